@@ -1,0 +1,74 @@
+// Channel identifiers, their component counts and formats: the one table of
+// per-pixel data the protocol can carry. Ids are part of the wire format.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace dn::protocol {
+
+enum class Format : uint8_t {
+  F16 = 1,  // IEEE 754 binary16, little-endian
+  F32 = 2,  // IEEE 754 binary32, little-endian
+};
+
+inline constexpr uint32_t bytes_per_component(Format f) { return f == Format::F16 ? 2u : 4u; }
+
+// Conventions (normative text in docs/protocol.md):
+//  - radiance channels: linear scene-referred RGB, >= 0
+//  - Normal: world-space unit vector
+//  - Depth: linear view depth, positive; 0 or +inf marks background
+//  - Motion: pixels, see MotionConvention
+enum class ChannelId : uint8_t {
+  Radiance = 0,        // rgb  noisy radiance, everything (or diffuse+specular+emission)
+  Diffuse = 1,         // rgb  noisy diffuse radiance (split form)
+  Specular = 2,        // rgb  noisy specular radiance (split form)
+  Albedo = 3,          // rgb  diffuse albedo
+  SpecularF0 = 4,      // rgb  specular reflectance at normal incidence
+  Roughness = 5,       // r    GGX alpha (see docs/protocol.md)
+  Normal = 6,          // xyz  world-space unit normal
+  Depth = 7,           // r    linear view depth
+  Motion = 8,          // xy   pixels
+  Emission = 9,        // rgb  emitted radiance at the primary hit (never filtered)
+  Position = 10,       // xyz  world-space position of the primary hit
+  SampleCount = 11,    // r    samples taken this frame (0 = none, < 1 spp rendering)
+  Output = 32,         // rgb  denoised radiance, only in RESULT
+};
+
+inline constexpr uint32_t kChannelIdLimit = 64;  // ids are < 64 so sets fit in a uint64 mask
+
+struct ChannelInfo {
+  ChannelId id;
+  std::string_view name;
+  uint32_t components;
+};
+
+inline constexpr ChannelInfo kChannels[] = {
+    {ChannelId::Radiance, "radiance", 3},   {ChannelId::Diffuse, "diffuse", 3},
+    {ChannelId::Specular, "specular", 3},   {ChannelId::Albedo, "albedo", 3},
+    {ChannelId::SpecularF0, "specular_f0", 3}, {ChannelId::Roughness, "roughness", 1},
+    {ChannelId::Normal, "normal", 3},       {ChannelId::Depth, "depth", 1},
+    {ChannelId::Motion, "motion", 2},       {ChannelId::Emission, "emission", 3},
+    {ChannelId::Position, "position", 3},   {ChannelId::SampleCount, "sample_count", 1},
+    {ChannelId::Output, "output", 3},
+};
+
+inline constexpr const ChannelInfo* find_channel(ChannelId id) {
+  for (const auto& c : kChannels)
+    if (c.id == id) return &c;
+  return nullptr;
+}
+inline constexpr const ChannelInfo* find_channel(std::string_view name) {
+  for (const auto& c : kChannels)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+inline constexpr uint64_t channel_bit(ChannelId id) { return uint64_t{1} << static_cast<uint32_t>(id); }
+
+// Bytes of one plane: width * height * components * bytes per component.
+inline constexpr uint64_t plane_bytes(const ChannelInfo& c, Format f, uint32_t width, uint32_t height) {
+  return uint64_t{width} * height * c.components * bytes_per_component(f);
+}
+
+}  // namespace dn::protocol

@@ -1,0 +1,85 @@
+// Encoding and decoding of protocol v1 over byte buffers. Pure functions and
+// one small framing state machine; no sockets, no Vulkan.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "dn/protocol/messages.hpp"
+
+namespace dn::protocol {
+
+struct DecodeError {
+  ErrorCode code = ErrorCode::Malformed;
+  std::string field;    // which field was wrong, e.g. "header.magic", "OPEN_SESSION.channels[1].format"
+  std::string message;  // human-readable, names the value found and what was expected
+};
+
+// Largest payload a message of this type may declare. FRAME and RESULT are
+// bounded by the configured maximum message size; control messages by fixed
+// small limits, so a header can be rejected before anything is allocated.
+uint64_t max_payload_bytes(MessageType type, uint64_t max_message_bytes);
+
+// Appends header + payload of `message` to `out`. `flags` are header flags.
+// The payload size is computed first and `out` is reserved once. Whatever is
+// written decodes: a message that breaks a rule of docs/protocol.md (string or
+// list over its limit, non-finite float, duplicate channel, undefined flag, ...)
+// throws std::invalid_argument naming the field, and one the wire cannot
+// represent at all (string > 65535 bytes, payload > 4 GiB) throws
+// std::length_error; `out` is then left as it was.
+void encode(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& out);
+std::vector<uint8_t> encode(const Message& message, uint64_t request_id = 0, uint32_t flags = 0);
+
+// Validates and parses a fixed header: magic, version (major must match, any
+// minor), known type, reserved flags zero, payload length within
+// max_payload_bytes(type, max_message_bytes).
+std::optional<DecodeError> decode_header(std::span<const uint8_t> bytes, uint64_t max_message_bytes,
+                                         Header& out);
+
+// Parses a payload whose header already passed decode_header. Plane views in
+// `out` point into `payload`, which must outlive them. Trailing bytes,
+// truncation, out-of-range enums and reserved fields are errors.
+std::optional<DecodeError> decode_payload(const Header& header, std::span<const uint8_t> payload,
+                                          Message& out);
+
+// Incremental framing for a byte stream: the caller reads straight into
+// writable(), then calls commit(n). The header is validated before the
+// payload buffer is allocated, and the buffer is exactly payload_length long.
+class MessageReader {
+ public:
+  enum class Status { NeedMore, Ready, Failed };
+
+  explicit MessageReader(uint64_t max_message_bytes) : max_message_bytes_(max_message_bytes) {}
+
+  std::span<uint8_t> writable();
+  Status commit(size_t n);
+  Status status() const { return status_; }
+
+  // Valid when status() == Ready. take_payload() resets the reader for the next message;
+  // header() keeps describing the taken message until the next header completes.
+  const Header& header() const { return header_; }
+  std::vector<uint8_t> take_payload();
+  // Valid when status() == Failed. The stream cannot be resynchronised after this.
+  const DecodeError& error() const { return error_; }
+  // Bytes of the current message received so far (header + payload).
+  uint64_t bytes_buffered() const { return header_filled_ + payload_filled_; }
+
+ private:
+  uint64_t max_message_bytes_;
+  Status status_ = Status::NeedMore;
+  uint8_t header_bytes_[kHeaderSize] = {};
+  size_t header_filled_ = 0;
+  Header header_{};
+  std::vector<uint8_t> payload_;
+  size_t payload_filled_ = 0;
+  DecodeError error_{};
+};
+
+// Half-precision helpers for the client and tests (the server never converts).
+uint16_t float_to_half(float value);
+float half_to_float(uint16_t bits);
+
+}  // namespace dn::protocol

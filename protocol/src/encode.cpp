@@ -1,0 +1,217 @@
+// encode(): one layout description per message, run twice — once by a
+// counting sink to get the exact payload size (so the output is reserved
+// once, frames are ~100 MB), once by the writing sink.
+#include <limits>
+#include <stdexcept>
+
+#include "wire.hpp"
+
+namespace dn::protocol {
+namespace {
+
+using wire::Writer;
+
+// Counts bytes and rejects what the wire cannot represent at all (lengths
+// and counts are u16, payload_length is u32). Semantic limits are checked
+// afterwards by decoding the encoded payload.
+class Counter {
+ public:
+  void u8(uint8_t) { n_ += 1; }
+  void u16(uint16_t) { n_ += 2; }
+  void u32(uint32_t) { n_ += 4; }
+  void u64(uint64_t) { n_ += 8; }
+  void f32(float) { n_ += 4; }
+  void f64(double) { n_ += 8; }
+  void bytes(std::span<const uint8_t> b) { n_ += b.size(); }
+  void str(std::string_view s) {
+    if (s.size() > std::numeric_limits<uint16_t>::max())
+      throw std::length_error("dn::protocol::encode: string of " + std::to_string(s.size()) +
+                              " bytes does not fit a u16 length");
+    n_ += 2 + s.size();
+  }
+  void zeros(size_t n) { n_ += n; }
+  uint64_t size() const { return n_; }
+
+ private:
+  uint64_t n_ = 0;
+};
+
+template <class S>
+void count(S& s, size_t n) {
+  if constexpr (std::is_same_v<S, Counter>) {
+    if (n > std::numeric_limits<uint16_t>::max())
+      throw std::length_error("dn::protocol::encode: list of " + std::to_string(n) +
+                              " entries does not fit a u16 count");
+  }
+  s.u16(static_cast<uint16_t>(n));
+}
+
+template <class S>
+void put_channels(S& s, const std::vector<ChannelDecl>& channels) {
+  count(s, channels.size());
+  for (const auto& c : channels) {
+    s.u8(static_cast<uint8_t>(c.id));
+    s.u8(static_cast<uint8_t>(c.format));
+  }
+}
+
+template <class S>
+void put_planes(S& s, const std::vector<PlaneView>& planes) {
+  count(s, planes.size());
+  for (const auto& p : planes) {
+    s.u8(static_cast<uint8_t>(p.id));
+    s.u8(static_cast<uint8_t>(p.format));
+    s.u16(0);  // reserved
+    s.u64(p.bytes.size());
+    s.bytes(p.bytes);
+  }
+}
+
+template <class S>
+void put_mat(S& s, const Mat4& m) {
+  for (float v : m) s.f32(v);
+}
+
+template <class S>
+struct Put {
+  S& s;
+  void operator()(const Hello& m) {
+    s.u32(m.capabilities);
+    s.str(m.client_name);
+    s.str(m.auth_token);
+  }
+  void operator()(const Welcome& m) {
+    s.str(m.server_version);
+    s.str(m.device_name);
+    s.u64(m.limits.max_message_bytes);
+    s.u64(m.limits.max_session_bytes);
+    s.u32(m.limits.max_sessions);
+    s.u32(m.limits.max_width);
+    s.u32(m.limits.max_height);
+    s.u32(m.limits.max_frames_in_flight);
+    count(s, m.pipelines.size());
+    for (const auto& p : m.pipelines) {
+      s.str(p.name);
+      s.u64(p.required_channels);
+      s.u64(p.optional_channels);
+    }
+  }
+  void operator()(const Error& m) {
+    s.u32(static_cast<uint32_t>(m.code));
+    s.str(m.field);
+    s.str(m.message);
+  }
+  void operator()(const OpenSession& m) {
+    s.u32(m.width);
+    s.u32(m.height);
+    s.str(m.pipeline);
+    s.u8(static_cast<uint8_t>(m.output_format));
+    s.u8(0);  // reserved
+    count(s, m.parameters.size());
+    for (const auto& p : m.parameters) {
+      s.str(p.name);
+      s.f64(p.value);
+    }
+    put_channels(s, m.channels);
+  }
+  void operator()(const Session& m) {
+    s.u64(m.session_id);
+    s.u32(m.width);
+    s.u32(m.height);
+    s.str(m.pipeline);
+    s.u8(static_cast<uint8_t>(m.output_format));
+    s.u8(m.read_only ? 1 : 0);
+    s.u64(m.device_bytes);
+    put_channels(s, m.channels);
+  }
+  void operator()(const Frame& m) {
+    const FrameInfo& f = m.info;
+    s.u64(f.session_id);
+    s.u64(f.frame_index);
+    s.u32(f.flags);
+    s.u8(static_cast<uint8_t>(f.motion));
+    s.zeros(3);  // reserved
+    put_mat(s, f.view);
+    put_mat(s, f.projection);
+    put_mat(s, f.prev_view);
+    put_mat(s, f.prev_projection);
+    for (float v : f.jitter) s.f32(v);
+    for (float v : f.prev_jitter) s.f32(v);
+    put_planes(s, m.planes);
+  }
+  void operator()(const Result& m) {
+    s.u64(m.session_id);
+    s.u64(m.frame_index);
+    count(s, m.timings.size());
+    for (const auto& t : m.timings) {
+      s.str(t.name);
+      s.f64(t.milliseconds);
+    }
+    put_planes(s, m.planes);
+  }
+  void operator()(const Attach& m) { s.u64(m.session_id); }
+  void operator()(const Ping& m) { s.u64(m.payload); }
+  void operator()(const Pong& m) { s.u64(m.payload); }
+  void operator()(const CloseSession& m) { s.u64(m.session_id); }
+  void operator()(const SessionClosed& m) {
+    s.u64(m.session_id);
+    s.u64(m.frames_processed);
+  }
+  void operator()(const StatsRequest&) {}
+  void operator()(const Stats& m) {
+    count(s, m.values.size());
+    for (const auto& v : m.values) {
+      s.str(v.name);
+      s.f64(v.value);
+    }
+  }
+};
+
+}  // namespace
+
+void encode(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& out) {
+  const MessageType type = type_of(message);
+  if (flags & ~kDefinedHeaderFlags)
+    throw std::invalid_argument("dn::protocol::encode: header.flags has reserved bits set");
+  if ((flags & kFlagNoOutput) && type != MessageType::Frame)
+    throw std::invalid_argument(std::string("dn::protocol::encode: header.flags NO_OUTPUT is only defined for FRAME, not ") +
+                                to_string(type));
+
+  Counter counter;
+  std::visit(Put<Counter>{counter}, message);
+  const uint64_t payload_size = counter.size();
+  if (payload_size > std::numeric_limits<uint32_t>::max())
+    throw std::length_error("dn::protocol::encode: payload of " + std::to_string(payload_size) +
+                            " bytes does not fit the u32 payload_length");
+
+  Header h;
+  h.type = type;
+  h.flags = flags;
+  h.payload_length = static_cast<uint32_t>(payload_size);
+  h.request_id = request_id;
+
+  const size_t start = out.size();
+  out.reserve(start + kHeaderSize + payload_size);
+  out.resize(start + kHeaderSize);
+  wire::store_header(out.data() + start, h);
+  Writer writer(out);
+  std::visit(Put<Writer>{writer}, message);
+
+  // Whatever encode() writes, decode_payload() accepts: a message that breaks
+  // a rule (string too long, NaN, duplicate channel, ...) is a bug in the
+  // sender and is reported here rather than by the peer.
+  Message check;
+  const std::span<const uint8_t> payload(out.data() + start + kHeaderSize, payload_size);
+  if (auto err = decode_payload(h, payload, check)) {
+    out.resize(start);
+    throw std::invalid_argument("dn::protocol::encode: " + err->field + ": " + err->message);
+  }
+}
+
+std::vector<uint8_t> encode(const Message& message, uint64_t request_id, uint32_t flags) {
+  std::vector<uint8_t> out;
+  encode(message, request_id, flags, out);
+  return out;
+}
+
+}  // namespace dn::protocol

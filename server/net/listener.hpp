@@ -1,0 +1,34 @@
+// Listening sockets for tcp://HOST:PORT and unix:///PATH endpoints.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace dn::server::net {
+
+struct Endpoint {
+  enum class Kind { Tcp, Unix } kind = Kind::Tcp;
+  std::string host;  // Tcp: numeric IPv4/IPv6 address or "localhost"
+  uint16_t port = 0;
+  std::string path;  // Unix
+  std::string url;   // as given
+};
+
+// Parses a listen URL; on failure returns nullopt and sets `error` to a reason naming the URL.
+std::optional<Endpoint> parse_endpoint(const std::string& url, std::string& error);
+
+// True when the endpoint only accepts connections from this machine.
+bool is_loopback(const Endpoint& endpoint);
+
+struct Listener {
+  Endpoint endpoint;
+  int fd = -1;
+  uint16_t bound_port = 0;  // the real port when 0 was asked for
+};
+
+// Creates a non-blocking listening socket; throws std::runtime_error naming the endpoint and errno.
+Listener open_listener(const Endpoint& endpoint);
+void close_listener(Listener& listener);
+
+}  // namespace dn::server::net

@@ -1,0 +1,44 @@
+// dnserver's command line: every flag, its default and its help text live here.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dn::server {
+
+struct ServerOptions {
+  std::vector<std::string> listen;       // tcp://HOST:PORT or unix:///PATH; default tcp://127.0.0.1:7878
+  std::string token_file;                // shared secret; also DN_TOKEN in the environment
+  std::string token;                     // resolved token (from file or environment)
+  std::vector<uint32_t> allowed_uids;    // Unix-socket peers besides our own uid and root
+  std::string device;                    // Vulkan device selector: index or name substring
+  bool list_devices = false;
+  bool validation = false;               // Khronos validation layer
+  uint32_t workers = 2;                  // device worker threads
+  uint32_t max_sessions = 16;
+  uint32_t max_connections = 256;
+  uint32_t max_frames_in_flight = 4;     // per session, before reading from its connection pauses
+  uint64_t max_message_bytes = 1ull << 30;
+  uint64_t max_session_bytes = 2ull << 30;   // device bytes per session
+  uint64_t max_output_buffer_bytes = 256ull << 20;  // per connection, before reading pauses
+  uint32_t max_width = 8192;
+  uint32_t max_height = 8192;
+  double handshake_timeout_s = 5.0;
+  double idle_timeout_s = 300.0;         // nothing received for this long: close (0 = never)
+  double heartbeat_s = 30.0;             // nothing received for this long: send PING
+  double shutdown_grace_s = 30.0;        // SIGTERM: time allowed to finish frames in flight
+  std::string log_level = "info";
+};
+
+struct ParseOutcome {
+  bool ok = true;
+  bool exit_now = false;  // --help or --version printed
+  std::string error;      // names the flag and what was wrong
+};
+
+ParseOutcome parse_options(int argc, char** argv, ServerOptions& out);
+std::string help_text();
+
+}  // namespace dn::server

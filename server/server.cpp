@@ -1,0 +1,618 @@
+#include "server/server.hpp"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <signal.h>
+#include <sys/epoll.h>
+#include <sys/signalfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+#include "dn/protocol/codec.hpp"
+#include "server/log.hpp"
+#include "server/net/auth.hpp"
+
+namespace dn::server {
+namespace {
+
+using protocol::ErrorCode;
+using Clock = std::chrono::steady_clock;
+
+constexpr size_t kReadBudgetPerEvent = 8u << 20;  // bytes read per wake-up before other sockets get a turn
+constexpr int kTimerTickMs = 200;
+
+// ERROR strings have wire limits (docs/protocol.md); cut at a UTF-8 character boundary.
+std::string fit(std::string text, size_t limit) {
+  if (text.size() <= limit) return text;
+  size_t cut = limit;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+  text.resize(cut);
+  return text;
+}
+
+double seconds_since(Clock::time_point t, Clock::time_point now) {
+  return std::chrono::duration<double>(now - t).count();
+}
+
+std::string peer_name(const sockaddr_storage& addr, bool is_unix) {
+  if (is_unix) return "unix";
+  char host[INET6_ADDRSTRLEN] = "?";
+  uint16_t port = 0;
+  if (addr.ss_family == AF_INET) {
+    auto* a = reinterpret_cast<const sockaddr_in*>(&addr);
+    inet_ntop(AF_INET, &a->sin_addr, host, sizeof host);
+    port = ntohs(a->sin_port);
+  } else if (addr.ss_family == AF_INET6) {
+    auto* a = reinterpret_cast<const sockaddr_in6*>(&addr);
+    inet_ntop(AF_INET6, &a->sin6_addr, host, sizeof host);
+    port = ntohs(a->sin6_port);
+  }
+  return std::string(host) + ":" + std::to_string(port);
+}
+
+// Large socket buffers keep a 1280x720 frame to a few syscalls.
+void tune_socket(int fd, bool is_unix) {
+  int size = 8 << 20;
+  ::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &size, sizeof size);
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof size);
+  if (!is_unix) {
+    int one = 1;
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  }
+}
+
+}  // namespace
+
+Server::Server(ServerOptions options, gpu::Context& device, std::string device_name)
+    : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
+  std::random_device rd;
+  session_ids_.seed((uint64_t{rd()} << 32) ^ rd());
+
+  std::vector<net::Endpoint> endpoints;
+  for (const std::string& url : options_.listen) {
+    std::string error;
+    auto e = net::parse_endpoint(url, error);
+    if (!e) throw std::runtime_error("--listen " + error);
+    if (e->kind == net::Endpoint::Kind::Tcp && !net::is_loopback(*e) && options_.token.empty())
+      throw std::runtime_error("--listen " + url +
+                               " is not a loopback address: set an authentication token with --token-file or DN_TOKEN");
+    endpoints.push_back(*e);
+  }
+  for (const auto& e : endpoints) {
+    listeners_.push_back(net::open_listener(e));
+    net::Listener& l = listeners_.back();
+    log::info("listen", {{"url", listening_urls().back()}, {"auth", options_.token.empty() ? "none" : "token"}});
+    size_t index = listeners_.size() - 1;
+    loop_.add(l.fd, EPOLLIN, [this, index](uint32_t) { accept_from(listeners_[index]); });
+  }
+
+  scheduler_ = std::make_unique<Scheduler>(options_.workers, [this](FrameDone&& done) {
+    {
+      std::lock_guard lock(completions_mutex_);
+      completions_.push_back(std::move(done));
+    }
+    loop_.wake();
+  });
+  loop_.set_wake_handler([this] { drain_completions(); });
+}
+
+Server::~Server() {
+  if (scheduler_) scheduler_->stop();
+  for (auto& l : listeners_) net::close_listener(l);
+  if (signal_fd_ >= 0) ::close(signal_fd_);
+}
+
+std::vector<std::string> Server::listening_urls() const {
+  std::vector<std::string> urls;
+  for (const auto& l : listeners_) {
+    if (l.endpoint.kind == net::Endpoint::Kind::Unix) {
+      urls.push_back("unix://" + l.endpoint.path);
+    } else {
+      bool v6 = l.endpoint.host.find(':') != std::string::npos;
+      urls.push_back("tcp://" + (v6 ? "[" + l.endpoint.host + "]" : l.endpoint.host) + ":" +
+                     std::to_string(l.bound_port));
+    }
+  }
+  return urls;
+}
+
+void Server::request_stop() {
+  stop_requested_ = true;
+  loop_.wake();
+}
+
+void Server::run(bool handle_signals) {
+  if (handle_signals) {
+    sigset_t mask;
+    sigemptyset(&mask);
+    sigaddset(&mask, SIGTERM);
+    sigaddset(&mask, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &mask, nullptr);
+    signal_fd_ = ::signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    if (signal_fd_ < 0) throw std::runtime_error(std::string("signalfd: ") + std::strerror(errno));
+    loop_.add(signal_fd_, EPOLLIN, [this](uint32_t) {
+      signalfd_siginfo info;
+      while (::read(signal_fd_, &info, sizeof info) == sizeof info) {
+        log::info("signal", {{"signal", info.ssi_signo == SIGTERM ? "SIGTERM" : "SIGINT"}});
+        stop_requested_ = true;
+      }
+    });
+  }
+  log::info("ready", {{"device", device_name_}, {"workers", options_.workers}});
+  for (;;) {
+    loop_.run_once(kTimerTickMs);
+    if (stop_requested_ && !shutting_down_) begin_shutdown();
+    check_timers();
+    if (shutting_down_ && shutdown_complete()) break;
+  }
+  for (auto it = connections_.begin(); it != connections_.end();) close_connection((it++)->first, "shutdown");
+  scheduler_->stop();
+  log::info("stopped", {{"frames", frames_processed_}});
+}
+
+void Server::begin_shutdown() {
+  shutting_down_ = true;
+  shutdown_deadline_ = Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options_.shutdown_grace_s * 1000));
+  for (auto& l : listeners_) {
+    loop_.remove(l.fd);
+    net::close_listener(l);
+  }
+  uint32_t in_flight = 0;
+  for (auto& [id, s] : sessions_) in_flight += s->in_flight;
+  log::info("shutdown.begin", {{"frames_in_flight", in_flight}, {"connections", connections_.size()}});
+}
+
+bool Server::shutdown_complete() const {
+  if (Clock::now() >= shutdown_deadline_) {
+    log::warn("shutdown.deadline", {{"grace_s", options_.shutdown_grace_s}});
+    return true;
+  }
+  for (const auto& [id, s] : sessions_)
+    if (s->in_flight > 0) return false;
+  for (const auto& [id, c] : connections_)
+    if (c->has_pending_output()) return false;
+  return true;
+}
+
+void Server::accept_from(net::Listener& listener) {
+  const bool is_unix = listener.endpoint.kind == net::Endpoint::Kind::Unix;
+  for (;;) {
+    sockaddr_storage addr{};
+    socklen_t len = sizeof addr;
+    int fd = ::accept4(listener.fd, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) {
+      if (errno == EINTR) continue;
+      if (errno != EAGAIN && errno != EWOULDBLOCK) log::warn("accept.failed", {{"error", std::strerror(errno)}});
+      return;
+    }
+    uint64_t id = next_connection_id_++;
+    ++connections_accepted_;
+    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, peer_name(addr, is_unix), options_.max_message_bytes);
+    tune_socket(fd, is_unix);
+    net::Connection& c = *conn;
+    connections_[id] = std::move(conn);
+    loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
+    log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}});
+
+    if (connections_.size() > options_.max_connections) {
+      send_error(c, 0, ErrorCode::LimitExceeded, "connections",
+                 "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)",
+                 true);
+      continue;
+    }
+    if (is_unix) {
+      uint32_t uid = 0;
+      if (!net::unix_peer_allowed(fd, options_.allowed_uids, uid)) {
+        log::warn("auth.refused", {{"conn", id}, {"peer_uid", uid}});
+        send_error(c, 0, ErrorCode::Unauthenticated, "peer_credentials",
+                   "Unix-socket peer uid " + std::to_string(uid) + " is not allowed (--allow-uid)", true);
+      }
+    }
+  }
+}
+
+net::Connection* Server::find_connection(uint64_t id) {
+  auto it = connections_.find(id);
+  return it == connections_.end() ? nullptr : it->second.get();
+}
+
+void Server::on_connection_event(uint64_t id, uint32_t events) {
+  net::Connection* c = find_connection(id);
+  if (!c) return;
+  if (events & EPOLLERR) return close_connection(id, "socket error");
+  if (events & EPOLLOUT) {
+    if (!c->flush()) return close_connection(id, "write failed");
+  }
+  if (events & (EPOLLIN | EPOLLHUP)) {
+    auto status = c->read_available(
+        [&](const protocol::Header& h, std::vector<uint8_t>&& payload) { handle_message(*c, h, std::move(payload)); },
+        kReadBudgetPerEvent);
+    if (status == net::Connection::ReadStatus::Closed) {
+      // A peer that only shut down its sending side still gets the results of its frames.
+      if ((events & EPOLLHUP) || !has_work(*c)) return close_connection(id, "peer closed");
+      c->close_after_flush = true;
+    } else if (status == net::Connection::ReadStatus::Failed) {
+      const auto& e = c->read_error();
+      log::warn("protocol.framing_error", {{"conn", id}, {"field", e.field}, {"reason", e.message}});
+      send_error(*c, 0, e.code, e.field, e.message, true);
+    } else if ((events & EPOLLHUP) && c->reading_paused) {
+      return close_connection(id, "peer hung up");
+    }
+  }
+  c = find_connection(id);
+  if (!c) return;
+  if (c->close_after_flush && !has_work(*c)) return close_connection(id, "closed after error");
+  update_interest(*c);
+}
+
+bool Server::has_work(const net::Connection& c) const {
+  if (c.has_pending_output()) return true;
+  for (uint64_t sid : c.owned_sessions) {
+    auto it = sessions_.find(sid);
+    if (it != sessions_.end() && it->second->in_flight > 0) return true;
+  }
+  return false;
+}
+
+void Server::update_interest(net::Connection& c) {
+  // Resume reading once the connection's queued output has drained below half the limit.
+  if (c.reading_paused) {
+    bool window_full = false;
+    for (uint64_t sid : c.owned_sessions) {
+      auto it = sessions_.find(sid);
+      if (it != sessions_.end() && it->second->in_flight >= options_.max_frames_in_flight) window_full = true;
+    }
+    if (!window_full && c.queued_bytes() <= options_.max_output_buffer_bytes / 2) c.reading_paused = false;
+  }
+  uint32_t events = 0;
+  if (!c.reading_paused && !c.close_after_flush) events |= EPOLLIN;
+  if (c.has_pending_output()) events |= EPOLLOUT;
+  loop_.modify(c.fd(), events);
+}
+
+void Server::send(net::Connection& c, const protocol::Message& m, uint64_t request_id) {
+  auto bytes = std::make_shared<std::vector<uint8_t>>();
+  protocol::encode(m, request_id, 0, *bytes);
+  c.queue(std::move(bytes));
+  if (!c.flush()) c.close_after_flush = true;  // nothing more can be written; close on the next turn
+}
+
+void Server::send_error(net::Connection& c, uint64_t request_id, ErrorCode code, std::string field,
+                        std::string message, bool fatal) {
+  log::info("request.error", {{"conn", c.id()},
+                              {"code", protocol::to_string(code)},
+                              {"field", field},
+                              {"reason", message},
+                              {"fatal", fatal}});
+  send(c, protocol::Error{code, fit(std::move(field), 256), fit(std::move(message), 1024)}, request_id);
+  if (fatal) {
+    c.close_after_flush = true;
+    // Never read from a connection that broke framing again.
+    ::shutdown(c.fd(), SHUT_RD);
+  }
+}
+
+void Server::handle_message(net::Connection& c, const protocol::Header& header, std::vector<uint8_t>&& payload) {
+  protocol::Message message;
+  if (auto err = protocol::decode_payload(header, payload, message)) {
+    // Framing is intact, so the connection can go on after a bad payload.
+    send_error(c, header.request_id, err->code, err->field, err->message, !c.authenticated);
+    return;
+  }
+  if (!c.authenticated) {
+    if (auto* hello = std::get_if<protocol::Hello>(&message)) return on_hello(c, header, *hello);
+    return send_error(c, header.request_id, ErrorCode::NotReady, "header.type",
+                      std::string(protocol::to_string(header.type)) + " before HELLO: the first message must be HELLO",
+                      true);
+  }
+  std::visit(
+      [&](auto&& m) {
+        using T = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<T, protocol::Hello>) {
+          send_error(c, header.request_id, ErrorCode::NotReady, "header.type", "HELLO sent twice", false);
+        } else if constexpr (std::is_same_v<T, protocol::OpenSession>) {
+          on_open_session(c, header, m);
+        } else if constexpr (std::is_same_v<T, protocol::Frame>) {
+          on_frame(c, header, std::move(m), std::move(payload));
+        } else if constexpr (std::is_same_v<T, protocol::Attach>) {
+          on_attach(c, header, m);
+        } else if constexpr (std::is_same_v<T, protocol::Ping>) {
+          send(c, protocol::Pong{m.payload}, header.request_id);
+        } else if constexpr (std::is_same_v<T, protocol::Pong>) {
+          // Heartbeat answered; receiving it already refreshed last_received.
+        } else if constexpr (std::is_same_v<T, protocol::CloseSession>) {
+          on_close_session(c, header, m);
+        } else if constexpr (std::is_same_v<T, protocol::StatsRequest>) {
+          on_stats(c, header);
+        } else {
+          send_error(c, header.request_id, ErrorCode::UnknownMessageType, "header.type",
+                     std::string(protocol::to_string(header.type)) + " is sent by servers, not clients", false);
+        }
+      },
+      message);
+}
+
+void Server::on_hello(net::Connection& c, const protocol::Header& h, const protocol::Hello& m) {
+  if (!options_.token.empty() && !net::tokens_equal(options_.token, m.auth_token)) {
+    log::warn("auth.refused", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
+    return send_error(c, h.request_id, ErrorCode::Unauthenticated, "HELLO.auth_token",
+                      m.auth_token.empty() ? "this server requires an authentication token"
+                                           : "authentication token does not match",
+                      true);
+  }
+  if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", true);
+  c.authenticated = true;
+  protocol::Welcome w;
+  w.server_version = "dnserver 0.1.0";
+  w.device_name = device_name_;
+  w.limits.max_message_bytes = options_.max_message_bytes;
+  w.limits.max_session_bytes = options_.max_session_bytes;
+  w.limits.max_sessions = options_.max_sessions;
+  w.limits.max_width = options_.max_width;
+  w.limits.max_height = options_.max_height;
+  w.limits.max_frames_in_flight = options_.max_frames_in_flight;
+  for (const auto& p : pipelines::available_pipelines())
+    w.pipelines.push_back(protocol::PipelineInfo{p.name, p.required_channels, p.optional_channels});
+  log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
+  send(c, w, h.request_id);
+}
+
+void Server::on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m) {
+  if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+  if (m.width > options_.max_width || m.height > options_.max_height)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, m.width > options_.max_width ? "OPEN_SESSION.width" : "OPEN_SESSION.height",
+                      "resolution " + std::to_string(m.width) + "x" + std::to_string(m.height) + " exceeds the server's " +
+                          std::to_string(options_.max_width) + "x" + std::to_string(options_.max_height),
+                      false);
+  if (sessions_.size() >= options_.max_sessions)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "sessions",
+                      "server already has " + std::to_string(sessions_.size()) + " sessions (--max-sessions " +
+                          std::to_string(options_.max_sessions) + ")",
+                      false);
+
+  pipelines::SessionConfig config{m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters};
+  if (auto err = pipelines::validate(config)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+
+  // A frame of this session must fit one message.
+  uint64_t frame_bytes = 4096;
+  for (const auto& ch : m.channels)
+    frame_bytes += protocol::plane_bytes(*protocol::find_channel(ch.id), ch.format, m.width, m.height) + 16;
+  if (frame_bytes > options_.max_message_bytes)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
+                      "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
+                          std::to_string(options_.max_message_bytes) + "-byte message limit (--max-message)",
+                      false);
+  const uint64_t estimate = pipelines::estimate_device_bytes(config);
+  if (estimate > options_.max_session_bytes)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                      "session needs " + std::to_string(estimate) + " bytes of device memory, above the " +
+                          std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)",
+                      false);
+
+  std::unique_ptr<pipelines::Pipeline> pipeline;
+  try {
+    pipeline = pipelines::create(device_, config);
+  } catch (const std::exception& e) {
+    log::error("session.create_failed", {{"conn", c.id()}, {"pipeline", m.pipeline}, {"reason", e.what()}});
+    return send_error(c, h.request_id, ErrorCode::DeviceError, "OPEN_SESSION",
+                      std::string("could not create the pipeline on the device: ") + e.what(), false);
+  }
+
+  uint64_t id;
+  do id = session_ids_(); while (id == 0 || sessions_.count(id));
+  auto session = std::make_shared<Session>(id, c.id(), std::move(config), std::move(pipeline));
+  sessions_[id] = session;
+  c.owned_sessions.push_back(id);
+  ++sessions_opened_;
+  log::info("session.open", {{"conn", c.id()},
+                             {"session", id},
+                             {"pipeline", m.pipeline},
+                             {"width", m.width},
+                             {"height", m.height},
+                             {"device_bytes", session->device_bytes()}});
+  protocol::Session reply{id, m.width, m.height, m.pipeline, m.output_format, session->device_bytes(), false, m.channels};
+  send(c, reply, h.request_id);
+}
+
+void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
+  auto it = sessions_.find(m.info.session_id);
+  if (it == sessions_.end() || it->second->owner() != c.id())
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(m.info.session_id) + " is not open on this connection", false);
+  const std::shared_ptr<Session>& s = it->second;
+  if (s->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(s->id()) + " is closing", false);
+  if (shutting_down_)
+    return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+  if (auto err = s->check_frame(m)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+
+  s->last_frame_index = m.info.frame_index;
+  ++s->in_flight;
+  FrameJob job;
+  job.request_id = h.request_id;
+  job.owner_wants_output = (h.flags & protocol::kFlagNoOutput) == 0;
+  job.watchers_want_output = !s->watchers.empty();
+  job.frame = std::move(m);
+  job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
+  scheduler_->submit(s, std::move(job));
+  if (s->in_flight >= options_.max_frames_in_flight) c.reading_paused = true;  // backpressure: stop reading
+}
+
+void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
+  auto it = sessions_.find(m.session_id);
+  if (it == sessions_.end() || it->second->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
+                      "no open session " + std::to_string(m.session_id), false);
+  Session& s = *it->second;
+  if (std::find(s.watchers.begin(), s.watchers.end(), c.id()) == s.watchers.end()) s.watchers.push_back(c.id());
+  if (std::find(c.watched_sessions.begin(), c.watched_sessions.end(), s.id()) == c.watched_sessions.end())
+    c.watched_sessions.push_back(s.id());
+  const auto& cfg = s.config();
+  log::info("session.attach", {{"conn", c.id()}, {"session", s.id()}});
+  send(c, protocol::Session{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true, cfg.channels},
+       h.request_id);
+}
+
+void Server::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {
+  auto it = sessions_.find(m.session_id);
+  if (it == sessions_.end() || it->second->owner() != c.id() || it->second->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "CLOSE_SESSION.session_id",
+                      "session " + std::to_string(m.session_id) + " is not open on this connection", false);
+  std::shared_ptr<Session> s = it->second;
+  s->closing = true;
+  s->close_request_id = h.request_id;
+  if (s->in_flight == 0) finish_session(s, true);  // else finished when its last frame completes
+}
+
+void Server::finish_session(const std::shared_ptr<Session>& s, bool notify) {
+  scheduler_->cancel(s);
+  protocol::SessionClosed closed{s->id(), s->frames_processed};
+  if (notify) {
+    if (net::Connection* owner = find_connection(s->owner())) send(*owner, closed, s->close_request_id);
+  }
+  for (uint64_t w : s->watchers) {
+    if (net::Connection* wc = find_connection(w)) {
+      send(*wc, closed, 0);
+      std::erase(wc->watched_sessions, s->id());
+      update_interest(*wc);
+    }
+  }
+  if (net::Connection* owner = find_connection(s->owner())) {
+    std::erase(owner->owned_sessions, s->id());
+    update_interest(*owner);
+  }
+  log::info("session.close", {{"session", s->id()}, {"frames", s->frames_processed}});
+  sessions_.erase(s->id());  // device memory is freed when the last worker reference goes
+}
+
+void Server::close_connection(uint64_t id, const char* reason) {
+  auto it = connections_.find(id);
+  if (it == connections_.end()) return;
+  std::unique_ptr<net::Connection> c = std::move(it->second);
+  connections_.erase(it);
+  loop_.remove(c->fd());
+  bytes_in_closed_ += c->bytes_in;
+  bytes_out_closed_ += c->bytes_out;
+  for (uint64_t sid : std::vector<uint64_t>(c->owned_sessions)) {
+    auto s = sessions_.find(sid);
+    if (s != sessions_.end()) finish_session(s->second, false);
+  }
+  for (uint64_t sid : c->watched_sessions) {
+    auto s = sessions_.find(sid);
+    if (s != sessions_.end()) std::erase(s->second->watchers, id);
+  }
+  log::debug("connection.close", {{"conn", id}, {"peer", c->peer()}, {"reason", reason}});
+}
+
+void Server::drain_completions() {
+  std::vector<FrameDone> batch;
+  {
+    std::lock_guard lock(completions_mutex_);
+    batch.swap(completions_);
+  }
+  for (FrameDone& d : batch) on_frame_done(std::move(d));
+}
+
+void Server::on_frame_done(FrameDone&& done) {
+  auto it = sessions_.find(done.session_id);
+  if (it == sessions_.end()) return;  // session closed by a disconnect: nobody to deliver to
+  std::shared_ptr<Session> s = it->second;
+  if (s->in_flight > 0) --s->in_flight;
+  if (done.failed) {
+    ++frames_failed_;
+    log::error("frame.failed", {{"session", s->id()}, {"frame", done.frame_index}});
+  } else {
+    ++frames_processed_;
+    ++s->frames_processed;
+    for (const auto& t : done.timings) {
+      auto& sum = pass_timings_[t.name];
+      sum.total_ms += t.milliseconds;
+      ++sum.count;
+    }
+  }
+  if (net::Connection* owner = find_connection(s->owner())) {
+    owner->queue(done.owner_message);
+    if (!owner->flush()) owner->close_after_flush = true;
+    update_interest(*owner);
+  }
+  if (done.watcher_message) {
+    for (uint64_t w : s->watchers) {
+      if (net::Connection* wc = find_connection(w)) {
+        wc->queue(done.watcher_message, s->id());
+        if (!wc->flush()) wc->close_after_flush = true;
+        update_interest(*wc);
+      }
+    }
+  }
+  if (s->closing && s->in_flight == 0) finish_session(s, true);
+}
+
+void Server::check_timers() {
+  const auto now = Clock::now();
+  std::vector<std::pair<uint64_t, const char*>> to_close;
+  for (auto& [id, c] : connections_) {
+    if (c->close_after_flush) {
+      if (!has_work(*c)) to_close.emplace_back(id, "closed after error");
+      continue;
+    }
+    if (!c->authenticated) {
+      if (seconds_since(c->created, now) > options_.handshake_timeout_s) {
+        send_error(*c, 0, ErrorCode::Timeout, "HELLO",
+                   "no HELLO within " + std::to_string(options_.handshake_timeout_s) + " s of connecting", true);
+        update_interest(*c);
+      }
+      continue;
+    }
+    const double idle = seconds_since(c->last_received, now);
+    if (has_work(*c)) continue;  // waiting for its own frames or draining output is not idle
+    if (options_.idle_timeout_s > 0 && idle > options_.idle_timeout_s) {
+      send_error(*c, 0, ErrorCode::Timeout, "", "nothing received for " + std::to_string(options_.idle_timeout_s) + " s",
+                 true);
+      update_interest(*c);
+    } else if (options_.heartbeat_s > 0 && idle > options_.heartbeat_s &&
+               seconds_since(c->last_ping_sent, now) > options_.heartbeat_s) {
+      c->last_ping_sent = now;
+      send(*c, protocol::Ping{static_cast<uint64_t>(now.time_since_epoch().count())}, 0);
+      update_interest(*c);
+    }
+  }
+  for (auto& [id, reason] : to_close) close_connection(id, reason);
+}
+
+void Server::on_stats(net::Connection& c, const protocol::Header& h) {
+  protocol::Stats st;
+  auto add = [&](std::string name, double v) { st.values.push_back({std::move(name), v}); };
+  uint64_t bytes_in = bytes_in_closed_, bytes_out = bytes_out_closed_;
+  for (auto& [id, conn] : connections_) {
+    bytes_in += conn->bytes_in;
+    bytes_out += conn->bytes_out;
+  }
+  uint32_t in_flight = 0;
+  for (auto& [id, s] : sessions_) in_flight += s->in_flight;
+  add("uptime_s", seconds_since(started_, Clock::now()));
+  add("connections", static_cast<double>(connections_.size()));
+  add("connections_accepted", static_cast<double>(connections_accepted_));
+  add("sessions", static_cast<double>(sessions_.size()));
+  add("sessions_opened", static_cast<double>(sessions_opened_));
+  add("frames_processed", static_cast<double>(frames_processed_));
+  add("frames_failed", static_cast<double>(frames_failed_));
+  add("frames_in_flight", static_cast<double>(in_flight));
+  add("bytes_in", static_cast<double>(bytes_in));
+  add("bytes_out", static_cast<double>(bytes_out));
+  uint64_t device_bytes = 0;  // held by open sessions; a closed one's is freed once its last frame leaves the device
+  for (auto& [id, s] : sessions_) device_bytes += s->device_bytes();
+  add("device_bytes", static_cast<double>(device_bytes));
+  for (const auto& [name, sum] : pass_timings_) {
+    if (st.values.size() >= 250) break;
+    add("pass." + name + ".mean_ms", sum.count ? sum.total_ms / static_cast<double>(sum.count) : 0.0);
+  }
+  send(c, st, h.request_id);
+}
+
+}  // namespace dn::server

@@ -1,0 +1,105 @@
+// The server: accepts connections, speaks protocol v1 on one epoll event loop,
+// owns the sessions and hands frames to the device workers.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "server/net/connection.hpp"
+#include "server/net/event_loop.hpp"
+#include "server/net/listener.hpp"
+#include "server/options.hpp"
+#include "server/session/scheduler.hpp"
+#include "server/session/session.hpp"
+
+namespace dn::gpu {
+class Context;
+}
+
+namespace dn::server {
+
+class Server {
+ public:
+  // Opens the listeners; throws std::runtime_error with a reason on bad options.
+  Server(ServerOptions options, gpu::Context& device, std::string device_name);
+  ~Server();
+
+  // Runs the event loop until request_stop() (or SIGTERM when handle_signals) and
+  // the graceful shutdown has finished.
+  void run(bool handle_signals);
+  // Thread-safe: begins the graceful shutdown.
+  void request_stop();
+
+  // Actual listening addresses (a port of 0 resolved), for tests and logs.
+  std::vector<std::string> listening_urls() const;
+
+ private:
+  using Bytes = net::Bytes;
+
+  void accept_from(net::Listener& listener);
+  void on_connection_event(uint64_t connection_id, uint32_t events);
+  void handle_message(net::Connection& c, const protocol::Header& header, std::vector<uint8_t>&& payload);
+
+  void on_hello(net::Connection& c, const protocol::Header& h, const protocol::Hello& m);
+  void on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m);
+  void on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload);
+  void on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m);
+  void on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m);
+  void on_stats(net::Connection& c, const protocol::Header& h);
+
+  void send(net::Connection& c, const protocol::Message& m, uint64_t request_id);
+  void send_error(net::Connection& c, uint64_t request_id, protocol::ErrorCode code, std::string field,
+                  std::string message, bool fatal);
+  void update_interest(net::Connection& c);
+  void close_connection(uint64_t connection_id, const char* reason);
+  void finish_session(const std::shared_ptr<Session>& s, bool notify);
+  void drain_completions();
+  void on_frame_done(FrameDone&& done);
+  void check_timers();
+  void begin_shutdown();
+  bool shutdown_complete() const;
+  net::Connection* find_connection(uint64_t id);
+  bool has_work(const net::Connection& c) const;
+
+  ServerOptions options_;
+  gpu::Context& device_;
+  std::string device_name_;
+  net::EventLoop loop_;
+  std::vector<net::Listener> listeners_;
+  std::map<uint64_t, std::unique_ptr<net::Connection>> connections_;
+  std::unordered_map<uint64_t, std::shared_ptr<Session>> sessions_;
+  uint64_t next_connection_id_ = 1;
+  std::mt19937_64 session_ids_;
+
+  std::unique_ptr<Scheduler> scheduler_;
+  std::mutex completions_mutex_;
+  std::vector<FrameDone> completions_;
+
+  std::atomic<bool> stop_requested_{false};
+  bool shutting_down_ = false;
+  std::chrono::steady_clock::time_point shutdown_deadline_{};
+  int signal_fd_ = -1;
+
+  // Counters for STATS.
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  uint64_t frames_processed_ = 0;
+  uint64_t frames_failed_ = 0;
+  uint64_t sessions_opened_ = 0;
+  uint64_t connections_accepted_ = 0;
+  uint64_t bytes_in_closed_ = 0;   // from connections already closed
+  uint64_t bytes_out_closed_ = 0;
+  struct TimingSum {
+    double total_ms = 0;
+    uint64_t count = 0;
+  };
+  std::map<std::string, TimingSum> pass_timings_;
+};
+
+}  // namespace dn::server

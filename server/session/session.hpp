@@ -1,0 +1,78 @@
+// A session: one camera stream's configuration, its pipeline (and with it
+// the device history), and the queue of frames waiting for the device.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "dn/protocol/messages.hpp"
+#include "server/pipelines/pipeline.hpp"
+
+namespace dn::server {
+
+// A validated frame on its way to the device; `frame` views into `payload`.
+struct FrameJob {
+  uint64_t request_id = 0;
+  bool owner_wants_output = true;
+  bool watchers_want_output = false;
+  protocol::Frame frame;
+  std::vector<uint8_t> payload;
+};
+
+// What a worker hands back to the event loop for one frame.
+struct FrameDone {
+  uint64_t session_id = 0;
+  uint64_t request_id = 0;
+  uint64_t frame_index = 0;
+  std::shared_ptr<const std::vector<uint8_t>> owner_message;    // encoded RESULT or ERROR
+  std::shared_ptr<const std::vector<uint8_t>> watcher_message;  // encoded RESULT with planes, if wanted
+  std::vector<protocol::PassTiming> timings;
+  bool failed = false;
+};
+
+class Session {
+ public:
+  Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config, std::unique_ptr<pipelines::Pipeline> pipeline);
+  ~Session();
+
+  uint64_t id() const { return id_; }
+  uint64_t owner() const { return owner_; }
+  const pipelines::SessionConfig& config() const { return config_; }
+  uint64_t device_bytes() const { return device_bytes_; }
+
+  // Checks a decoded FRAME against this session: declared channels present
+  // exactly once, in the declared format, with the right byte length, and a
+  // frame index above the last one accepted.
+  std::optional<protocol::Error> check_frame(const protocol::Frame& frame) const;
+
+  // Runs the next pending frame on the device; called by one worker at a time.
+  FrameDone run(FrameJob& job);
+
+  // Event-loop state (touched only by the loop thread).
+  std::optional<uint64_t> last_frame_index;
+  uint32_t in_flight = 0;
+  uint64_t frames_processed = 0;
+  bool closing = false;
+  uint64_t close_request_id = 0;
+  std::vector<uint64_t> watchers;  // connection ids
+
+  // Scheduler state (guarded by mutex).
+  std::mutex mutex;
+  std::deque<FrameJob> pending;
+  bool scheduled = false;
+  std::atomic<bool> cancelled{false};
+
+ private:
+  uint64_t id_;
+  uint64_t owner_;
+  pipelines::SessionConfig config_;
+  std::unique_ptr<pipelines::Pipeline> pipeline_;
+  uint64_t device_bytes_;
+};
+
+}  // namespace dn::server

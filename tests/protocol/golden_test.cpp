@@ -1,0 +1,187 @@
+// Golden bytes: written by hand from docs/protocol.md (not produced by
+// encode()), so they pin the documented layout in both directions.
+#include <gtest/gtest.h>
+
+#include "support.hpp"
+
+namespace dn::protocol::test {
+namespace {
+
+// HELLO, request_id 7, client_name "cli", auth_token "tk".
+std::vector<uint8_t> golden_hello() {
+  return Bytes{}
+      .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
+      .raw({0x01, 0x00})              // version 1.0
+      .raw({0x01, 0x00})              // type 1 = HELLO
+      .raw({0x00, 0x00, 0x00, 0x00})  // flags
+      .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
+      .raw({0x07, 0, 0, 0, 0, 0, 0, 0})  // request_id 7
+      // payload
+      .raw({0x00, 0x00, 0x00, 0x00})       // capabilities
+      .raw({0x03, 0x00}).text("cli")       // client_name
+      .raw({0x02, 0x00}).text("tk")        // auth_token
+      .v;
+}
+
+// FRAME with NO_OUTPUT, request_id 0x1122334455667788, one 2-pixel F16 depth plane.
+std::vector<uint8_t> golden_frame() {
+  return Bytes{}
+      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, 0x00})  // magic, version 1.0
+      .raw({0x06, 0x00})                          // type 6 = FRAME
+      .raw({0x01, 0x00, 0x00, 0x00})              // flags NO_OUTPUT
+      .raw({0x3A, 0x01, 0x00, 0x00})              // payload_length 314
+      .raw({0x88, 0x77, 0x66, 0x55, 0x44, 0x33, 0x22, 0x11})
+      // payload offset 0: session_id 0x0102030405060708
+      .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01})
+      .raw({0x2A, 0, 0, 0, 0, 0, 0, 0})  // 8: frame_index 42
+      .raw({0x01, 0x00, 0x00, 0x00})     // 16: flags RESET
+      .raw({0x02})                       // 20: motion UV_TO_PREVIOUS
+      .raw({0x00, 0x00, 0x00})           // 21: reserved
+      // 24: view = identity (column-major)
+      .raw({0x00, 0x00, 0x80, 0x3F}).zeros(16)
+      .raw({0x00, 0x00, 0x80, 0x3F}).zeros(16)
+      .raw({0x00, 0x00, 0x80, 0x3F}).zeros(16)
+      .raw({0x00, 0x00, 0x80, 0x3F})
+      // 88: projection: [0] = 0.5, [14] = -1
+      .raw({0x00, 0x00, 0x00, 0x3F}).zeros(13 * 4)
+      .raw({0x00, 0x00, 0x80, 0xBF}).zeros(4)
+      // 152: prev_view: [12] = 3 (translation x)
+      .zeros(12 * 4).raw({0x00, 0x00, 0x40, 0x40}).zeros(3 * 4)
+      // 216: prev_projection: zero
+      .zeros(64)
+      // 280: jitter (0.25, -0.5); 288: prev_jitter (0, 0)
+      .raw({0x00, 0x00, 0x80, 0x3E, 0x00, 0x00, 0x00, 0xBF})
+      .zeros(8)
+      // 296: plane count 1
+      .raw({0x01, 0x00})
+      // 298: id 7 (depth), format 1 (F16), reserved, byte_length 4
+      .raw({0x07, 0x01, 0x00, 0x00})
+      .raw({0x04, 0, 0, 0, 0, 0, 0, 0})
+      // 310: half 1.0, half 2.0
+      .raw({0x00, 0x3C, 0x00, 0x40})
+      .v;
+}
+
+// OPEN_SESSION 1920x1080 "svgf", F16 output, alpha = 0.2, radiance F32 + depth F16.
+std::vector<uint8_t> golden_open_session() {
+  return Bytes{}
+      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, 0x00, 0x04, 0x00})  // magic, 1.0, type 4
+      .raw({0, 0, 0, 0})                                      // flags
+      .raw({0x27, 0, 0, 0})                                   // payload_length 39
+      .raw({0x01, 0, 0, 0, 0, 0, 0, 0})                       // request_id 1
+      .raw({0x80, 0x07, 0, 0})                                // width 1920
+      .raw({0x38, 0x04, 0, 0})                                // height 1080
+      .raw({0x04, 0x00}).text("svgf")                         // pipeline
+      .raw({0x01})                                            // output_format F16
+      .raw({0x00})                                            // reserved
+      .raw({0x01, 0x00})                                      // 1 parameter
+      .raw({0x05, 0x00}).text("alpha")
+      .raw({0x9A, 0x99, 0x99, 0x99, 0x99, 0x99, 0xC9, 0x3F})  // 0.2
+      .raw({0x02, 0x00})                                      // 2 channels
+      .raw({0x00, 0x02})                                      // radiance F32
+      .raw({0x07, 0x01})                                      // depth F16
+      .v;
+}
+
+TEST(Golden, HelloDecodes) {
+  const auto bytes = golden_hello();
+  ASSERT_EQ(bytes.size(), 24u + 13u);
+  Header h;
+  ASSERT_FALSE(decode_header(bytes, kMaxMessage, h));
+  EXPECT_EQ(h.magic, 0x56534E44u);
+  EXPECT_EQ(h.version_major, 1);
+  EXPECT_EQ(h.version_minor, 0);
+  EXPECT_EQ(h.type, MessageType::Hello);
+  EXPECT_EQ(h.flags, 0u);
+  EXPECT_EQ(h.payload_length, 13u);
+  EXPECT_EQ(h.request_id, 7u);
+  Message m;
+  ASSERT_FALSE(decode_payload(h, std::span(bytes).subspan(24), m));
+  const auto& hello = std::get<Hello>(m);
+  EXPECT_EQ(hello.capabilities, 0u);
+  EXPECT_EQ(hello.client_name, "cli");
+  EXPECT_EQ(hello.auth_token, "tk");
+}
+
+TEST(Golden, HelloEncodes) {
+  Hello hello{0, "cli", "tk"};
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello());
+}
+
+TEST(Golden, FrameDecodes) {
+  const auto bytes = golden_frame();
+  ASSERT_EQ(bytes.size(), 24u + 314u);
+  Header h;
+  ASSERT_FALSE(decode_header(bytes, kMaxMessage, h));
+  EXPECT_EQ(h.type, MessageType::Frame);
+  EXPECT_EQ(h.flags, kFlagNoOutput);
+  EXPECT_EQ(h.payload_length, 314u);
+  EXPECT_EQ(h.request_id, 0x1122334455667788u);
+  const std::span<const uint8_t> payload = std::span(bytes).subspan(24);
+  Message m;
+  auto err = decode_payload(h, payload, m);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  const auto& f = std::get<Frame>(m);
+  EXPECT_EQ(f.info.session_id, 0x0102030405060708u);
+  EXPECT_EQ(f.info.frame_index, 42u);
+  EXPECT_EQ(f.info.flags, kFrameReset);
+  EXPECT_EQ(f.info.motion, MotionConvention::UvToPrevious);
+  const Mat4 identity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  EXPECT_EQ(f.info.view, identity);
+  Mat4 projection{};
+  projection[0] = 0.5f;
+  projection[14] = -1.0f;
+  EXPECT_EQ(f.info.projection, projection);
+  Mat4 prev_view{};
+  prev_view[12] = 3.0f;
+  EXPECT_EQ(f.info.prev_view, prev_view);
+  EXPECT_EQ(f.info.prev_projection, Mat4{});
+  EXPECT_EQ(f.info.jitter, (std::array<float, 2>{0.25f, -0.5f}));
+  EXPECT_EQ(f.info.prev_jitter, (std::array<float, 2>{0.0f, 0.0f}));
+  ASSERT_EQ(f.planes.size(), 1u);
+  EXPECT_EQ(f.planes[0].id, ChannelId::Depth);
+  EXPECT_EQ(f.planes[0].format, Format::F16);
+  ASSERT_EQ(f.planes[0].bytes.size(), 4u);
+  // Zero copy: the plane views the payload at offset 310.
+  EXPECT_EQ(f.planes[0].bytes.data(), payload.data() + 310);
+  EXPECT_EQ(half_to_float(uint16_t(f.planes[0].bytes[0] | f.planes[0].bytes[1] << 8)), 1.0f);
+  EXPECT_EQ(half_to_float(uint16_t(f.planes[0].bytes[2] | f.planes[0].bytes[3] << 8)), 2.0f);
+}
+
+TEST(Golden, FrameEncodes) {
+  Frame f;
+  f.info.session_id = 0x0102030405060708u;
+  f.info.frame_index = 42;
+  f.info.flags = kFrameReset;
+  f.info.motion = MotionConvention::UvToPrevious;
+  f.info.view = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  f.info.projection[0] = 0.5f;
+  f.info.projection[14] = -1.0f;
+  f.info.prev_view[12] = 3.0f;
+  f.info.jitter = {0.25f, -0.5f};
+  const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
+  f.planes.push_back({ChannelId::Depth, Format::F16, depth});
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame());
+}
+
+TEST(Golden, OpenSessionBothWays) {
+  const auto bytes = golden_open_session();
+  OpenSession o;
+  o.width = 1920;
+  o.height = 1080;
+  o.pipeline = "svgf";
+  o.output_format = Format::F16;
+  o.parameters = {{"alpha", 0.2}};
+  o.channels = {{ChannelId::Radiance, Format::F32}, {ChannelId::Depth, Format::F16}};
+  EXPECT_EQ(encode(o, 1, 0), bytes);
+
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(d.header.request_id, 1u);
+  EXPECT_EQ(diff(o, d.message), "");
+}
+
+}  // namespace
+}  // namespace dn::protocol::test
