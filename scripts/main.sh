@@ -26,15 +26,18 @@ table="$out/metrics.md"
 {
   echo "# Metrics: ${frames} frames, ${width}x${height}, dnsynth scene"
   echo
-  echo "Device: $(build/client/dn ping --server "unix://$socket" | sed -n 's/.*device: //p')"
+  echo "Device: $(build/client/dn ping --server "unix://$socket" --count 1 | sed -n '1s/.* on //p')"
   echo
-  echo "| pipeline | RMSE | relMSE | SSIM | end-to-end ms/frame | device ms/frame |"
+  echo "Means over all frames against the noise-free reference; SSIM on ACES-tone-mapped luma."
+  echo "End-to-end: submit to result through the socket, 3 frames in flight. Server: upload + device passes + download."
+  echo
+  echo "| pipeline | RMSE | relMSE | SSIM | end-to-end ms/frame | server ms/frame |"
   echo "|---|---|---|---|---|---|"
 } > "$table"
 
 for pipeline in passthrough accumulate; do
   mkdir -p "$out/$pipeline"
-  build/client/dn denoise --server "unix://$socket" --pipeline "$pipeline" --preset dnrender \
+  build/client/dn denoise -q --server "unix://$socket" --pipeline "$pipeline" --preset dnrender \
     --input "$out/input/frame_%04d.exr" --start 0 --end $((frames - 1)) \
     --output "$out/$pipeline/frame_%04d.exr" --png "$out/$pipeline/frame_%04d.png" \
     -r "$out/input/ref_%04d.exr" --summary "$out/$pipeline/summary.tsv"

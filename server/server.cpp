@@ -84,7 +84,7 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
     endpoints.push_back(*e);
   }
   for (const auto& e : endpoints) {
-    listeners_.push_back(net::open_listener(e));
+    listeners_.push_back(net::open_listener(e, !options_.allowed_uids.empty()));
     net::Listener& l = listeners_.back();
     log::info("listen", {{"url", listening_urls().back()}, {"auth", options_.token.empty() ? "none" : "token"}});
     size_t index = listeners_.size() - 1;

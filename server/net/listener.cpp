@@ -86,7 +86,7 @@ namespace {
 }
 }  // namespace
 
-Listener open_listener(const Endpoint& e) {
+Listener open_listener(const Endpoint& e, bool other_users) {
   Listener l;
   l.endpoint = e;
   if (e.kind == Endpoint::Kind::Unix) {
@@ -101,6 +101,7 @@ Listener open_listener(const Endpoint& e) {
     mode_t old = ::umask(0077);  // owner-only socket file: peer credentials are checked too
     int rc = ::bind(l.fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
     ::umask(old);
+    if (rc == 0) ::chmod(e.path.c_str(), other_users ? 0666 : 0600);
     if (rc != 0) {
       int saved = errno;
       ::close(l.fd);

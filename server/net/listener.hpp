@@ -28,7 +28,9 @@ struct Listener {
 };
 
 // Creates a non-blocking listening socket; throws std::runtime_error naming the endpoint and errno.
-Listener open_listener(const Endpoint& endpoint);
+// A Unix socket file is owner-only (0600) unless `other_users` is set, when it
+// is 0666 and the server's peer-credential check alone decides who may talk.
+Listener open_listener(const Endpoint& endpoint, bool other_users = false);
 void close_listener(Listener& listener);
 
 }  // namespace dn::server::net

@@ -1,5 +1,7 @@
 // Authentication and listener rules of a real dnserver process.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -63,6 +65,55 @@ TEST(Auth, NonLoopbackListenerWithTokenStarts) {
   EXPECT_TRUE(server.running());
   EXPECT_NE(server.log().find("url=tcp://0.0.0.0:"), std::string::npos);
   ::unlink(file.c_str());
+}
+
+// Connects to the Unix socket as `uid` in a child process; returns the ERROR
+// code received (0 for WELCOME, -1 when the connection itself failed).
+int hello_as_uid(const std::string& url, uid_t uid) {
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) return -2;
+  pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(pipe_fds[0]);
+    int result = -1;
+    if (::setgid(uid) == 0 && ::setuid(uid) == 0) {
+      try {
+        RawClient c(url);
+        c.send(protocol::Hello{0, "uid-test", ""}, 1);
+        auto r = c.receive(10.0);
+        if (r && std::get_if<protocol::Welcome>(&r->message)) result = 0;
+        if (r && std::get_if<protocol::Error>(&r->message))
+          result = static_cast<int>(std::get<protocol::Error>(r->message).code);
+      } catch (...) {
+      }
+    }
+    [[maybe_unused]] auto w = ::write(pipe_fds[1], &result, sizeof result);
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  int result = -3;
+  [[maybe_unused]] auto r = ::read(pipe_fds[0], &result, sizeof result);
+  ::close(pipe_fds[0]);
+  ::waitpid(pid, nullptr, 0);
+  return result;
+}
+
+TEST(Auth, UnixPeerCredentialsChecked) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to connect as other uids";
+  ServerProcess server({"--allow-uid", "12345"});
+  EXPECT_EQ(hello_as_uid(server.unix_url(), 12345), 0) << "an allowed uid was refused";
+  EXPECT_EQ(hello_as_uid(server.unix_url(), 23456), static_cast<int>(ErrorCode::Unauthenticated))
+      << "a uid not allowed got in";
+  // The TCP listener does not use peer credentials.
+  RawClient tcp(server.tcp_url());
+  EXPECT_NO_THROW(tcp.hello());
+}
+
+TEST(Auth, UnixSocketIsOwnerOnlyByDefault) {
+  ServerProcess server;
+  struct stat st{};
+  ASSERT_EQ(::stat(server.unix_url().substr(7).c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
 }
 
 TEST(Auth, BadFlagsNameTheFlag) {

@@ -270,6 +270,38 @@ TEST(Session, HandshakeDeadline) {
   EXPECT_TRUE(c.closed_by_server());
 }
 
+TEST(Session, HeartbeatThenIdleTimeout) {
+  ServerProcess server({"--heartbeat", "0.3", "--idle-timeout", "1.5"});
+  RawClient c(server.tcp_url());
+  c.hello();
+  auto ping = c.receive(5.0);
+  ASSERT_TRUE(ping);
+  ASSERT_NE(std::get_if<protocol::Ping>(&ping->message), nullptr) << "no heartbeat PING";
+  // Answering keeps the connection alive past the idle timeout...
+  for (int i = 0; i < 4; ++i) {
+    c.send(protocol::Pong{std::get<protocol::Ping>(ping->message).payload}, 0);
+    usleep(500000);
+  }
+  c.send(protocol::Ping{3}, 8);
+  bool alive = false;
+  for (int i = 0; i < 10 && !alive; ++i) {
+    auto r = c.receive(2.0);
+    ASSERT_TRUE(r) << "closed although it answered every heartbeat";
+    alive = std::get_if<protocol::Pong>(&r->message) != nullptr;
+  }
+  EXPECT_TRUE(alive);
+  // ...silence does not.
+  std::optional<protocol::Error> timeout;
+  for (int i = 0; i < 20 && !timeout; ++i) {
+    auto r = c.receive(5.0);
+    if (!r) break;
+    if (auto* e = std::get_if<protocol::Error>(&r->message)) timeout = *e;
+  }
+  ASSERT_TRUE(timeout);
+  EXPECT_EQ(timeout->code, ErrorCode::Timeout);
+  EXPECT_TRUE(c.closed_by_server());
+}
+
 TEST(Session, SigtermFinishesFramesInFlight) {
   ServerProcess server;
   RawClient c(server.tcp_url());

@@ -1,0 +1,58 @@
+// A small command-line parser for the dn tool: "--name value", "--name=value",
+// boolean flags, repeatable options and short aliases ("-r").
+#pragma once
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace dn::cli {
+
+// Bad command line: printed as "dn <cmd>: <message>" and exit status 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Args {
+ public:
+  struct Spec {
+    std::string name;        // long name without "--"
+    std::string alias;       // short alias with "-", e.g. "-r"; may be empty
+    bool takes_value = true;
+    bool repeatable = false;
+    std::string help;        // one line, printed by usage()
+    std::string metavar = "VALUE";
+  };
+
+  Args(std::string command, std::vector<Spec> specs) : command_(std::move(command)), specs_(std::move(specs)) {}
+
+  // Throws UsageError on unknown options, missing values, repeated
+  // non-repeatable options and positional arguments.
+  void parse(const std::vector<std::string>& argv);
+
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  std::optional<std::string> get(const std::string& name) const;
+  std::string get_or(const std::string& name, const std::string& fallback) const;
+  std::string require(const std::string& name) const;  // UsageError if absent
+  std::vector<std::string> all(const std::string& name) const;
+  long long get_int(const std::string& name, long long fallback, long long min, long long max) const;
+  double get_double(const std::string& name, double fallback) const;
+
+  std::string usage() const;  // option list
+
+ private:
+  const Spec* find(const std::string& name) const;
+  std::string command_;
+  std::vector<Spec> specs_;
+  std::map<std::string, std::vector<std::string>> values_;
+};
+
+long long parse_int(const std::string& text, const std::string& what);
+double parse_double(const std::string& text, const std::string& what);
+// "name=value" -> {name, value}; UsageError naming `what` otherwise.
+std::pair<std::string, std::string> split_assignment(const std::string& text, const std::string& what);
+
+}  // namespace dn::cli

@@ -1,0 +1,348 @@
+// dn denoise: stream an EXR sequence through a server session, pipelined.
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <future>
+#include <map>
+#include <optional>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "dn/client/client.hpp"
+#include "dn/image/exr_io.hpp"
+#include "dn/image/metrics.hpp"
+#include "dn/image/png.hpp"
+#include "frame_source.hpp"
+#include "presets.hpp"
+#include "progress.hpp"
+
+namespace dn::cli {
+
+using protocol::ChannelId;
+using protocol::Format;
+
+namespace {
+
+const std::vector<Args::Spec> kSpecs = {
+    {"server", "", true, false, "server address: tcp://HOST:PORT or unix:///path (default $DN_SERVER)", "URL"},
+    {"pipeline", "", true, false, "denoising pipeline (svgf, svgf-fb, ...; see 'dn ping')", "NAME"},
+    {"input", "", true, false, "input EXR path pattern, e.g. 'in/frame_%04d.exr' or 'in/####.exr'", "PATTERN"},
+    {"start", "", true, false, "first frame number (default 0)", "N"},
+    {"end", "", true, false, "last frame number, inclusive (default: --start)", "M"},
+    {"step", "", true, false, "frame number step (default 1)", "S"},
+    {"output", "-o", true, false, "output EXR path pattern (RGB, half unless --exr-float)", "PATTERN"},
+    {"png", "", true, false, "also write tone-mapped 8-bit PNGs to this pattern", "PATTERN"},
+    {"preset", "", true, false, "channel layout of the input: dnrender | cycles | auto (default auto)", "NAME"},
+    {"layer", "", true, false, "Cycles view layer name (default: detected from '<layer>.Combined.R')", "NAME"},
+    {"channel", "", true, true, "map a protocol channel: NAME=LAYER | NAME=A+B | NAME=C1,C2,C3 [@cycles]", "MAP"},
+    {"channels", "", true, false, "send exactly these protocol channels (comma-separated)", "LIST"},
+    {"fp16", "", false, false, "send input planes and receive the output as fp16", ""},
+    {"output-format", "", true, false, "f32 | f16 output on the wire (default f16 with --fp16, else f32)", "FMT"},
+    {"param", "", true, true, "pipeline parameter NAME=VALUE", "NAME=VALUE"},
+    {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE and SSIM per frame", "PATTERN"},
+    {"in-flight", "", true, false, "frames kept in flight (default 3)", "K"},
+    {"token-file", "", true, false, "file holding the auth token (default $DN_TOKEN / $DN_TOKEN_FILE)", "FILE"},
+    {"tonemap", "", true, false, "PNG and SSIM tone map: aces | reinhard | clamp (default aces)", "OP"},
+    {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
+    {"exr-float", "", false, false, "write 32-bit float output EXRs", ""},
+    {"motion-convention", "", true, false,
+     "motion vectors in the input: to-previous | to-next | uv (default: preset's)", "NAME"},
+    {"timeout", "", true, false, "seconds to wait for any one reply (default 120)", "SECONDS"},
+    {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
+    {"quiet", "-q", false, false, "no per-frame output", ""},
+    {"help", "-h", false, false, "this help", ""},
+};
+
+constexpr const char* kUsage =
+    "usage: dn denoise --server URL --pipeline NAME --input PATTERN [--start N --end M] [--output PATTERN]\n"
+    "                  [--png PATTERN] [--preset dnrender|cycles|auto] [--channel NAME=LAYER ...] [--fp16]\n"
+    "                  [--param NAME=VALUE ...] [-r PATTERN] [--in-flight K] [--token-file FILE]\n";
+
+protocol::Mat4 identity() {
+  protocol::Mat4 m{};
+  m[0] = m[5] = m[10] = m[15] = 1.0f;
+  return m;
+}
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+void ensure_parent_dir(const std::string& path) {
+  const auto parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+  }
+}
+
+struct Metrics {
+  double rmse = 0, relmse = 0, ssim = 0;
+};
+
+struct Totals {
+  size_t frames = 0, with_ref = 0;
+  double latency_ms = 0, server_ms = 0;
+  double rmse = 0, relmse = 0, ssim = 0;
+};
+
+}  // namespace
+
+int run_denoise(const std::vector<std::string>& argv) {
+  Args args("denoise", kSpecs);
+  args.parse(argv);
+  if (args.has("help")) {
+    std::printf("%s\noptions:\n%s", kUsage, args.usage().c_str());
+    return 0;
+  }
+
+  // ---- options ---------------------------------------------------------------
+  const std::string url = server_url(args.get_or("server", ""));
+  const std::string pipeline_name = args.require("pipeline");
+  const std::string input = args.require("input");
+  const auto output = args.get("output");
+  const auto png = args.get("png");
+  const auto reference = args.get("reference");
+  const bool fp16 = args.has("fp16");
+  const bool quiet = args.has("quiet");
+  const bool exr_float = args.has("exr-float");
+  const long long start = args.get_int("start", 0, 0, INT64_MAX / 2);
+  const long long end = args.get_int("end", start, 0, INT64_MAX / 2);
+  const long long step = args.get_int("step", 1, 1, 1 << 30);
+  const long long in_flight = args.get_int("in-flight", 3, 1, 1024);
+  const double timeout_s = args.get_double("timeout", 120.0);
+  const float exposure = float(args.get_double("exposure", 1.0));
+  image::Tonemap tonemap = image::Tonemap::Aces;
+  try {
+    tonemap = image::parse_tonemap(args.get_or("tonemap", "aces"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--tonemap: ") + e.what());
+  }
+  Format output_format = fp16 ? Format::F16 : Format::F32;
+  if (auto f = args.get("output-format")) {
+    if (*f == "f16") output_format = Format::F16;
+    else if (*f == "f32") output_format = Format::F32;
+    else throw UsageError("--output-format: expected f16 or f32, got '" + *f + "'");
+  }
+  std::optional<protocol::MotionConvention> motion_override;
+  if (auto m = args.get("motion-convention")) {
+    if (*m == "to-previous") motion_override = protocol::MotionConvention::PixelsToPrevious;
+    else if (*m == "to-next") motion_override = protocol::MotionConvention::PixelsToNext;
+    else if (*m == "uv") motion_override = protocol::MotionConvention::UvToPrevious;
+    else throw UsageError("--motion-convention: expected to-previous, to-next or uv, got '" + *m + "'");
+  }
+  if (end < start) throw UsageError("--end " + std::to_string(end) + " is before --start " + std::to_string(start));
+  std::vector<protocol::Parameter> params;
+  for (const auto& p : args.all("param")) {
+    auto [name, value] = split_assignment(p, "--param");
+    params.push_back({name, parse_double(value, "--param " + name)});
+  }
+  std::vector<ChannelSpec> overrides;
+  for (const auto& c : args.all("channel")) {
+    try {
+      overrides.push_back(parse_channel_override(c));
+    } catch (const ChannelMapError& e) {
+      throw UsageError(e.what());
+    }
+  }
+  std::optional<std::vector<ChannelId>> only;
+  if (auto list = args.get("channels")) {
+    try {
+      only = parse_channel_list(*list);
+    } catch (const ChannelMapError& e) {
+      throw UsageError(e.what());
+    }
+  }
+
+  std::vector<long long> frames;
+  const bool sequence = has_frame_placeholder(input);
+  if (sequence) {
+    for (long long n = start; n <= end; n += step) frames.push_back(n);
+  } else {
+    if (args.has("end") && end != start) throw UsageError("--input has no frame-number placeholder (%04d or ####)");
+    frames.push_back(start);
+  }
+  for (const auto* opt : {&output, &png, &reference})
+    if (*opt && frames.size() > 1 && !has_frame_placeholder(**opt))
+      throw UsageError("output/reference pattern '" + **opt + "' has no frame-number placeholder (%04d or ####)");
+
+  // ---- first frame: size and channel layout ---------------------------------
+  const std::string first_path = format_frame_path(input, frames.front());
+  image::ExrReader first(first_path);
+  const int width = first.width(), height = first.height();
+  Preset preset = make_preset(args.get_or("preset", "auto"), first.channels(), args.get_or("layer", ""));
+
+  // ---- connect and open the session -----------------------------------------
+  client::ConnectOptions copts;
+  copts.client_name = "dn-cli";
+  if (auto tf = args.get("token-file")) copts.token_file = *tf;
+  copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
+  client::Connection conn = client::Connection::connect(url, copts);
+  const protocol::PipelineInfo* pipeline = conn.find_pipeline(pipeline_name);
+  if (!pipeline && !conn.welcome().pipelines.empty()) {
+    std::string names;
+    for (const auto& p : conn.welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
+    throw std::runtime_error("server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
+                             "' (it offers: " + names + ")");
+  }
+  const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
+
+  client::SessionDesc desc;
+  desc.width = uint32_t(width);
+  desc.height = uint32_t(height);
+  desc.pipeline = pipeline_name;
+  desc.output_format = output_format;
+  desc.parameters = params;
+  desc.max_in_flight = uint32_t(in_flight);
+  for (const auto& ch : plan) desc.channel(ch.id, fp16 ? Format::F16 : Format::F32);
+
+  if (!quiet) {
+    std::fprintf(stderr, "dn: %s (%s), %dx%d, pipeline %s, preset %s, %zu frame%s\n", conn.endpoint().c_str(),
+                 conn.welcome().device_name.c_str(), width, height, pipeline_name.c_str(), preset.name.c_str(),
+                 frames.size(), frames.size() == 1 ? "" : "s");
+    for (const auto& ch : plan)
+      std::fprintf(stderr, "dn:   %-12s <- %s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str());
+  }
+  client::Session session = conn.open_session(desc);
+
+  const bool want_output = output || png || reference;
+  const auto motion = motion_override.value_or(protocol::MotionConvention::PixelsToPrevious);
+
+  // ---- the pipelined loop ------------------------------------------------------
+  Progress progress(frames.size(), Progress::stderr_is_tty(), quiet);
+  Totals totals;
+  const auto t_begin = std::chrono::steady_clock::now();
+  std::deque<long long> submitted;  // frame numbers in flight, in order
+
+  auto handle = [&](const client::Result& r) {
+    const long long number = (long long)r.frame_index;
+    submitted.pop_front();
+    std::vector<float> rgb;
+    if (r.has_output()) rgb = r.rgb();
+    if (output) {
+      const std::string path = format_frame_path(*output, number);
+      ensure_parent_dir(path);
+      image::write_exr_rgb(path, int(r.width), int(r.height), rgb.data(),
+                           exr_float ? image::ExrPixelType::Float : image::ExrPixelType::Half);
+    }
+    if (png) {
+      const std::string path = format_frame_path(*png, number);
+      ensure_parent_dir(path);
+      const auto bytes = image::to_srgb8(rgb.data(), size_t(r.width) * r.height, tonemap, exposure);
+      image::write_png_rgb8(path, int(r.width), int(r.height), bytes.data());
+    }
+    std::optional<Metrics> m;
+    if (reference) {
+      int rw = 0, rh = 0;
+      const std::string path = format_frame_path(*reference, number);
+      const std::vector<float> ref = image::read_exr_rgb(path, rw, rh);
+      if (rw != int(r.width) || rh != int(r.height))
+        throw std::runtime_error("reference " + path + " is " + std::to_string(rw) + "x" + std::to_string(rh) +
+                                 ", the output is " + std::to_string(r.width) + "x" + std::to_string(r.height));
+      m = Metrics{image::rmse(rgb.data(), ref.data(), rgb.size()),
+                  image::relative_mse(rgb.data(), ref.data(), rgb.size()),
+                  image::ssim_tonemapped(rgb.data(), ref.data(), rw, rh, tonemap, exposure)};
+      totals.with_ref++;
+      totals.rmse += m->rmse;
+      totals.relmse += m->relmse;
+      totals.ssim += m->ssim;
+    }
+    totals.frames++;
+    totals.latency_ms += r.latency.count();
+    totals.server_ms += r.total_timing_ms();
+
+    char head[96];
+    std::snprintf(head, sizeof head, "frame %04lld  e2e %.1f ms  server %.1f ms", number, r.latency.count(),
+                  r.total_timing_ms());
+    std::string line = head;
+    if (!r.timings.empty()) {
+      line += " [";
+      for (size_t i = 0; i < r.timings.size(); ++i)
+        line += (i ? ", " : "") + r.timings[i].name + " " + fmt("%.2f", r.timings[i].milliseconds);
+      line += "]";
+    }
+    std::string status = fmt("e2e %.1f ms", r.latency.count()) + fmt("  server %.1f ms", r.total_timing_ms());
+    if (m) {
+      const std::string q = fmt("  rmse %.5f", m->rmse) + fmt("  relmse %.5f", m->relmse) + fmt("  ssim %.4f", m->ssim);
+      line += q;
+      status += fmt("  rmse %.5f", m->rmse) + fmt("  ssim %.4f", m->ssim);
+    }
+    progress.frame_done(line, status);
+  };
+  // Attach the frame number to errors thrown for a frame.
+  auto collect = [&](bool newest, auto&& fn) {
+    try {
+      return fn();
+    } catch (const client::Error& e) {
+      const long long n = submitted.empty() ? -1 : newest ? submitted.back() : submitted.front();
+      throw std::runtime_error("frame " + std::to_string(n) + ": " + e.what());
+    }
+  };
+
+  auto load = [&](size_t i) {
+    const std::string path = format_frame_path(input, frames[i]);
+    image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
+    return load_frame(exr, plan, frames[i]);
+  };
+  std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));
+  for (size_t i = 0; i < frames.size(); ++i) {
+    LoadedFrame f = next.get();
+    if (i + 1 < frames.size()) next = std::async(std::launch::async, load, i + 1);
+    if (f.width != width || f.height != height)
+      throw std::runtime_error(f.path + " is " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                               ", the sequence started at " + std::to_string(width) + "x" + std::to_string(height));
+    client::FrameInput in;
+    in.frame_index = uint64_t(f.number);
+    in.no_output = !want_output;
+    in.info.motion = motion;
+    in.info.view = f.camera.view.value_or(identity());
+    in.info.projection = f.camera.projection.value_or(identity());
+    if (f.camera.jitter) in.info.jitter = *f.camera.jitter;
+    if (f.camera.prev_view && f.camera.prev_projection) {
+      in.fill_previous_camera = false;
+      in.info.prev_view = *f.camera.prev_view;
+      in.info.prev_projection = *f.camera.prev_projection;
+      in.info.prev_jitter = f.camera.prev_jitter.value_or(std::array<float, 2>{});
+    }
+    if (i == 0) in.reset();
+    for (const auto& p : f.planes) in.add(p.id, std::span<const float>(p.data));
+    submitted.push_back(f.number);
+    collect(true, [&] { return session.submit(in); });
+    while (auto r = collect(false, [&] { return session.poll(); })) handle(*r);
+  }
+  while (session.in_flight() > 0) handle(collect(false, [&] { return session.wait(); }));
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
+  progress.finish();
+  session.close();
+
+  if (!quiet) {
+    const double n = double(std::max<size_t>(totals.frames, 1));
+    std::fprintf(stderr, "dn: %zu frames in %.2f s (%.2f fps), mean e2e %.1f ms, mean server %.1f ms\n", totals.frames,
+                 wall, wall > 0 ? double(totals.frames) / wall : 0.0, totals.latency_ms / n, totals.server_ms / n);
+  }
+  if (reference && totals.with_ref) {
+    const double n = double(totals.with_ref);
+    std::printf("mean rmse %.6f  relmse %.6f  ssim %.5f  (%zu frames, ssim on %s-tone-mapped luma)\n",
+                totals.rmse / n, totals.relmse / n, totals.ssim / n, totals.with_ref, image::to_string(tonemap));
+  }
+  if (auto summary = args.get("summary")) {
+    ensure_parent_dir(*summary);
+    std::FILE* f = std::fopen(summary->c_str(), "w");
+    if (!f) throw std::runtime_error("cannot write --summary file " + *summary);
+    const double n = double(std::max<size_t>(totals.frames, 1));
+    const double r = double(std::max<size_t>(totals.with_ref, 1));
+    const bool have_ref = totals.with_ref > 0;
+    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\n");
+    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\n", have_ref ? totals.rmse / r : NAN,
+                 have_ref ? totals.relmse / r : NAN, have_ref ? totals.ssim / r : NAN, totals.latency_ms / n,
+                 totals.server_ms / n, totals.frames, wall > 0 ? double(totals.frames) / wall : 0.0);
+    std::fclose(f);
+  }
+  return 0;
+}
+
+}  // namespace dn::cli

@@ -1,0 +1,60 @@
+// dn: command-line client of dnserver.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "dn/client/client.hpp"
+
+namespace {
+
+constexpr const char* kHelp =
+    "usage: dn <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  denoise   denoise an EXR sequence through a server session\n"
+    "  watch     attach to a running session and write its newest frames\n"
+    "  ping      handshake, server limits and pipelines, round-trip time\n"
+    "  stats     print the server's statistics\n"
+    "\n"
+    "'dn <command> --help' lists the options of a command. The server address is\n"
+    "--server tcp://HOST:PORT or unix:///path (default $DN_SERVER); the auth token\n"
+    "comes from --token-file, $DN_TOKEN or $DN_TOKEN_FILE.\n";
+
+std::string one_line(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+    std::fputs(kHelp, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version")) {
+    std::printf("dn %s\n", dn::client::kClientVersion);
+    return 0;
+  }
+  const std::string cmd = argv[1];
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  try {
+    if (cmd == "denoise") return dn::cli::run_denoise(args);
+    if (cmd == "watch") return dn::cli::run_watch(args);
+    if (cmd == "ping") return dn::cli::run_ping(args);
+    if (cmd == "stats") return dn::cli::run_stats(args);
+    std::fprintf(stderr, "dn: unknown command '%s' (expected denoise, watch, ping or stats)\n", cmd.c_str());
+    return 2;
+  } catch (const dn::cli::UsageError& e) {
+    std::fprintf(stderr, "dn %s: %s\n", cmd.c_str(), one_line(e.what()).c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dn %s: error: %s\n", cmd.c_str(), one_line(e.what()).c_str());
+    return 1;
+  }
+}

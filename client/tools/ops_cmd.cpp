@@ -1,0 +1,87 @@
+// dn ping / dn stats: small operational checks.
+#include <cstdio>
+#include <cstdlib>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "dn/client/client.hpp"
+
+namespace dn::cli {
+
+std::string server_url(const std::string& option_value) {
+  if (!option_value.empty()) return option_value;
+  if (const char* env = std::getenv("DN_SERVER"); env && *env) return env;
+  throw UsageError("missing --server URL (or set DN_SERVER), e.g. --server unix:///tmp/dnserver.sock");
+}
+
+namespace {
+
+std::string channel_set(uint64_t mask) {
+  std::string out;
+  for (const auto& c : protocol::kChannels)
+    if (mask & protocol::channel_bit(c.id)) out += (out.empty() ? "" : ",") + std::string(c.name);
+  return out.empty() ? "-" : out;
+}
+
+client::Connection connect_for(const Args& args, const char* name) {
+  client::ConnectOptions o;
+  o.client_name = name;
+  if (auto tf = args.get("token-file")) o.token_file = *tf;
+  const double t = args.get_double("timeout", 10.0);
+  o.connect_timeout = o.io_timeout = std::chrono::milliseconds(static_cast<long long>(t * 1000.0));
+  return client::Connection::connect(server_url(args.get_or("server", "")), o);
+}
+
+}  // namespace
+
+int run_ping(const std::vector<std::string>& argv) {
+  Args args("ping", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+                     {"count", "-c", true, false, "number of pings (default 3)", "N"},
+                     {"token-file", "", true, false, "file holding the auth token", "FILE"},
+                     {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
+                     {"help", "-h", false, false, "this help", ""}});
+  args.parse(argv);
+  if (args.has("help")) {
+    std::printf("usage: dn ping --server URL [--count N]\n\noptions:\n%s", args.usage().c_str());
+    return 0;
+  }
+  const long long count = args.get_int("count", 3, 1, 1000000);
+  client::Connection conn = connect_for(args, "dn-ping");
+  const auto& w = conn.welcome();
+  std::printf("%s: %s on %s\n", conn.endpoint().c_str(), w.server_version.c_str(), w.device_name.c_str());
+  std::printf("limits: max message %llu bytes, %llu bytes per session, %u sessions, %ux%u, %u frames in flight\n",
+              (unsigned long long)w.limits.max_message_bytes, (unsigned long long)w.limits.max_session_bytes,
+              w.limits.max_sessions, w.limits.max_width, w.limits.max_height, w.limits.max_frames_in_flight);
+  for (const auto& p : w.pipelines)
+    std::printf("pipeline %-12s requires %s; optional %s\n", p.name.c_str(), channel_set(p.required_channels).c_str(),
+                channel_set(p.optional_channels).c_str());
+  double best = 1e300, sum = 0;
+  for (long long i = 0; i < count; ++i) {
+    const double ms = conn.ping().count();
+    best = std::min(best, ms);
+    sum += ms;
+    std::printf("pong %lld: %.3f ms\n", i + 1, ms);
+  }
+  std::printf("rtt min %.3f ms, mean %.3f ms\n", best, sum / double(count));
+  return 0;
+}
+
+int run_stats(const std::vector<std::string>& argv) {
+  Args args("stats", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+                      {"token-file", "", true, false, "file holding the auth token", "FILE"},
+                      {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
+                      {"help", "-h", false, false, "this help", ""}});
+  args.parse(argv);
+  if (args.has("help")) {
+    std::printf("usage: dn stats --server URL\n\noptions:\n%s", args.usage().c_str());
+    return 0;
+  }
+  client::Connection conn = connect_for(args, "dn-stats");
+  const protocol::Stats s = conn.stats();
+  size_t width = 0;
+  for (const auto& v : s.values) width = std::max(width, v.name.size());
+  for (const auto& v : s.values) std::printf("%-*s %.17g\n", int(width), v.name.c_str(), v.value);
+  return 0;
+}
+
+}  // namespace dn::cli

@@ -1,0 +1,101 @@
+// Channel maps: which EXR channels make each protocol channel, for the
+// example renderer's own layout ("dnrender") and Blender Cycles multilayer
+// EXRs ("cycles"), plus user overrides (--channel NAME=SPEC) and the Cycles
+// depth/vector conversions. docs/client.md documents every mapping.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "dn/protocol/channels.hpp"
+#include "dn/protocol/messages.hpp"
+
+namespace dn::cli {
+
+// Missing or unresolvable channels; what() names the channel and what was tried.
+class ChannelMapError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class Convert {
+  None,
+  CyclesDepth,   // Depth.Z: view-axis distance; background 1e10 -> +inf
+  CyclesVector,  // Vector.XY: (p_prev - p) in raster space, +y up -> PixelsToPrevious, y down
+};
+
+// One summand: either explicit EXR channels (one per component) or a layer
+// whose component channels are found in the file (LAYER.R/G/B, LAYER.X/Y/Z, ...).
+struct TermSpec {
+  std::vector<std::string> channels;  // explicit
+  std::string layer;                  // or a layer name
+};
+// One way to make a channel: the sum of its terms, then a conversion.
+struct RecipeSpec {
+  std::vector<TermSpec> terms;
+  Convert convert = Convert::None;
+};
+// All ways to make a protocol channel, tried in order.
+struct ChannelSpec {
+  protocol::ChannelId id = protocol::ChannelId::Radiance;
+  std::vector<RecipeSpec> alternatives;
+  bool user = false;  // from --channel: always sent
+};
+
+struct Preset {
+  std::string name;  // "dnrender" or "cycles"
+  std::string layer_prefix;  // cycles: detected view layer, e.g. "ViewLayer"
+  std::vector<ChannelSpec> channels;
+};
+
+// The preset for `name` ("dnrender", "cycles" or "auto": cycles when the file
+// has a "<layer>.Combined.R" channel). `view_layer` overrides the Cycles view
+// layer detection. Throws ChannelMapError for an unknown name.
+Preset make_preset(const std::string& name, const std::vector<std::string>& exr_channels,
+                   const std::string& view_layer = {});
+
+// Parses "--channel NAME=SPEC". SPEC: terms joined by '+'; a term is a layer
+// name (DiffCol, ViewLayer.DiffCol) or explicit channels separated by ','
+// (N.X,N.Y,N.Z). A trailing "@cycles" applies the Cycles conversion (depth,
+// motion). Throws UsageError-like ChannelMapError on syntax errors.
+ChannelSpec parse_channel_override(const std::string& assignment);
+
+// A concrete recipe: per term, one EXR channel name per component.
+struct ResolvedChannel {
+  protocol::ChannelId id = protocol::ChannelId::Radiance;
+  std::vector<std::vector<std::string>> terms;
+  Convert convert = Convert::None;
+  std::string describe() const;  // "ViewLayer.DiffDir.{R,G,B} + ViewLayer.DiffInd.{R,G,B}"
+};
+
+// First alternative whose channels all exist in `exr_channels`.
+std::optional<ResolvedChannel> resolve(const ChannelSpec& spec, const std::vector<std::string>& exr_channels,
+                                       const std::string& layer_prefix);
+// The layers an alternative list tries, for error messages ("ViewLayer.DiffCol, DiffCol").
+std::string describe_tried(const ChannelSpec& spec, const std::string& layer_prefix);
+
+// Decides what to send: every channel the pipeline requires (error naming the
+// channel and the layers tried when one is missing), every --channel override,
+// and the pipeline's optional channels the file has. The split-radiance
+// channels (diffuse, specular) are left out when radiance is sent, unless
+// required or overridden. `only` (from --channels) replaces the automatic
+// choice. `pipeline` may be null (server did not list it): then `only` or the
+// overrides, else radiance/albedo/normal/depth/motion when present.
+std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vector<ChannelSpec>& overrides,
+                                           const protocol::PipelineInfo* pipeline,
+                                           const std::optional<std::vector<protocol::ChannelId>>& only,
+                                           const std::vector<std::string>& exr_channels, const std::string& file);
+
+// Parses "radiance,albedo,..." (protocol channel names).
+std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);
+
+// Cycles conversions, in place on interleaved data.
+// Depth: values >= 1e9 (Cycles writes 1e10 for background), non-finite or <= 0 become +inf.
+void convert_cycles_depth(std::span<float> depth);
+// Vector: xy = (V.x, -V.y), in place on 2-component data.
+void convert_cycles_vector(std::span<float> xy);
+
+}  // namespace dn::cli

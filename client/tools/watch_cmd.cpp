@@ -1,0 +1,115 @@
+// dn watch: attach to a running session read-only and write its newest frames.
+#include <cstdio>
+#include <filesystem>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "dn/client/client.hpp"
+#include "dn/image/exr_io.hpp"
+#include "dn/image/metrics.hpp"
+#include "dn/image/png.hpp"
+#include "frame_source.hpp"
+#include "progress.hpp"
+
+namespace dn::cli {
+
+namespace {
+
+const std::vector<Args::Spec> kSpecs = {
+    {"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+    {"session", "", true, false, "id of the session to watch (see 'dn stats')", "ID"},
+    {"output", "-o", true, false, "output pattern; .png (tone-mapped) or .exr by extension", "PATTERN"},
+    {"count", "", true, false, "stop after N frames (default: until the session ends)", "N"},
+    {"token-file", "", true, false, "file holding the auth token", "FILE"},
+    {"tonemap", "", true, false, "PNG tone map: aces | reinhard | clamp (default aces)", "OP"},
+    {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
+    {"timeout", "", true, false, "seconds to wait for the next frame (default 600)", "SECONDS"},
+    {"quiet", "-q", false, false, "no per-frame output", ""},
+    {"help", "-h", false, false, "this help", ""},
+};
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+int run_watch(const std::vector<std::string>& argv) {
+  Args args("watch", kSpecs);
+  args.parse(argv);
+  if (args.has("help")) {
+    std::printf("usage: dn watch --server URL --session ID --output 'w/frame_%%04d.png' [--count N]\n\noptions:\n%s",
+                args.usage().c_str());
+    return 0;
+  }
+  const std::string url = server_url(args.get_or("server", ""));
+  const long long session_id = args.get_int("session", -1, 0, INT64_MAX);
+  if (session_id < 0) throw UsageError("missing required option --session");
+  const std::string output = args.require("output");
+  const long long count = args.get_int("count", 0, 0, INT64_MAX);
+  const bool quiet = args.has("quiet");
+  const float exposure = float(args.get_double("exposure", 1.0));
+  const double timeout_s = args.get_double("timeout", 600.0);
+  image::Tonemap tonemap = image::Tonemap::Aces;
+  try {
+    tonemap = image::parse_tonemap(args.get_or("tonemap", "aces"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--tonemap: ") + e.what());
+  }
+  const bool as_png = ends_with(output, ".png");
+  if (!as_png && !ends_with(output, ".exr")) throw UsageError("--output must end in .png or .exr");
+  if (count != 1 && !has_frame_placeholder(output))
+    throw UsageError("--output '" + output + "' has no frame-number placeholder (%04d or ####)");
+
+  client::ConnectOptions copts;
+  copts.client_name = "dn-watch";
+  if (auto tf = args.get("token-file")) copts.token_file = *tf;
+  copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
+  client::Connection conn = client::Connection::connect(url, copts);
+  client::Watcher watcher = conn.attach(uint64_t(session_id));
+  const auto& info = watcher.info();
+  if (!quiet)
+    std::fprintf(stderr, "dn: watching session %llu on %s: %ux%u, pipeline %s\n", (unsigned long long)session_id,
+                 conn.endpoint().c_str(), info.width, info.height, info.pipeline.c_str());
+
+  Progress progress(size_t(count), Progress::stderr_is_tty() && count > 0, quiet);
+  long long written = 0;
+  for (;;) {
+    if (count > 0 && written >= count) break;
+    client::Result r;
+    try {
+      r = watcher.next();
+    } catch (const client::Error& e) {
+      // The session ending is the normal end of an unbounded watch.
+      if (count == 0 && e.kind() == client::ErrorKind::Server && e.code() == protocol::ErrorCode::UnknownSession) {
+        progress.finish();
+        if (!quiet) std::fprintf(stderr, "dn: %s\n", e.what());
+        break;
+      }
+      throw;
+    }
+    if (!r.has_output()) continue;
+    const std::vector<float> rgb = r.rgb();
+    const std::string path = format_frame_path(output, (long long)r.frame_index);
+    if (auto parent = std::filesystem::path(path).parent_path(); !parent.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(parent, ec);
+    }
+    if (as_png) {
+      const auto bytes = image::to_srgb8(rgb.data(), size_t(r.width) * r.height, tonemap, exposure);
+      image::write_png_rgb8(path, int(r.width), int(r.height), bytes.data());
+    } else {
+      image::write_exr_rgb(path, int(r.width), int(r.height), rgb.data(), image::ExrPixelType::Half);
+    }
+    ++written;
+    char line[256];
+    std::snprintf(line, sizeof line, "frame %04llu -> %s (skipped %llu so far)", (unsigned long long)r.frame_index,
+                  path.c_str(), (unsigned long long)watcher.dropped());
+    progress.frame_done(line, "frame " + std::to_string(r.frame_index));
+  }
+  progress.finish();
+  if (!quiet) std::fprintf(stderr, "dn: wrote %lld frames\n", written);
+  return 0;
+}
+
+}  // namespace dn::cli

@@ -1,0 +1,63 @@
+// A scripted stand-in for dnserver: listens on a Unix-domain socket (or TCP
+// loopback), accepts one connection on a thread and runs a handler that talks
+// the protocol through dn_protocol. Blocking I/O; gtest assertions in the
+// handler are fine (gtest is thread-safe on POSIX).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "dn/protocol/codec.hpp"
+
+namespace dn::test {
+
+struct Received {
+  protocol::Header header{};
+  std::shared_ptr<std::vector<uint8_t>> payload;
+  protocol::Message message;
+};
+
+class Peer {
+ public:
+  explicit Peer(int fd) : fd_(fd) {}
+  int fd() const { return fd_; }
+  // Next message; nullopt on EOF or when nothing arrives within timeout_ms.
+  std::optional<Received> recv(int timeout_ms = 5000);
+  void send(const protocol::Message& m, uint64_t request_id, uint32_t flags = 0);
+  void send_raw(const std::vector<uint8_t>& bytes);
+  // Reads and discards exactly n bytes (for "close in the middle of a message").
+  bool read_raw(size_t n, int timeout_ms = 5000);
+  // Waits for HELLO, checks the token when `token` is set, answers WELCOME.
+  // Returns the HELLO.
+  protocol::Hello handshake(const std::optional<std::string>& token = std::nullopt, uint32_t max_in_flight = 4,
+                            uint64_t max_message_bytes = 64ull << 20);
+  void close();
+  bool eof() const { return eof_; }
+
+ private:
+  int fd_;
+  bool eof_ = false;
+  protocol::MessageReader reader_{uint64_t{1} << 32};
+};
+
+protocol::Welcome test_welcome(uint32_t max_in_flight = 4, uint64_t max_message_bytes = 64ull << 20);
+
+class FakeServer {
+ public:
+  using Handler = std::function<void(Peer&)>;
+  explicit FakeServer(Handler handler, bool tcp = false);
+  ~FakeServer();  // waits for the handler to finish
+  const std::string& url() const { return url_; }
+  void join();
+
+ private:
+  int listen_fd_ = -1;
+  std::string url_, path_;
+  std::thread thread_;
+};
+
+}  // namespace dn::test

@@ -1,0 +1,52 @@
+# ctest -R client_find_package: install the dnclient component into a fresh
+# prefix, then configure, build and run tests/client/consumer against it.
+foreach(v BUILD_DIR SOURCE_DIR CONSUMER_DIR WORK_DIR GENERATOR)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "find_package_test.cmake: ${v} not set")
+  endif()
+endforeach()
+
+set(prefix ${WORK_DIR}/prefix)
+file(REMOVE_RECURSE ${WORK_DIR})
+
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+
+run("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --component dnclient --prefix ${prefix})
+
+foreach(f include/dn/client/client.hpp include/dn/client/session.hpp include/dn/protocol/messages.hpp
+          include/dn/protocol/codec.hpp bin/dn)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+file(GLOB_RECURSE config_files ${prefix}/*/dnclientConfig.cmake)
+file(GLOB_RECURSE version_files ${prefix}/*/dnclientConfigVersion.cmake)
+file(GLOB_RECURSE target_files ${prefix}/*/dnclientTargets.cmake)
+if(NOT config_files OR NOT version_files OR NOT target_files)
+  message(FATAL_ERROR "dnclientConfig.cmake / ConfigVersion / Targets not installed under ${prefix}")
+endif()
+file(READ ${target_files} targets_text)
+string(FIND "${targets_text}" "${SOURCE_DIR}" at)
+if(NOT at EQUAL -1)
+  message(FATAL_ERROR "installed dnclientTargets.cmake refers to the source tree ${SOURCE_DIR}")
+endif()
+
+set(cfg_args -S ${CONSUMER_DIR} -B ${WORK_DIR}/build -G ${GENERATOR} -DCMAKE_PREFIX_PATH=${prefix}
+             -DCMAKE_BUILD_TYPE=Release)
+if(CXX_COMPILER)
+  list(APPEND cfg_args -DCMAKE_CXX_COMPILER=${CXX_COMPILER})
+endif()
+run("consumer configure" ${CMAKE_COMMAND} ${cfg_args})
+run("consumer build" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run("consumer run" ${WORK_DIR}/build/dnclient_consumer)
+string(FIND "${last_output}" "dnclient consumer ok" at)
+if(at EQUAL -1)
+  message(FATAL_ERROR "consumer printed:\n${last_output}")
+endif()
+message(STATUS "${last_output}")

@@ -1,0 +1,255 @@
+// `dn denoise` end to end against the fake server: EXR sequence in, EXR/PNG
+// out, metrics against references, errors naming the frame.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "dn/image/exr_io.hpp"
+#include "dn/protocol/codec.hpp"
+#include "fake_server.hpp"
+#include "frame_source.hpp"
+
+namespace {
+
+using namespace dn;
+using namespace dn::protocol;
+using dn::test::FakeServer;
+using dn::test::Peer;
+namespace fs = std::filesystem;
+
+constexpr int W = 16, H = 12;
+
+struct EchoLog {
+  OpenSession open;
+  std::vector<uint64_t> frames;
+  std::vector<uint32_t> flags;
+  std::vector<FrameInfo> infos;
+  bool closed = false;
+};
+
+// A server that answers every FRAME with 2 * radiance (in the session's
+// output format), or ERROR for frame `fail_on`.
+void echo_server(Peer& peer, EchoLog& log, std::optional<uint64_t> fail_on = std::nullopt) {
+  peer.handshake();
+  Session session;
+  for (;;) {
+    auto m = peer.recv(10000);
+    if (!m) return;
+    const uint64_t id = m->header.request_id;
+    if (auto* o = std::get_if<OpenSession>(&m->message)) {
+      log.open = *o;
+      session.session_id = 3;
+      session.width = o->width;
+      session.height = o->height;
+      session.pipeline = o->pipeline;
+      session.output_format = o->output_format;
+      session.channels = o->channels;
+      peer.send(session, id);
+    } else if (auto* f = std::get_if<Frame>(&m->message)) {
+      log.frames.push_back(f->info.frame_index);
+      log.flags.push_back(m->header.flags);
+      log.infos.push_back(f->info);
+      if (fail_on && f->info.frame_index == *fail_on) {
+        peer.send(Error{ErrorCode::InvalidChannel, "FRAME.planes[0]", "radiance has NaNs"}, id);
+        continue;
+      }
+      Result r;
+      r.session_id = f->info.session_id;
+      r.frame_index = f->info.frame_index;
+      r.timings = {{"filter", 1.0}};
+      std::vector<float> rgb(size_t(W * H * 3), 0.0f);
+      for (const auto& p : f->planes)
+        if (p.id == ChannelId::Radiance) {
+          for (size_t i = 0; i < rgb.size(); ++i) {
+            if (p.format == Format::F32) {
+              std::memcpy(&rgb[i], p.bytes.data() + 4 * i, 4);
+            } else {
+              uint16_t h;
+              std::memcpy(&h, p.bytes.data() + 2 * i, 2);
+              rgb[i] = half_to_float(h);
+            }
+            rgb[i] *= 2.0f;
+          }
+        }
+      std::vector<uint8_t> bytes;
+      if (session.output_format == Format::F32) {
+        bytes.resize(rgb.size() * 4);
+        std::memcpy(bytes.data(), rgb.data(), bytes.size());
+      } else {
+        bytes.resize(rgb.size() * 2);
+        for (size_t i = 0; i < rgb.size(); ++i) {
+          const uint16_t h = float_to_half(rgb[i]);
+          std::memcpy(bytes.data() + 2 * i, &h, 2);
+        }
+      }
+      if (!(m->header.flags & kFlagNoOutput)) r.planes.push_back({ChannelId::Output, session.output_format, bytes});
+      peer.send(r, id);
+    } else if (auto* c = std::get_if<CloseSession>(&m->message)) {
+      log.closed = true;
+      peer.send(SessionClosed{c->session_id, log.frames.size()}, id);
+    }
+  }
+}
+
+float radiance_value(int frame, size_t i) { return 0.25f * float(frame) + 0.001f * float(i % 97); }
+
+class DnCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::path("/tmp") / ("dn_client_test_cli_" + std::to_string(::getpid()) + "_" +
+                              ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir / "in");
+    fs::create_directories(dir / "ref");
+    // dnrender layout: radiance, albedo, normal, depth, motion + camera attributes.
+    for (int frame = 1; frame <= 4; ++frame) {
+      std::vector<float> rad(size_t(W * H * 3)), alb(size_t(W * H * 3), 0.5f), nrm(size_t(W * H * 3), 0.0f),
+          depth(size_t(W * H), 2.0f), motion(size_t(W * H * 2), 0.0f);
+      for (size_t i = 0; i < rad.size(); ++i) rad[i] = radiance_value(frame, i);
+      image::ExrWriteOptions o;
+      std::array<float, 16> view{};
+      view[0] = view[5] = view[10] = view[15] = 1.0f;
+      view[12] = float(frame);  // translation x
+      o.camera.view = view;
+      o.camera.projection = view;
+      o.camera.jitter = std::array<float, 2>{0.5f, -0.5f};
+      std::vector<image::ExrChannelOut> ch = {
+          {"radiance.R", rad.data() + 0, 3, image::ExrPixelType::Float},
+          {"radiance.G", rad.data() + 1, 3, image::ExrPixelType::Float},
+          {"radiance.B", rad.data() + 2, 3, image::ExrPixelType::Float},
+          {"albedo.R", alb.data() + 0, 3, image::ExrPixelType::Half},
+          {"albedo.G", alb.data() + 1, 3, image::ExrPixelType::Half},
+          {"albedo.B", alb.data() + 2, 3, image::ExrPixelType::Half},
+          {"normal.X", nrm.data() + 0, 3, image::ExrPixelType::Half},
+          {"normal.Y", nrm.data() + 1, 3, image::ExrPixelType::Half},
+          {"normal.Z", nrm.data() + 2, 3, image::ExrPixelType::Half},
+          {"depth.Z", depth.data(), 1, image::ExrPixelType::Float},
+          {"motion.X", motion.data() + 0, 2, image::ExrPixelType::Float},
+          {"motion.Y", motion.data() + 1, 2, image::ExrPixelType::Float},
+      };
+      image::write_exr(cli::format_frame_path((dir / "in/frame_%04d.exr").string(), frame), W, H, ch, o);
+      std::vector<float> ref(rad);
+      for (auto& v : ref) v *= 2.0f;
+      image::write_exr_rgb(cli::format_frame_path((dir / "ref/ref_%04d.exr").string(), frame), W, H, ref.data(),
+                           image::ExrPixelType::Float);
+    }
+  }
+  void TearDown() override { fs::remove_all(dir); }
+
+  std::vector<std::string> base_args(const std::string& url) {
+    return {"--server", url, "--pipeline", "svgf", "--input", (dir / "in/frame_%04d.exr").string(),
+            "--start", "1", "--end", "4", "--quiet"};
+  }
+  fs::path dir;
+};
+
+TEST_F(DnCli, DenoisesSequenceWritesOutputsAndMetrics) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  for (const std::string& a : {std::string("--output"), (dir / "out/den_%04d.exr").string(), std::string("--png"),
+                               (dir / "png/den_####.png").string(), std::string("-r"),
+                               (dir / "ref/ref_%04d.exr").string(), std::string("--in-flight"), std::string("2"),
+                               std::string("--exr-float")})
+    args.push_back(a);
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(cli::run_denoise(args), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  server.join();
+
+  // Required (radiance, albedo) plus the optional channels the file has (normal, depth).
+  std::vector<ChannelId> declared;
+  for (const auto& c : log.open.channels) declared.push_back(c.id);
+  EXPECT_EQ(declared, (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal,
+                                              ChannelId::Depth}));
+  EXPECT_EQ(log.open.width, uint32_t(W));
+  EXPECT_EQ(log.frames, (std::vector<uint64_t>{1, 2, 3, 4}));
+  EXPECT_TRUE(log.closed);
+  // Camera from the dn.* attributes; previous camera from the previous frame; reset on the first.
+  ASSERT_EQ(log.infos.size(), 4u);
+  EXPECT_EQ(log.infos[0].flags, kFrameReset);
+  EXPECT_EQ(log.infos[1].flags, 0u);
+  EXPECT_EQ(log.infos[1].view[12], 2.0f);
+  EXPECT_EQ(log.infos[1].prev_view[12], 1.0f);
+  EXPECT_EQ(log.infos[1].jitter[0], 0.5f);
+  EXPECT_EQ(log.infos[1].motion, MotionConvention::PixelsToPrevious);
+  for (int frame = 1; frame <= 4; ++frame) {
+    int w = 0, h = 0;
+    const auto rgb =
+        image::read_exr_rgb(cli::format_frame_path((dir / "out/den_%04d.exr").string(), frame), w, h);
+    ASSERT_EQ(w, W);
+    EXPECT_FLOAT_EQ(rgb[7], 2.0f * radiance_value(frame, 7));
+    EXPECT_TRUE(fs::exists(cli::format_frame_path((dir / "png/den_####.png").string(), frame)));
+  }
+  // Output == reference: RMSE 0, SSIM 1.
+  EXPECT_NE(out.find("mean rmse 0.000000"), std::string::npos) << out;
+  EXPECT_NE(out.find("ssim 1.00000"), std::string::npos) << out;
+}
+
+TEST_F(DnCli, NoOutputsMeansNoOutputFramesAndFp16) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  args.push_back("--fp16");
+  args.push_back("--channels");
+  args.push_back("radiance,albedo");
+  EXPECT_EQ(cli::run_denoise(args), 0);
+  server.join();
+  ASSERT_EQ(log.open.channels.size(), 2u);
+  EXPECT_EQ(log.open.channels[0].format, Format::F16);
+  EXPECT_EQ(log.open.output_format, Format::F16);
+  ASSERT_EQ(log.flags.size(), 4u);
+  for (uint32_t f : log.flags) EXPECT_EQ(f, kFlagNoOutput);
+}
+
+TEST_F(DnCli, ServerErrorNamesTheFrame) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log, 3); });
+  auto args = base_args(server.url());
+  args.push_back("--output");
+  args.push_back((dir / "out/den_%04d.exr").string());
+  try {
+    cli::run_denoise(args);
+    FAIL() << "frame 3 fails";
+  } catch (const std::exception& e) {
+    EXPECT_STREQ(e.what(), "frame 3: server error InvalidChannel at FRAME.planes[0]: radiance has NaNs");
+  }
+  server.join();
+}
+
+TEST_F(DnCli, MissingRequiredChannelFailsBeforeOpeningASession) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  args.push_back("--channel");
+  args.push_back("albedo=base_color");
+  try {
+    cli::run_denoise(args);
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("channel 'albedo'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("base_color"), std::string::npos) << e.what();
+  }
+  server.join();
+  EXPECT_EQ(log.open.width, 0u);  // never opened
+}
+
+TEST_F(DnCli, UsageErrors) {
+  EXPECT_THROW(cli::run_denoise({"--pipeline", "svgf"}), cli::UsageError);
+  EXPECT_THROW(cli::run_denoise({"--server", "unix:///x", "--pipeline", "svgf", "--input", "a_%04d.exr", "--start",
+                                 "5", "--end", "1"}),
+               cli::UsageError);
+  EXPECT_THROW(cli::run_denoise({"--bogus"}), cli::UsageError);
+  EXPECT_THROW(cli::run_denoise({"--server", "unix:///x", "--pipeline", "svgf", "--input", "a_%04d.exr", "--start",
+                                 "1", "--end", "2", "--output", "single.exr"}),
+               cli::UsageError);
+  EXPECT_THROW(cli::run_denoise({"--server", "unix:///x", "--pipeline", "svgf", "--input", "a.exr", "--param",
+                                 "alpha"}),
+               cli::UsageError);
+}
+
+}  // namespace

@@ -1,0 +1,97 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "dn/image/metrics.hpp"
+
+namespace {
+
+using namespace dn::image;
+
+TEST(Metrics, RmseOfKnownImages) {
+  const std::vector<float> a = {0, 0, 0, 0}, b = {1, 1, 1, 1};
+  EXPECT_DOUBLE_EQ(rmse(a.data(), b.data(), 4), 1.0);
+  const std::vector<float> c = {1, 2, 3}, d = {1, 2, 5};
+  EXPECT_DOUBLE_EQ(rmse(c.data(), d.data(), 3), std::sqrt(4.0 / 3.0));
+  EXPECT_DOUBLE_EQ(rmse(c.data(), c.data(), 3), 0.0);
+}
+
+TEST(Metrics, RelativeMse) {
+  const std::vector<float> a = {2, 0}, ref = {1, 0};
+  // ((2-1)^2/(1+0.01) + 0) / 2
+  EXPECT_NEAR(relative_mse(a.data(), ref.data(), 2), 0.5 / 1.01, 1e-12);
+  EXPECT_NEAR(relative_mse(a.data(), ref.data(), 2, 1.0), 0.25, 1e-12);
+}
+
+TEST(Metrics, SsimIdentityIsOneAndDropsWithNoise) {
+  const int w = 48, h = 40;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(0.2f, 0.8f);
+  std::vector<float> x(size_t(w * h));
+  for (int y = 0; y < h; ++y)
+    for (int i = 0; i < w; ++i) x[size_t(y * w + i)] = 0.5f + 0.3f * std::sin(0.3f * float(i)) * std::cos(0.2f * float(y));
+  EXPECT_NEAR(ssim(x.data(), x.data(), w, h), 1.0, 1e-12);
+
+  std::normal_distribution<float> n(0.0f, 1.0f);
+  double prev = 1.0;
+  for (float sigma : {0.02f, 0.1f, 0.3f}) {
+    std::vector<float> y = x;
+    for (auto& v : y) v = std::clamp(v + sigma * n(rng), 0.0f, 1.0f);
+    const double s = ssim(x.data(), y.data(), w, h);
+    EXPECT_LT(s, prev) << "sigma " << sigma;
+    EXPECT_GT(s, 0.0);
+    prev = s;
+  }
+  EXPECT_LT(prev, 0.5);
+}
+
+TEST(Metrics, SsimOfConstantsMatchesFormula) {
+  // For constant images every window has zero variance, so
+  // SSIM = (2ab + C1) / (a^2 + b^2 + C1), C1 = 0.01^2 — in the Gaussian path
+  // (>= 11x11) and in the small-image path alike.
+  const double a = 0.2, b = 0.4, C1 = 1e-4;
+  const double expect = (2 * a * b + C1) / (a * a + b * b + C1);
+  for (int size : {16, 6}) {
+    std::vector<float> x(size_t(size * size), float(a)), y(size_t(size * size), float(b));
+    EXPECT_NEAR(ssim(x.data(), y.data(), size, size), expect, 1e-6) << size;
+  }
+}
+
+TEST(Metrics, SsimTonemappedOnRgb) {
+  const int w = 16, h = 16;
+  std::vector<float> rgb(size_t(w * h * 3), 0.0f);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = float(i % 13) * 0.3f;
+  EXPECT_NEAR(ssim_tonemapped(rgb.data(), rgb.data(), w, h), 1.0, 1e-12);
+  std::vector<float> darker = rgb;
+  for (auto& v : darker) v *= 0.5f;
+  EXPECT_LT(ssim_tonemapped(darker.data(), rgb.data(), w, h), 0.99);
+}
+
+TEST(Metrics, ToneMapsAndOetf) {
+  EXPECT_EQ(tonemap(0.0f, Tonemap::Aces), 0.0f);
+  EXPECT_EQ(tonemap(std::nanf(""), Tonemap::Aces), 0.0f);
+  EXPECT_EQ(tonemap(-2.0f, Tonemap::Reinhard), 0.0f);
+  EXPECT_FLOAT_EQ(tonemap(1.0f, Tonemap::Reinhard), 0.5f);
+  EXPECT_EQ(tonemap(1e30f, Tonemap::Aces), 1.0f);  // the curve tends to 2.51/2.43 > 1: clamped
+  // ACES fit at 1: (2.51 + 0.03) / (2.43 + 0.59 + 0.14)
+  EXPECT_NEAR(tonemap(1.0f, Tonemap::Aces), 2.54 / 3.16, 1e-6);
+  float last = 0.0f;
+  for (float x = 0.01f; x < 100.0f; x *= 1.5f) {
+    const float y = tonemap(x, Tonemap::Aces);
+    EXPECT_GE(y, last);
+    last = y;
+  }
+  EXPECT_NEAR(srgb_oetf(0.5f), 0.735357, 1e-5);
+  EXPECT_NEAR(srgb_oetf(0.002f), 0.02584, 1e-6);
+  EXPECT_FLOAT_EQ(srgb_oetf(1.0f), 1.0f);
+  EXPECT_EQ(parse_tonemap("reinhard"), Tonemap::Reinhard);
+  EXPECT_THROW(parse_tonemap("filmic"), std::invalid_argument);
+}
+
+TEST(Metrics, TemporalError) {
+  const std::vector<float> a = {1, 1, 1, 0, 0, 0}, b = {0, 0, 0, 0, 0, 0};
+  EXPECT_NEAR(temporal_error(a.data(), b.data(), 2), 0.5, 1e-6);
+}
+
+}  // namespace
