@@ -608,6 +608,10 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
   uint64_t device_bytes = 0;  // held by open sessions; a closed one's is freed once its last frame leaves the device
   for (auto& [id, s] : sessions_) device_bytes += s->device_bytes();
   add("device_bytes", static_cast<double>(device_bytes));
+  for (const auto& [id, s] : sessions_) {  // lets a watcher find a session to ATTACH to
+    if (st.values.size() >= 200) break;
+    add("session." + std::to_string(id) + ".frames", static_cast<double>(s->frames_processed));
+  }
   for (const auto& [name, sum] : pass_timings_) {
     if (st.values.size() >= 250) break;
     add("pass." + name + ".mean_ms", sum.count ? sum.total_ms / static_cast<double>(sum.count) : 0.0);

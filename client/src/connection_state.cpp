@@ -223,6 +223,11 @@ void ConnectionState::send(const protocol::Message& message, uint64_t request_id
                        "message of " + std::to_string(send_buffer_.size()) +
                            " bytes exceeds the server's max_message_bytes " + std::to_string(max_bytes));
   if (expect_reply) pending_[request_id] = Pending{protocol::type_of(message), std::nullopt};
+  sending_ = true;
+  struct ClearSending {
+    ConnectionState* self;
+    ~ClearSending() { self->sending_ = false; }
+  } clear_sending{this};
   const uint8_t* p = send_buffer_.data();
   size_t left = send_buffer_.size();
   bool has_deadline = false;
@@ -253,6 +258,8 @@ void ConnectionState::send(const protocol::Message& message, uint64_t request_id
   }
   // Keep the send buffer from pinning a huge frame's worth of memory forever.
   if (send_buffer_.capacity() > (size_t{256} << 20)) std::vector<uint8_t>().swap(send_buffer_);
+  sending_ = false;
+  send_pong_if_due();
 }
 
 void ConnectionState::throw_send_failure(uint64_t request_id, bool expect_reply) {
@@ -313,8 +320,33 @@ void ConnectionState::read_available() {
   }
 }
 
+void ConnectionState::send_pong_if_due() {
+  if (!pong_due_ || sending_ || broken_) return;
+  const std::vector<uint8_t> bytes = protocol::encode(protocol::Pong{*pong_due_}, 0, 0);
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (n > 0) {
+      done += size_t(n);
+    } else if (n < 0 && errno == EINTR) {
+      continue;
+    } else if (done == 0) {
+      return;  // socket full or failing: answer later, or let the next call report the failure
+    } else {
+      pollfd p{fd_, POLLOUT, 0};  // 32 bytes partly out: finish them before anything else
+      ::poll(&p, 1, 1000);
+    }
+  }
+  pong_due_.reset();
+}
+
 void ConnectionState::dispatch(Incoming&& in) {
   const uint64_t id = in.header.request_id;
+  if (auto* ping = std::get_if<protocol::Ping>(&in.message); ping && id == 0) {
+    pong_due_ = ping->payload;  // the server's heartbeat
+    send_pong_if_due();
+    return;
+  }
   if (auto it = pending_.find(id); it != pending_.end() && !it->second.reply) {
     it->second.reply = std::move(in);
     return;

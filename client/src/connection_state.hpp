@@ -88,6 +88,8 @@ class ConnectionState {
   void connect_socket(Clock::time_point deadline, int buffer_bytes);
   void read_available();  // non-blocking: recv until EAGAIN, dispatching every complete message
   void dispatch(Incoming&& in);
+  // Answers the server's heartbeat PING; never in the middle of another message.
+  void send_pong_if_due();
   void wait_fd(short events, Clock::time_point deadline, bool has_deadline, const char* what);
   // mark_*: record the failure and close the socket; fail_*: and throw it.
   void mark_failed(Error e);
@@ -107,6 +109,8 @@ class ConnectionState {
   protocol::MessageReader reader_;
   protocol::Welcome welcome_;
   uint64_t next_request_id_ = 1;
+  std::optional<uint64_t> pong_due_;  // payload of a heartbeat PING not yet answered
+  bool sending_ = false;              // a message is partly written: nothing else may be
 
   // request_id -> reply (empty until it arrives). Keys present = awaited.
   struct Pending {

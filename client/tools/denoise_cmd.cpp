@@ -208,6 +208,10 @@ int run_denoise(const std::vector<std::string>& argv) {
       std::fprintf(stderr, "dn:   %-12s <- %s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str());
   }
   client::Session session = conn.open_session(desc);
+  if (!quiet)
+    std::fprintf(stderr, "dn: session %llu (watch it with: dn watch --server %s --session %llu)\n",
+                 static_cast<unsigned long long>(session.id()), conn.endpoint().c_str(),
+                 static_cast<unsigned long long>(session.id()));
 
   const bool want_output = output || png || reference;
   const auto motion = motion_override.value_or(protocol::MotionConvention::PixelsToPrevious);

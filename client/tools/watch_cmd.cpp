@@ -1,4 +1,5 @@
 // dn watch: attach to a running session read-only and write its newest frames.
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 
@@ -43,8 +44,17 @@ int run_watch(const std::vector<std::string>& argv) {
     return 0;
   }
   const std::string url = server_url(args.get_or("server", ""));
-  const long long session_id = args.get_int("session", -1, 0, INT64_MAX);
-  if (session_id < 0) throw UsageError("missing required option --session");
+  // Session ids are random 64-bit numbers: parse the full unsigned range.
+  const auto session_text = args.get("session");
+  if (!session_text) throw UsageError("missing required option --session");
+  uint64_t session_id = 0;
+  {
+    const char* b = session_text->data();
+    const char* e = b + session_text->size();
+    auto [ptr, ec] = std::from_chars(b, e, session_id);
+    if (ec != std::errc() || ptr != e || session_id == 0)
+      throw UsageError("--session: expected a session id (1 to 18446744073709551615), got '" + *session_text + "'");
+  }
   const std::string output = args.require("output");
   const long long count = args.get_int("count", 0, 0, INT64_MAX);
   const bool quiet = args.has("quiet");

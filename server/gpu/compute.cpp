@@ -1,0 +1,134 @@
+#include "gpu/compute.hpp"
+
+#include "gpu/context.hpp"
+#include "gpu/error.hpp"
+
+namespace dn::gpu {
+
+Kernel::Kernel(VkDevice device, const KernelDesc& desc)
+    : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers) {
+  if (desc.spirv.empty()) throw Error("kernel " + name_ + ": no SPIR-V (shader not embedded?)");
+  VkShaderModule module = VK_NULL_HANDLE;
+  try {
+    std::vector<VkDescriptorSetLayoutBinding> bindings(desc.storage_buffers + 1);
+    for (uint32_t i = 0; i < bindings.size(); ++i) {
+      bindings[i].binding = i;
+      bindings[i].descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      bindings[i].descriptorCount = 1;
+      bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    set_info.bindingCount = static_cast<uint32_t>(bindings.size());
+    set_info.pBindings = bindings.data();
+    check(vkCreateDescriptorSetLayout(device_, &set_info, nullptr, &set_layout_), "vkCreateDescriptorSetLayout");
+
+    VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layout_info.setLayoutCount = 1;
+    layout_info.pSetLayouts = &set_layout_;
+    check(vkCreatePipelineLayout(device_, &layout_info, nullptr, &layout_), "vkCreatePipelineLayout");
+
+    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    module_info.codeSize = desc.spirv.size_bytes();
+    module_info.pCode = desc.spirv.data();
+    check(vkCreateShaderModule(device_, &module_info, nullptr, &module), "vkCreateShaderModule");
+
+    std::vector<VkSpecializationMapEntry> entries;
+    std::vector<uint32_t> data;
+    for (const auto& c : desc.spec_constants) {
+      entries.push_back({c.id, static_cast<uint32_t>(data.size() * sizeof(uint32_t)), sizeof(uint32_t)});
+      data.push_back(c.value);
+    }
+    VkSpecializationInfo spec{};
+    spec.mapEntryCount = static_cast<uint32_t>(entries.size());
+    spec.pMapEntries = entries.data();
+    spec.dataSize = data.size() * sizeof(uint32_t);
+    spec.pData = data.data();
+
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = module;
+    info.stage.pName = "main";
+    info.stage.pSpecializationInfo = entries.empty() ? nullptr : &spec;
+    info.layout = layout_;
+    check(vkCreateComputePipelines(device_, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_),
+          "vkCreateComputePipelines");
+    vkDestroyShaderModule(device_, module, nullptr);
+  } catch (...) {
+    if (module) vkDestroyShaderModule(device_, module, nullptr);
+    destroy();
+    throw;
+  }
+}
+
+Kernel::~Kernel() { destroy(); }
+
+void Kernel::destroy() noexcept {
+  if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr);
+  if (layout_) vkDestroyPipelineLayout(device_, layout_, nullptr);
+  if (set_layout_) vkDestroyDescriptorSetLayout(device_, set_layout_, nullptr);
+  pipeline_ = VK_NULL_HANDLE;
+  layout_ = VK_NULL_HANDLE;
+  set_layout_ = VK_NULL_HANDLE;
+}
+
+std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
+  Key key{desc.spirv.data(), desc.spirv.size(), desc.storage_buffers, desc.spec_constants};
+  std::lock_guard lock(mutex_);
+  auto it = kernels_.find(key);
+  if (it != kernels_.end()) return it->second;
+  auto kernel = std::make_shared<const Kernel>(device_, desc);
+  kernels_.emplace(std::move(key), kernel);
+  return kernel;
+}
+
+size_t KernelCache::size() const {
+  std::lock_guard lock(mutex_);
+  return kernels_.size();
+}
+
+DescriptorPool::DescriptorPool(Context& context, uint32_t sets, uint32_t storage_buffers_total)
+    : device_(context.device()) {
+  VkDescriptorPoolSize sizes[2] = {
+      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, sets},
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, storage_buffers_total > 0 ? storage_buffers_total : 1},
+  };
+  VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  info.maxSets = sets;
+  info.poolSizeCount = 2;
+  info.pPoolSizes = sizes;
+  check(vkCreateDescriptorPool(device_, &info, nullptr, &pool_), "vkCreateDescriptorPool");
+}
+
+DescriptorPool::~DescriptorPool() {
+  if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);
+}
+
+VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage) {
+  if (storage.size() != kernel.storage_buffers())
+    throw Error("kernel " + kernel.name() + ": " + std::to_string(storage.size()) + " storage buffers given, " +
+                std::to_string(kernel.storage_buffers()) + " expected");
+  VkDescriptorSetLayout layout = kernel.set_layout();
+  VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  alloc.descriptorPool = pool_;
+  alloc.descriptorSetCount = 1;
+  alloc.pSetLayouts = &layout;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  check(vkAllocateDescriptorSets(device_, &alloc, &set), "vkAllocateDescriptorSets");
+
+  std::vector<VkDescriptorBufferInfo> infos(storage.size() + 1);
+  std::vector<VkWriteDescriptorSet> writes(storage.size() + 1);
+  for (size_t i = 0; i < infos.size(); ++i) {
+    infos[i] = {i == 0 ? uniform : storage[i - 1], 0, VK_WHOLE_SIZE};
+    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstSet = set;
+    writes[i].dstBinding = static_cast<uint32_t>(i);
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(device_, static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
+  return set;
+}
+
+}  // namespace dn::gpu

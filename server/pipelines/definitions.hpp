@@ -1,0 +1,29 @@
+// Internal: the pipelines this build offers. Each definition describes
+// itself (channels, parameters from parameters.def) and builds its pass graph
+// from a validated SessionConfig.
+#pragma once
+
+#include <string_view>
+#include <vector>
+
+#include "pipelines/graph.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace dn::pipelines {
+
+struct PipelineDefinition {
+  PipelineDescription description;
+  GraphSpec (*build)(const SessionConfig& config);
+};
+
+PipelineDefinition passthrough_definition();
+PipelineDefinition accumulate_definition();
+
+// All definitions in a stable order; find_definition returns nullptr if unknown.
+const std::vector<PipelineDefinition>& definitions();
+const PipelineDefinition* find_definition(std::string_view name);
+
+// Common start of every graph: resolution and resolved parameters.
+GraphSpec begin_graph(const SessionConfig& config);
+
+}  // namespace dn::pipelines

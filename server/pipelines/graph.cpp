@@ -1,0 +1,303 @@
+#include "pipelines/graph.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+
+#include "dn/shaders/shaders.hpp"
+#include "gpu/error.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+const char* channel_name(protocol::ChannelId id) {
+  const auto* c = protocol::find_channel(id);
+  return c ? c->name.data() : "?";
+}
+
+}  // namespace
+
+uint64_t round_up4(uint64_t bytes) { return (bytes + 3) & ~uint64_t{3}; }
+
+protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel) {
+  for (const auto& c : config.channels)
+    if (c.id == channel) return c.format;
+  return protocol::Format::F32;
+}
+
+uint32_t is_half(protocol::Format format) { return format == protocol::Format::F16 ? 1u : 0u; }
+
+uint64_t GraphSpec::device_bytes() const {
+  uint64_t total = kUniformBytes;
+  for (const auto& b : buffers) total += b.role == BufferRole::History ? 2 * b.bytes : b.bytes;
+  return total;
+}
+
+const BufferSpec* GraphSpec::largest_binding() const {
+  const BufferSpec* best = nullptr;
+  for (const auto& b : buffers)
+    if (!best || b.bytes > best->bytes) best = &b;
+  return best;
+}
+
+const BufferSpec* GraphSpec::find(const std::string& name) const {
+  for (const auto& b : buffers)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
+void GraphSpec::add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name) {
+  const auto* info = protocol::find_channel(channel);
+  const auto format = channel_format(config, channel);
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Input;
+  b.channel = channel;
+  b.format = format;
+  b.plane_bytes = protocol::plane_bytes(*info, format, config.width, config.height);
+  b.bytes = round_up4(b.plane_bytes);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_output(const SessionConfig& config) {
+  const auto* info = protocol::find_channel(protocol::ChannelId::Output);
+  BufferSpec b;
+  b.name = "output";
+  b.role = BufferRole::Output;
+  b.channel = protocol::ChannelId::Output;
+  b.format = config.output_format;
+  b.plane_bytes = protocol::plane_bytes(*info, config.output_format, config.width, config.height);
+  b.bytes = round_up4(b.plane_bytes);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::History;
+  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
+  buffers.push_back(std::move(b));
+}
+
+GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
+  for (auto& n : nodes_)
+    if (n.spec->name == name) return n;
+  throw std::logic_error("pipeline graph: pass binds unknown buffer " + name);
+}
+
+GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config, GraphSpec spec)
+    : context_(context), spec_(std::move(spec)), output_format_(config.output_format) {
+  const uint64_t limit = context.limits().max_storage_buffer_range;
+  if (const BufferSpec* big = spec_.largest_binding(); big && big->bytes > limit)
+    throw DeviceFailure("buffer " + big->name + " needs " + std::to_string(big->bytes) +
+                        " bytes in one binding; device " + context.name() + " allows " + std::to_string(limit));
+  try {
+    nodes_.reserve(spec_.buffers.size());
+    for (const auto& b : spec_.buffers) {
+      Node& n = nodes_.emplace_back();
+      n.spec = &b;
+      gpu::BufferKind kind = gpu::BufferKind::Storage;
+      if (b.role == BufferRole::Input) kind = gpu::BufferKind::StorageUpload;
+      if (b.role == BufferRole::Output) kind = gpu::BufferKind::StorageDownload;
+      n.copies[0] = gpu::Buffer(context, b.bytes, kind, b.name);
+      device_bytes_ += b.bytes;
+      if (b.role == BufferRole::History) {
+        n.copies[1] = gpu::Buffer(context, b.bytes, kind, b.name + "[1]");
+        device_bytes_ += b.bytes;
+      }
+    }
+    uniform_ = gpu::Buffer(context, GraphSpec::kUniformBytes, gpu::BufferKind::Uniform, "frame_constants");
+    device_bytes_ += GraphSpec::kUniformBytes;
+
+    uint32_t storage_total = 0;
+    for (const auto& p : spec_.passes) storage_total += static_cast<uint32_t>(p.bindings.size());
+    descriptors_ = std::make_unique<gpu::DescriptorPool>(context, 2 * static_cast<uint32_t>(spec_.passes.size()),
+                                                         2 * storage_total);
+
+    const uint64_t pixels = uint64_t{spec_.width} * spec_.height;
+    for (const auto& ps : spec_.passes) {
+      Pass& pass = passes_.emplace_back();
+      pass.spec = &ps;
+      gpu::KernelDesc desc;
+      desc.name = ps.shader;
+      desc.spirv = shaders::get(ps.shader);
+      desc.storage_buffers = static_cast<uint32_t>(ps.bindings.size());
+      desc.spec_constants.push_back({0, kWorkgroupSize});
+      desc.spec_constants.insert(desc.spec_constants.end(), ps.spec_constants.begin(), ps.spec_constants.end());
+      pass.kernel = context.kernels().get(desc);
+
+      for (uint32_t parity = 0; parity < 2; ++parity) {
+        std::vector<VkBuffer> storage;
+        for (const auto& ref : ps.bindings) {
+          Node& n = node(ref.buffer);
+          uint32_t copy = 0;
+          if (n.spec->role == BufferRole::History) copy = ref.slot == Slot::Current ? parity : parity ^ 1u;
+          storage.push_back(n.copies[copy].handle());
+        }
+        pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage);
+      }
+
+      const uint64_t items = (pixels + ps.pixels_per_invocation - 1) / ps.pixels_per_invocation;
+      const uint64_t groups = std::max<uint64_t>(1, (items + kWorkgroupSize - 1) / kWorkgroupSize);
+      const uint64_t gx = std::min<uint64_t>(groups, context.limits().max_compute_work_group_count[0]);
+      const uint64_t gy = (groups + gx - 1) / gx;
+      if (gy > context.limits().max_compute_work_group_count[1])
+        throw DeviceFailure("pass " + ps.name + ": " + std::to_string(groups) + " workgroups exceed the device limit");
+      pass.groups_x = static_cast<uint32_t>(gx);
+      pass.groups_y = static_cast<uint32_t>(gy);
+    }
+
+    commands_ = std::make_unique<gpu::CommandStream>(context);
+    timestamps_ = std::make_unique<gpu::TimestampPool>(context, static_cast<uint32_t>(spec_.passes.size()) + 3);
+  } catch (const gpu::Error& e) {
+    throw DeviceFailure(std::string("creating pipeline ") + config.pipeline + ": " + e.what());
+  }
+}
+
+GraphPipeline::~GraphPipeline() {
+  // The command stream waits for a pending submission before anything it
+  // uses is destroyed (members are destroyed in reverse order).
+  commands_.reset();
+}
+
+void GraphPipeline::process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+                            std::vector<protocol::PassTiming>& timings) {
+  std::lock_guard lock(mutex_);
+  try {
+    run(frame, want_output, output, timings);
+  } catch (const gpu::Error& e) {
+    history_valid_ = false;
+    throw DeviceFailure(e.what());
+  } catch (...) {
+    history_valid_ = false;
+    throw;
+  }
+}
+
+void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+                        std::vector<protocol::PassTiming>& timings) {
+  if (context_.lost()) throw gpu::VulkanError(VK_ERROR_DEVICE_LOST, "process");
+
+  // Upload: planes are copied verbatim into their (mapped or staging) buffers.
+  const auto upload_start = Clock::now();
+  bool any_staged_input = false;
+  for (auto& n : nodes_) {
+    if (n.spec->role != BufferRole::Input) continue;
+    const protocol::PlaneView* plane = nullptr;
+    for (const auto& p : frame.planes)
+      if (p.id == n.spec->channel) plane = &p;
+    if (!plane) throw std::invalid_argument(std::string("frame has no ") + channel_name(n.spec->channel) + " plane");
+    if (plane->format != n.spec->format)
+      throw std::invalid_argument(std::string("plane ") + channel_name(n.spec->channel) + " has the wrong format");
+    if (plane->bytes.size() != n.spec->plane_bytes)
+      throw std::invalid_argument(std::string("plane ") + channel_name(n.spec->channel) + " has " +
+                                  std::to_string(plane->bytes.size()) + " bytes, expected " +
+                                  std::to_string(n.spec->plane_bytes));
+    n.copies[0].write(plane->bytes);
+    any_staged_input = any_staged_input || n.copies[0].staged();
+  }
+
+  const bool reset = (frame.info.flags & protocol::kFrameReset) != 0 || !history_valid_;
+  FrameConstants constants{};
+  constants.size[0] = spec_.width;
+  constants.size[1] = spec_.height;
+  constants.size[2] = spec_.width * spec_.height;
+  constants.size[3] = reset ? kFrameFlagReset : 0u;
+  switch (frame.info.motion) {
+    case protocol::MotionConvention::PixelsToPrevious:
+      constants.motion[0] = constants.motion[1] = 1.0f;
+      break;
+    case protocol::MotionConvention::PixelsToNext:
+      constants.motion[0] = constants.motion[1] = -1.0f;
+      break;
+    case protocol::MotionConvention::UvToPrevious:
+      constants.motion[0] = static_cast<float>(spec_.width);
+      constants.motion[1] = static_cast<float>(spec_.height);
+      break;
+    default:
+      throw std::invalid_argument("unknown motion convention");
+  }
+  std::copy(spec_.parameters.begin(), spec_.parameters.end(), constants.params);
+  uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
+  const double upload_host_ms = ms_since(upload_start);
+
+  const uint32_t parity = static_cast<uint32_t>(frames_ & 1);
+  Node* out_node = nullptr;
+  for (auto& n : nodes_)
+    if (n.spec->role == BufferRole::Output) out_node = &n;
+
+  VkCommandBuffer cmd = commands_->begin();
+  timestamps_->reset(cmd);
+  // Orders this frame after everything the previous submissions did to the
+  // same buffers (history written last frame, staging copies).
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                          VK_ACCESS_TRANSFER_WRITE_BIT);
+  timestamps_->write(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0);
+  if (any_staged_input) {
+    for (auto& n : nodes_)
+      if (n.spec->role == BufferRole::Input) n.copies[0].record_upload(cmd, n.spec->plane_bytes);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+  }
+  timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 1);
+
+  uint32_t mark = 2;
+  for (size_t i = 0; i < passes_.size(); ++i) {
+    const Pass& pass = passes_[i];
+    if (i > 0)
+      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->pipeline());
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->layout(), 0, 1, &pass.sets[parity], 0,
+                            nullptr);
+    vkCmdDispatch(cmd, pass.groups_x, pass.groups_y, 1);
+    timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
+  }
+
+  const uint64_t out_bytes = out_node ? out_node->spec->plane_bytes : 0;
+  if (want_output && out_node) {
+    gpu::Buffer& out = out_node->copies[0];
+    if (out.staged()) {
+      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
+      out.record_download(cmd, out_bytes);
+      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    } else {
+      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    }
+  }
+  timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
+
+  commands_->submit_and_wait();
+  const std::vector<double> intervals = timestamps_->read_intervals_ms(mark);
+
+  double download_ms = 0.0;
+  if (want_output && out_node) {
+    download_ms = intervals.back();  // staging copy, if any
+    const auto t0 = Clock::now();
+    output.resize(out_bytes);
+    out_node->copies[0].read(output);
+    download_ms += ms_since(t0);
+  }
+
+  timings.push_back({"upload", upload_host_ms + intervals[0]});
+  for (size_t i = 0; i < passes_.size(); ++i) timings.push_back({passes_[i].spec->name, intervals[i + 1]});
+  timings.push_back({"download", download_ms});
+
+  ++frames_;
+  history_valid_ = true;
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,138 @@
+// The generic layer under every pipeline: a pipeline is a list of passes
+// over named device buffers. A GraphSpec is pure data computed from a
+// SessionConfig (so estimate_device_bytes() and the limit check need no
+// device); GraphPipeline turns it into device objects and runs frames.
+//
+// Buffers:
+//  - Input:   one client plane, uploaded verbatim (fp16 or fp32 as declared)
+//  - Output:  the Output plane, written by the last pass in the session's format
+//  - History: persistent per-session state, allocated twice and ping-ponged:
+//             a pass binds the Current or the Previous copy, and the two
+//             descriptor sets of each pass swap them on alternate frames
+//  - Scratch: transient device-only intermediate
+// Every binding of a pass is a storage buffer (bindings 1..n, in order);
+// binding 0 is the FrameConstants uniform buffer.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "gpu/buffer.hpp"
+#include "gpu/commands.hpp"
+#include "gpu/compute.hpp"
+#include "gpu/context.hpp"
+#include "gpu/timestamps.hpp"
+#include "pipelines/parameters.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace dn::pipelines {
+
+// Uniform block of every pass (shaders/include/frame.glsl), std140.
+struct FrameConstants {
+  uint32_t size[4];    // width, height, pixel count, flags
+  float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
+  float params[kMaxParameters];
+};
+static_assert(sizeof(FrameConstants) == 96);
+
+inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
+inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass
+
+enum class BufferRole { Input, Output, History, Scratch };
+enum class Slot { Current, Previous };
+
+struct BufferSpec {
+  std::string name;
+  BufferRole role = BufferRole::Scratch;
+  uint64_t bytes = 0;                                    // allocation size (rounded up to 4)
+  uint64_t plane_bytes = 0;                              // Input/Output: exact plane size
+  protocol::ChannelId channel = protocol::ChannelId::Radiance;  // Input/Output
+  protocol::Format format = protocol::Format::F32;       // Input/Output
+};
+
+struct BindingRef {
+  std::string buffer;
+  Slot slot = Slot::Current;  // History buffers only
+};
+
+struct PassSpec {
+  std::string name;    // also the timing name
+  std::string shader;  // dn::shaders::get(shader)
+  std::vector<BindingRef> bindings;
+  std::vector<gpu::SpecConstant> spec_constants;  // ids >= 1 (0 is the workgroup size)
+  uint32_t pixels_per_invocation = 2;             // linear dispatch over pixels
+};
+
+struct GraphSpec {
+  uint32_t width = 0, height = 0;
+  std::vector<BufferSpec> buffers;
+  std::vector<PassSpec> passes;
+  std::array<float, kMaxParameters> parameters{};
+
+  static constexpr uint64_t kUniformBytes = sizeof(FrameConstants);
+
+  // Persistent device bytes: every buffer (History twice) plus the uniform buffer.
+  uint64_t device_bytes() const;
+  // The largest single binding (what maxStorageBufferRange limits).
+  const BufferSpec* largest_binding() const;
+  const BufferSpec* find(const std::string& name) const;
+
+  // Builders used by pipeline definitions.
+  void add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name);
+  void add_output(const SessionConfig& config);
+  void add_history(std::string name, uint64_t bytes_per_pixel);
+};
+
+uint64_t round_up4(uint64_t bytes);
+// The declared format of a channel (F32 if it is not declared).
+protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel);
+// Specialization value "this plane is fp16".
+uint32_t is_half(protocol::Format format);
+
+class GraphPipeline final : public Pipeline {
+ public:
+  GraphPipeline(gpu::Context& context, const SessionConfig& config, GraphSpec spec);
+  ~GraphPipeline() override;
+
+  uint64_t device_bytes() const override { return device_bytes_; }
+  void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+               std::vector<protocol::PassTiming>& timings) override;
+
+  const GraphSpec& spec() const { return spec_; }
+
+ private:
+  struct Node {
+    const BufferSpec* spec = nullptr;
+    gpu::Buffer copies[2];  // History: [parity]; otherwise copies[0] only
+  };
+  struct Pass {
+    const PassSpec* spec = nullptr;
+    std::shared_ptr<const gpu::Kernel> kernel;
+    VkDescriptorSet sets[2] = {VK_NULL_HANDLE, VK_NULL_HANDLE};  // [parity]
+    uint32_t groups_x = 1, groups_y = 1;
+  };
+
+  void run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+           std::vector<protocol::PassTiming>& timings);
+  Node& node(const std::string& name);
+
+  gpu::Context& context_;
+  GraphSpec spec_;
+  protocol::Format output_format_;
+  std::vector<Node> nodes_;
+  gpu::Buffer uniform_;
+  std::unique_ptr<gpu::DescriptorPool> descriptors_;
+  std::vector<Pass> passes_;
+  std::unique_ptr<gpu::CommandStream> commands_;
+  std::unique_ptr<gpu::TimestampPool> timestamps_;
+  uint64_t device_bytes_ = 0;
+  uint64_t frames_ = 0;          // frames completed; parity = frames_ % 2
+  bool history_valid_ = false;   // false until a frame completed, and after any failure
+  std::mutex mutex_;
+};
+
+}  // namespace dn::pipelines

@@ -1,0 +1,42 @@
+// passthrough: Radiance -> Output, format conversion on the device and no
+// filtering. The honest baseline for transport benchmarks: it accepts every
+// input channel and uploads each one declared, so a transport measurement
+// pays the upload of a real pipeline's channel set.
+#include "pipelines/definitions.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+using protocol::ChannelId;
+
+GraphSpec build(const SessionConfig& config) {
+  GraphSpec g = begin_graph(config);
+  g.add_input(config, ChannelId::Radiance, "radiance");
+  for (const auto& decl : config.channels)
+    if (decl.id != ChannelId::Radiance) g.add_input(config, decl.id, std::string(protocol::find_channel(decl.id)->name));
+  g.add_output(config);
+  PassSpec pass;
+  pass.name = "passthrough";
+  pass.shader = "passthrough";
+  pass.bindings = {{"radiance"}, {"output"}};
+  pass.spec_constants = {{1, is_half(channel_format(config, ChannelId::Radiance))},
+                         {2, is_half(config.output_format)}};
+  g.passes.push_back(std::move(pass));
+  return g;
+}
+
+}  // namespace
+
+PipelineDefinition passthrough_definition() {
+  PipelineDefinition d;
+  d.description.name = "passthrough";
+  d.description.summary = "Copies Radiance to Output with format conversion only (no filtering).";
+  d.description.required_channels = protocol::channel_bit(ChannelId::Radiance);
+  for (const auto& c : protocol::kChannels)
+    if (c.id != ChannelId::Radiance && c.id != ChannelId::Output) d.description.optional_channels |= protocol::channel_bit(c.id);
+  d.description.parameters = parameters_of("passthrough");
+  d.build = build;
+  return d;
+}
+
+}  // namespace dn::pipelines

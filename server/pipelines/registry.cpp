@@ -1,0 +1,184 @@
+// The pipeline contract: the list of pipelines, configuration validation,
+// device-byte estimates and creation.
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "gpu/context.hpp"
+#include "pipelines/definitions.hpp"
+#include "pipelines/registry.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+std::string channel_list(uint64_t mask) {
+  std::string out;
+  for (const auto& c : protocol::kChannels) {
+    if (!(mask & protocol::channel_bit(c.id))) continue;
+    if (!out.empty()) out += ", ";
+    out += c.name;
+  }
+  return out.empty() ? "none" : out;
+}
+
+std::string format_number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+ConfigError error(protocol::ErrorCode code, std::string field, std::string message) {
+  return ConfigError{code, std::move(field), std::move(message)};
+}
+
+}  // namespace
+
+const std::vector<PipelineDefinition>& definitions() {
+  static const std::vector<PipelineDefinition> all = {passthrough_definition(), accumulate_definition()};
+  return all;
+}
+
+const PipelineDefinition* find_definition(std::string_view name) {
+  for (const auto& d : definitions())
+    if (d.description.name == name) return &d;
+  return nullptr;
+}
+
+GraphSpec begin_graph(const SessionConfig& config) {
+  GraphSpec g;
+  g.width = config.width;
+  g.height = config.height;
+  g.parameters = resolve_parameters(config.pipeline, config.parameters);
+  return g;
+}
+
+const std::vector<PipelineDescription>& available_pipelines() {
+  static const std::vector<PipelineDescription> all = [] {
+    std::vector<PipelineDescription> out;
+    for (const auto& d : definitions()) out.push_back(d.description);
+    return out;
+  }();
+  return all;
+}
+
+BindingSize largest_binding(const SessionConfig& config) {
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  if (!def) return {};
+  const GraphSpec g = def->build(config);
+  const BufferSpec* b = g.largest_binding();
+  return b ? BindingSize{b->name, b->bytes} : BindingSize{};
+}
+
+std::optional<ConfigError> check_device_limits(const SessionConfig& config, const gpu::DeviceLimits& limits) {
+  const BindingSize big = largest_binding(config);
+  if (big.bytes > limits.max_storage_buffer_range)
+    return error(protocol::ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                 "resolution " + std::to_string(config.width) + "x" + std::to_string(config.height) + " needs " +
+                     std::to_string(big.bytes) + " bytes in one device buffer (" + big.buffer +
+                     "); the device allows " + std::to_string(limits.max_storage_buffer_range));
+  return std::nullopt;
+}
+
+namespace {
+
+// Everything validate() checks except the device limits.
+std::optional<ConfigError> validate_config(const SessionConfig& config) {
+  using protocol::ErrorCode;
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  if (!def) {
+    std::string names;
+    for (const auto& d : definitions()) names += (names.empty() ? "" : ", ") + d.description.name;
+    return error(ErrorCode::UnknownPipeline, "OPEN_SESSION.pipeline",
+                 "unknown pipeline \"" + config.pipeline + "\"; available: " + names);
+  }
+  const PipelineDescription& desc = def->description;
+
+  if (config.width == 0)
+    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.width", "width must be at least 1");
+  if (config.height == 0)
+    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.height", "height must be at least 1");
+  if (config.width > kMaxDimension)
+    return error(ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                 "width " + std::to_string(config.width) + " exceeds " + std::to_string(kMaxDimension));
+  if (config.height > kMaxDimension)
+    return error(ErrorCode::LimitExceeded, "OPEN_SESSION.height",
+                 "height " + std::to_string(config.height) + " exceeds " + std::to_string(kMaxDimension));
+  if (config.output_format != protocol::Format::F16 && config.output_format != protocol::Format::F32)
+    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.output_format",
+                 "output format " + std::to_string(static_cast<int>(config.output_format)) +
+                     " is neither f16 (1) nor f32 (2)");
+
+  uint64_t declared = 0;
+  for (size_t i = 0; i < config.channels.size(); ++i) {
+    const auto& ch = config.channels[i];
+    const std::string field = "OPEN_SESSION.channels[" + std::to_string(i) + "]";
+    const auto* info = protocol::find_channel(ch.id);
+    if (!info || ch.id == protocol::ChannelId::Output)
+      return error(ErrorCode::InvalidChannel, field + ".id",
+                   "channel id " + std::to_string(static_cast<int>(ch.id)) + " is not an input channel");
+    if (ch.format != protocol::Format::F16 && ch.format != protocol::Format::F32)
+      return error(ErrorCode::InvalidChannel, field + ".format",
+                   "channel " + std::string(info->name) + " has format " +
+                       std::to_string(static_cast<int>(ch.format)) + ", expected f16 (1) or f32 (2)");
+    const uint64_t bit = protocol::channel_bit(ch.id);
+    if (declared & bit)
+      return error(ErrorCode::InvalidChannel, field + ".id",
+                   "channel " + std::string(info->name) + " is declared twice");
+    if (!((desc.required_channels | desc.optional_channels) & bit))
+      return error(ErrorCode::InvalidChannel, field + ".id",
+                   "pipeline " + desc.name + " does not use channel " + std::string(info->name) +
+                       "; it takes: " + channel_list(desc.required_channels | desc.optional_channels));
+    declared |= bit;
+  }
+  if (const uint64_t missing = desc.required_channels & ~declared)
+    return error(ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                 "pipeline " + desc.name + " requires channel(s) " + channel_list(missing));
+
+  std::set<std::string> seen;
+  for (size_t i = 0; i < config.parameters.size(); ++i) {
+    const auto& p = config.parameters[i];
+    const std::string field = "OPEN_SESSION.parameters[" + std::to_string(i) + "]";
+    const ParameterInfo* info = nullptr;
+    for (const auto& candidate : desc.parameters)
+      if (candidate.name == p.name) info = &candidate;
+    if (!info) {
+      std::string names;
+      for (const auto& candidate : desc.parameters) names += (names.empty() ? "" : ", ") + candidate.name;
+      return error(ErrorCode::InvalidParameter, field + ".name",
+                   "pipeline " + desc.name + " has no parameter \"" + p.name +
+                       "\"; it has: " + (names.empty() ? "none" : names));
+    }
+    if (!seen.insert(p.name).second)
+      return error(ErrorCode::InvalidParameter, field + ".name", "parameter " + p.name + " is given twice");
+    if (!std::isfinite(p.value) || p.value < info->min_value || p.value > info->max_value)
+      return error(ErrorCode::InvalidParameter, field + ".value",
+                   p.name + " = " + format_number(p.value) + " is outside [" + format_number(info->min_value) + ", " +
+                       format_number(info->max_value) + "]");
+    if (info->integer && p.value != std::floor(p.value))
+      return error(ErrorCode::InvalidParameter, field + ".value",
+                   p.name + " = " + format_number(p.value) + " must be an integer");
+  }
+
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<ConfigError> validate(const SessionConfig& config) {
+  if (auto err = validate_config(config)) return err;
+  return check_device_limits(config, gpu::current_device_limits());
+}
+
+uint64_t estimate_device_bytes(const SessionConfig& config) {
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  return def ? def->build(config).device_bytes() : 0;
+}
+
+std::unique_ptr<Pipeline> create(gpu::Context& context, const SessionConfig& config) {
+  if (auto err = validate_config(config)) throw std::invalid_argument(err->field + ": " + err->message);
+  if (auto err = check_device_limits(config, context.limits())) throw DeviceFailure(err->message);
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  return std::make_unique<GraphPipeline>(context, config, def->build(config));
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,30 @@
+// Additions to the pipeline contract (pipeline.hpp) for the server and tests.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "gpu/limits.hpp"
+#include "pipelines/pipeline.hpp"
+
+namespace dn::pipelines {
+
+// Largest width or height any pipeline accepts (validate() rejects more with LimitExceeded).
+inline constexpr uint32_t kMaxDimension = 16384;
+
+struct BindingSize {
+  std::string buffer;  // name of the largest device buffer
+  uint64_t bytes = 0;
+};
+
+// The largest single storage binding create() would make for this config
+// (what maxStorageBufferRange limits). config.pipeline must be known.
+BindingSize largest_binding(const SessionConfig& config);
+
+// LimitExceeded when the largest binding exceeds limits.max_storage_buffer_range.
+// validate() calls it with gpu::current_device_limits() (the limits of the
+// most recently created Context, or the Vulkan minimum of 128 MiB before any).
+std::optional<ConfigError> check_device_limits(const SessionConfig& config, const gpu::DeviceLimits& limits);
+
+}  // namespace dn::pipelines

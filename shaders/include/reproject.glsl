@@ -1,0 +1,35 @@
+// Reprojection helpers. Pixel centres are at (x + 0.5, y + 0.5); motion
+// vectors (after FrameConstants.motion scaling) point from the current pixel
+// centre to its position in the previous frame: p_prev = p + mv.
+#ifndef DN_REPROJECT_GLSL
+#define DN_REPROJECT_GLSL
+
+// Minimum total weight of the accepted bilinear taps below which the history
+// is treated as lost (a documented constant, not a tunable).
+const float DN_MIN_TAP_WEIGHT = 1e-3;
+
+vec2 dn_previous_position(uint pixel, uint width, vec2 motion_px) {
+  return vec2(float(pixel % width), float(pixel / width)) + 0.5 + motion_px;
+}
+
+// Bilinear footprint of a position in pixel units: the top-left tap and the
+// weights of taps (0,0), (1,0), (0,1), (1,1). Returns false when the position
+// is so far outside the image that no tap can be inside (this also keeps the
+// float -> int conversion in range).
+bool dn_bilinear_footprint(vec2 p, uvec2 size, out ivec2 origin, out vec4 weights) {
+  vec2 f = p - 0.5;
+  if (!(f.x > -1.0 && f.y > -1.0 && f.x < float(size.x) && f.y < float(size.y))) {
+    origin = ivec2(0);
+    weights = vec4(0.0);
+    return false;
+  }
+  vec2 base = floor(f);
+  vec2 t = f - base;
+  origin = ivec2(base);
+  weights = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
+  return true;
+}
+
+bool dn_inside(ivec2 q, uvec2 size) { return q.x >= 0 && q.y >= 0 && q.x < int(size.x) && q.y < int(size.y); }
+
+#endif

@@ -1,0 +1,24 @@
+// Input sanitizing, applied by the first pass of a filtering pipeline so that
+// no bad value ever enters history (docs/pipelines.md, "Sanitize rule"):
+//   radiance: NaN, +Inf, -Inf -> 0; negative -> 0 (max(x, 0)); per component
+//   normal:   any non-finite component -> the zero vector (rejects every tap)
+//   depth:    a pixel is foreground iff depth is finite and > 0
+//   motion:   any non-finite component -> no reprojection for that pixel
+// Tests are done on the bits so that no compiler fast-math can fold them away.
+#ifndef DN_SANITIZE_GLSL
+#define DN_SANITIZE_GLSL
+
+bool dn_is_finite(float x) { return (floatBitsToUint(x) & 0x7f800000u) != 0x7f800000u; }
+bool dn_is_finite(vec2 v) { return dn_is_finite(v.x) && dn_is_finite(v.y); }
+bool dn_is_finite(vec3 v) { return dn_is_finite(v.x) && dn_is_finite(v.y) && dn_is_finite(v.z); }
+
+float dn_sanitize_radiance(float x) { return dn_is_finite(x) ? max(x, 0.0) : 0.0; }
+vec3 dn_sanitize_radiance(vec3 c) {
+  return vec3(dn_sanitize_radiance(c.x), dn_sanitize_radiance(c.y), dn_sanitize_radiance(c.z));
+}
+
+vec3 dn_sanitize_normal(vec3 n) { return dn_is_finite(n) ? n : vec3(0.0); }
+
+bool dn_is_foreground(float depth) { return dn_is_finite(depth) && depth > 0.0; }
+
+#endif
