@@ -3,12 +3,15 @@
 // `passthrough` pipeline, which does no filtering. Prints frames per second,
 // GB/s (request + reply bytes over wall time) and the per-stage times:
 // encode, send, decode (client side) and upload, copy, download (server side).
+// Frames are sent the way the client library sends them: encode_segments()
+// plus sendmsg(), so plane bytes are never copied in user space.
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <arpa/inet.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -62,6 +65,38 @@ int connect_to(const std::string& url) {
   ::setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &size, sizeof size);
   ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof size);
   return fd;
+}
+
+// Sends gathered segments with sendmsg: plane bytes go from the renderer's memory to the socket.
+void send_segments(int fd, const std::vector<std::span<const uint8_t>>& segments) {
+  size_t segment = 0, offset = 0;
+  while (segment < segments.size()) {
+    iovec iov[64];
+    size_t count = 0;
+    for (size_t i = segment; i < segments.size() && count < 64; ++i, ++count) {
+      const size_t skip = i == segment ? offset : 0;
+      iov[count] = {const_cast<uint8_t*>(segments[i].data() + skip), segments[i].size() - skip};
+    }
+    msghdr msg{};
+    msg.msg_iov = iov;
+    msg.msg_iovlen = count;
+    ssize_t n = ::sendmsg(fd, &msg, MSG_NOSIGNAL);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error("send failed");
+    }
+    for (size_t sent = static_cast<size_t>(n); sent > 0;) {
+      const size_t left = segments[segment].size() - offset;
+      if (sent >= left) {
+        sent -= left;
+        ++segment;
+        offset = 0;
+      } else {
+        offset += sent;
+        sent = 0;
+      }
+    }
+  }
 }
 
 void send_all(int fd, const std::vector<uint8_t>& bytes) {
@@ -133,7 +168,8 @@ Report run(const std::string& url, uint32_t width, uint32_t height, Format forma
   std::vector<double> encode_ms, send_ms;
   uint64_t request_bytes = 0;
   std::thread sender([&] {
-    std::vector<uint8_t> bytes;
+    std::vector<uint8_t> scratch;
+    std::vector<std::span<const uint8_t>> segments;
     for (int i = 0; i < warmup + frames; ++i) {
       {
         std::unique_lock lock(m);
@@ -142,16 +178,15 @@ Report run(const std::string& url, uint32_t width, uint32_t height, Format forma
       }
       data.frame.info.frame_index = static_cast<uint64_t>(i);
       auto t0 = Clock::now();
-      bytes.clear();
-      dn::protocol::encode(data.frame, 100 + static_cast<uint64_t>(i), 0, bytes);
+      dn::protocol::encode_segments(data.frame, 100 + static_cast<uint64_t>(i), 0, scratch, segments);
       double e = ms_since(t0);
       auto t1 = Clock::now();
-      send_all(fd, bytes);
+      send_segments(fd, segments);
       double s = ms_since(t1);
       if (i >= warmup) {
         encode_ms.push_back(e);
         send_ms.push_back(s);
-        request_bytes += bytes.size();
+        for (auto seg : segments) request_bytes += seg.size();
       }
     }
   });
@@ -210,7 +245,7 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    dn::test::ServerProcess server({"--max-in-flight", std::to_string(in_flight), "--log-level", "warn"});
+    dn::test::ServerProcess server({"--max-in-flight", std::to_string(in_flight)});
     const std::string url = use_unix ? server.unix_url() : server.tcp_url();
     std::printf("transport: %ux%u, passthrough, %d frames after 3 warm-up, %d in flight, %s\n", width, height, frames,
                 in_flight, url.c_str());

@@ -6,6 +6,8 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
+#include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -216,27 +218,49 @@ void ConnectionState::wait_fd(short events, Clock::time_point deadline, bool has
 void ConnectionState::send(const protocol::Message& message, uint64_t request_id, uint32_t flags, bool expect_reply,
                            uint64_t max_bytes) {
   check_usable();
-  send_buffer_.clear();
-  protocol::encode(message, request_id, flags, send_buffer_);
-  if (max_bytes && send_buffer_.size() > max_bytes)
+  // Gather the message: header and fields in send_buffer_, plane bytes sent
+  // straight from the caller's memory (no copy of a 100 MB frame).
+  protocol::encode_segments(message, request_id, flags, send_buffer_, send_segments_);
+  uint64_t total = 0;
+  for (auto seg : send_segments_) total += seg.size();
+  if (max_bytes && total > max_bytes)
     throw Error::usage(protocol::ErrorCode::LimitExceeded, protocol::to_string(protocol::type_of(message)),
-                       "message of " + std::to_string(send_buffer_.size()) +
-                           " bytes exceeds the server's max_message_bytes " + std::to_string(max_bytes));
+                       "message of " + std::to_string(total) + " bytes exceeds the server's max_message_bytes " +
+                           std::to_string(max_bytes));
   if (expect_reply) pending_[request_id] = Pending{protocol::type_of(message), std::nullopt};
   sending_ = true;
   struct ClearSending {
     ConnectionState* self;
     ~ClearSending() { self->sending_ = false; }
   } clear_sending{this};
-  const uint8_t* p = send_buffer_.data();
-  size_t left = send_buffer_.size();
+  size_t segment = 0, offset = 0;  // first byte not yet sent
   bool has_deadline = false;
   auto deadline = deadline_from(std::nullopt, has_deadline);
-  while (left > 0) {
-    const ssize_t n = ::send(fd_, p, left, MSG_NOSIGNAL | MSG_DONTWAIT);
+  while (segment < send_segments_.size()) {
+    iovec iov[64];
+    size_t count = 0;
+    for (size_t i = segment; i < send_segments_.size() && count < 64; ++i, ++count) {
+      const size_t skip = (i == segment) ? offset : 0;
+      iov[count].iov_base = const_cast<uint8_t*>(send_segments_[i].data() + skip);
+      iov[count].iov_len = send_segments_[i].size() - skip;
+    }
+    msghdr msg{};
+    msg.msg_iov = iov;
+    msg.msg_iovlen = count;
+    const ssize_t n = ::sendmsg(fd_, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n > 0) {
-      p += n;
-      left -= size_t(n);
+      size_t sent = size_t(n);
+      while (sent > 0) {
+        const size_t left = send_segments_[segment].size() - offset;
+        if (sent >= left) {
+          sent -= left;
+          ++segment;
+          offset = 0;
+        } else {
+          offset += sent;
+          sent = 0;
+        }
+      }
       deadline = deadline_from(std::nullopt, has_deadline);  // io_timeout bounds a stall, not the whole send
       continue;
     }
@@ -256,8 +280,7 @@ void ConnectionState::send(const protocol::Message& message, uint64_t request_id
                                   protocol::ErrorCode::Internal));
     throw_send_failure(request_id, expect_reply);
   }
-  // Keep the send buffer from pinning a huge frame's worth of memory forever.
-  if (send_buffer_.capacity() > (size_t{256} << 20)) std::vector<uint8_t>().swap(send_buffer_);
+  send_segments_.clear();
   sending_ = false;
   send_pong_if_due();
 }

@@ -109,6 +109,7 @@ class ConnectionState {
   protocol::MessageReader reader_;
   protocol::Welcome welcome_;
   uint64_t next_request_id_ = 1;
+  std::vector<std::span<const uint8_t>> send_segments_;  // the message being sent, see send()
   std::optional<uint64_t> pong_due_;  // payload of a heartbeat PING not yet answered
   bool sending_ = false;              // a message is partly written: nothing else may be
 

@@ -36,6 +36,46 @@ class Counter {
   uint64_t n_ = 0;
 };
 
+// Writes like Writer but leaves plane bytes where they are: each one becomes
+// its own segment, so a sender can writev() the caller's planes directly.
+class Gatherer {
+ public:
+  explicit Gatherer(std::vector<uint8_t>& scratch) : scratch_(scratch), writer_(scratch) {}
+  void u8(uint8_t v) { writer_.u8(v); }
+  void u16(uint16_t v) { writer_.u16(v); }
+  void u32(uint32_t v) { writer_.u32(v); }
+  void u64(uint64_t v) { writer_.u64(v); }
+  void f32(float v) { writer_.f32(v); }
+  void f64(double v) { writer_.f64(v); }
+  void str(std::string_view v) { writer_.str(v); }
+  void zeros(size_t n) { writer_.zeros(n); }
+  void bytes(std::span<const uint8_t> b) {
+    close_scratch_piece();
+    pieces_.push_back({true, 0, b.size(), b.data()});
+  }
+  // Spans are taken at the end: scratch may reallocate while it grows.
+  void finish(std::vector<std::span<const uint8_t>>& segments) {
+    close_scratch_piece();
+    for (const Piece& p : pieces_)
+      if (p.size) segments.emplace_back(p.external ? p.data : scratch_.data() + p.offset, p.size);
+  }
+
+ private:
+  struct Piece {
+    bool external;
+    size_t offset, size;
+    const uint8_t* data;
+  };
+  void close_scratch_piece() {
+    if (scratch_.size() > open_from_) pieces_.push_back({false, open_from_, scratch_.size() - open_from_, nullptr});
+    open_from_ = scratch_.size();
+  }
+  std::vector<uint8_t>& scratch_;
+  Writer writer_;
+  std::vector<Piece> pieces_;
+  size_t open_from_ = 0;
+};
+
 template <class S>
 void count(S& s, size_t n) {
   if constexpr (std::is_same_v<S, Counter>) {
@@ -206,6 +246,39 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
     out.resize(start);
     throw std::invalid_argument("dn::protocol::encode: " + err->field + ": " + err->message);
   }
+}
+
+void encode_segments(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& scratch,
+                     std::vector<std::span<const uint8_t>>& segments) {
+  // Validate everything but the plane bytes (which the decoder only counts) by
+  // encoding the message with empty planes: cheap, and the same rules as encode().
+  Message skeleton = message;
+  std::visit(
+      [](auto& m) {
+        if constexpr (requires { m.planes; })
+          for (auto& p : m.planes) p.bytes = {};
+      },
+      skeleton);
+  scratch.clear();
+  encode(skeleton, request_id, flags, scratch);
+
+  Counter counter;
+  std::visit(Put<Counter>{counter}, message);
+  if (counter.size() > std::numeric_limits<uint32_t>::max())
+    throw std::length_error("dn::protocol::encode: payload of " + std::to_string(counter.size()) +
+                            " bytes does not fit the u32 payload_length");
+  Header h;
+  h.type = type_of(message);
+  h.flags = flags;
+  h.payload_length = static_cast<uint32_t>(counter.size());
+  h.request_id = request_id;
+  scratch.clear();
+  scratch.resize(kHeaderSize);
+  wire::store_header(scratch.data(), h);
+  Gatherer gatherer(scratch);
+  std::visit(Put<Gatherer>{gatherer}, message);
+  segments.clear();
+  gatherer.finish(segments);
 }
 
 std::vector<uint8_t> encode(const Message& message, uint64_t request_id, uint32_t flags) {

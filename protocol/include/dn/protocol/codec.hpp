@@ -33,6 +33,13 @@ uint64_t max_payload_bytes(MessageType type, uint64_t max_message_bytes);
 void encode(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& out);
 std::vector<uint8_t> encode(const Message& message, uint64_t request_id = 0, uint32_t flags = 0);
 
+// The same bytes as encode(), without copying plane data: `segments` lists,
+// in order, pieces of `scratch` (header and fields) and the caller's plane
+// spans, ready for writev()/sendmsg(). The spans stay valid while `scratch`
+// and the planes do. Same validation and exceptions as encode().
+void encode_segments(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& scratch,
+                     std::vector<std::span<const uint8_t>>& segments);
+
 // Validates and parses a fixed header: magic, version (major must match, any
 // minor), known type, reserved flags zero, payload length within
 // max_payload_bytes(type, max_message_bytes).
