@@ -25,6 +25,15 @@ using Clock = std::chrono::steady_clock;
 
 constexpr size_t kReadBudgetPerEvent = 8u << 20;  // bytes read per wake-up before other sockets get a turn
 constexpr int kTimerTickMs = 200;
+constexpr uint64_t kControlMessageBytes = 64u << 10;  // the largest control message (OPEN_SESSION, ...)
+
+// Bytes of one FRAME of this session: planes plus generous room for the fixed fields.
+uint64_t frame_message_bytes(const pipelines::SessionConfig& config) {
+  uint64_t bytes = 4096;
+  for (const auto& ch : config.channels)
+    bytes += protocol::plane_bytes(*protocol::find_channel(ch.id), ch.format, config.width, config.height) + 16;
+  return bytes;
+}
 
 // ERROR strings have wire limits (docs/protocol.md); cut at a UTF-8 character boundary.
 std::string fit(std::string text, size_t limit) {
@@ -192,7 +201,8 @@ void Server::accept_from(net::Listener& listener) {
     }
     uint64_t id = next_connection_id_++;
     ++connections_accepted_;
-    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, peer_name(addr, is_unix), options_.max_message_bytes);
+    // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
+    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, peer_name(addr, is_unix), kControlMessageBytes);
     tune_socket(fd, is_unix);
     net::Connection& c = *conn;
     connections_[id] = std::move(conn);
@@ -259,8 +269,19 @@ bool Server::has_work(const net::Connection& c) const {
   return false;
 }
 
+void Server::refresh_message_limit(net::Connection& c) {
+  // A peer may send messages up to twice the frame size of the largest session it owns (so a
+  // frame with a wrong plane size still gets a recoverable ERROR); nothing bigger is allocated.
+  uint64_t limit = kControlMessageBytes;
+  for (uint64_t sid : c.owned_sessions)
+    if (auto it = sessions_.find(sid); it != sessions_.end())
+      limit = std::max(limit, 2 * frame_message_bytes(it->second->config()) + kControlMessageBytes);
+  c.set_max_message_bytes(std::min(limit, options_.max_message_bytes));
+}
+
 void Server::update_interest(net::Connection& c) {
-  // Resume reading once the connection's queued output has drained below half the limit.
+  // Pause reading while the peer does not take its output; resume below half the limit.
+  if (!c.reading_paused && c.queued_bytes() > options_.max_output_buffer_bytes) c.reading_paused = true;
   if (c.reading_paused) {
     bool window_full = false;
     for (uint64_t sid : c.owned_sessions) {
@@ -379,9 +400,7 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
   if (auto err = pipelines::validate(config)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
 
   // A frame of this session must fit one message.
-  uint64_t frame_bytes = 4096;
-  for (const auto& ch : m.channels)
-    frame_bytes += protocol::plane_bytes(*protocol::find_channel(ch.id), ch.format, m.width, m.height) + 16;
+  const uint64_t frame_bytes = frame_message_bytes(config);
   if (frame_bytes > options_.max_message_bytes)
     return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
                       "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
@@ -408,6 +427,7 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
   auto session = std::make_shared<Session>(id, c.id(), std::move(config), std::move(pipeline));
   sessions_[id] = session;
   c.owned_sessions.push_back(id);
+  refresh_message_limit(c);  // before the next header is read: this session's frames may follow at once
   ++sessions_opened_;
   log::info("session.open", {{"conn", c.id()},
                              {"session", id},
@@ -485,6 +505,7 @@ void Server::finish_session(const std::shared_ptr<Session>& s, bool notify) {
   }
   if (net::Connection* owner = find_connection(s->owner())) {
     std::erase(owner->owned_sessions, s->id());
+    refresh_message_limit(*owner);
     update_interest(*owner);
   }
   log::info("session.close", {{"session", s->id()}, {"frames", s->frames_processed}});

@@ -58,6 +58,7 @@ class Server {
   void send_error(net::Connection& c, uint64_t request_id, protocol::ErrorCode code, std::string field,
                   std::string message, bool fatal);
   void update_interest(net::Connection& c);
+  void refresh_message_limit(net::Connection& c);
   void close_connection(uint64_t connection_id, const char* reason);
   void finish_session(const std::shared_ptr<Session>& s, bool notify);
   void drain_completions();

@@ -36,6 +36,8 @@ class Connection {
   // complete message to `handler`. Stops early once reading is paused.
   ReadStatus read_available(const MessageHandler& handler, size_t budget);
   const protocol::DecodeError& read_error() const { return reader_.error(); }
+  // Largest message accepted from now on: bounds what one peer can make us allocate.
+  void set_max_message_bytes(uint64_t bytes) { reader_.set_max_message_bytes(bytes); }
 
   // Queues an encoded message. A watch message (watch_session != 0) replaces
   // an older one of the same session that has not started going out, so a

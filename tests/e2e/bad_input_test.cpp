@@ -96,6 +96,26 @@ TEST_F(BadInput, FrameLargerThanServerLimit) {
   EXPECT_TRUE(c.closed_by_server());
 }
 
+TEST_F(BadInput, FrameLargerThanOwnSessionsNeedIsRefusedBeforeAllocation) {
+  // The server allows a peer at most twice its largest session's frame: a
+  // client cannot make it allocate max_message_bytes by merely claiming it.
+  for (bool with_session : {false, true}) {
+    RawClient c(server_->tcp_url());
+    c.hello();
+    if (with_session) c.open(passthrough_session(64, 32));  // frames of ~24 KiB
+    auto b = protocol::encode(protocol::Ping{1}, 3);
+    b[6] = static_cast<uint8_t>(protocol::MessageType::Frame);
+    put_u32(b, 12, 8u << 20);  // 8 MiB: within --max-message 64M, far beyond this peer's needs
+    c.send_bytes(std::vector<uint8_t>(b.begin(), b.begin() + 24));
+    auto r = c.receive(10.0);
+    ASSERT_TRUE(r);
+    auto* e = std::get_if<protocol::Error>(&r->message);
+    ASSERT_NE(e, nullptr);
+    EXPECT_EQ(e->code, ErrorCode::MessageTooLarge) << e->message;
+    EXPECT_TRUE(c.closed_by_server());
+  }
+}
+
 TEST_F(BadInput, UnknownMessageType) {
   auto b = hello_bytes();
   b[6] = 0xE7;

@@ -60,6 +60,9 @@ class MessageReader {
   enum class Status { NeedMore, Ready, Failed };
 
   explicit MessageReader(uint64_t max_message_bytes) : max_message_bytes_(max_message_bytes) {}
+  // Changes the limit for headers not yet read (a server lowers it until a
+  // peer has a session whose frames need more).
+  void set_max_message_bytes(uint64_t max_message_bytes) { max_message_bytes_ = max_message_bytes; }
 
   std::span<uint8_t> writable();
   Status commit(size_t n);
