@@ -2,6 +2,7 @@
 // watchers, close, memory accounting, limits and graceful shutdown.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/socket.h>
 
 #include <cstring>
 #include <map>
@@ -215,6 +216,43 @@ TEST(Session, WatcherSeesTheOwnersFrames) {
   auto bye = watcher.receive();
   ASSERT_TRUE(bye);
   EXPECT_NE(std::get_if<protocol::SessionClosed>(&bye->message), nullptr);
+}
+
+TEST(Session, SlowWatcherGetsTheLatestFrameAndNeverSlowsTheOwner) {
+  ServerProcess server;
+  RawClient owner(server.tcp_url());
+  owner.hello();
+  constexpr uint32_t w = 256, h = 144;  // 442 KB per result
+  auto request = passthrough_session(w, h);
+  uint64_t sid = owner.open(request);
+  RawClient watcher(server.tcp_url());
+  int small = 64 * 1024;
+  ::setsockopt(watcher.fd(), SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  watcher.hello();
+  watcher.send(protocol::Attach{sid}, 8);
+  ASSERT_TRUE(watcher.receive());  // SESSION (read-only)
+
+  // The watcher reads nothing while the owner streams: the owner must not be slowed.
+  constexpr int kFrames = 60;  // 26 MB of results, more than the socket buffers hold
+  for (int i = 0; i < kFrames; ++i) {
+    auto f = make_frame(sid, static_cast<uint64_t>(i), w, h, request.channels, static_cast<float>(i));
+    owner.send(f.frame, static_cast<uint64_t>(i));
+    auto r = owner.receive(20.0);
+    ASSERT_TRUE(r) << "owner stalled at frame " << i;
+    ASSERT_NE(std::get_if<protocol::Result>(&r->message), nullptr);
+  }
+  // Now the watcher reads what it was kept: fewer than all frames, ending with the latest.
+  int received = 0;
+  float last = -1.0f;
+  while (auto r = watcher.receive(2.0)) {
+    auto* result = std::get_if<protocol::Result>(&r->message);
+    ASSERT_NE(result, nullptr);
+    std::memcpy(&last, result->planes.at(0).bytes.data(), 4);
+    ++received;
+  }
+  EXPECT_LT(received, kFrames) << "a slow watcher was sent every frame";
+  EXPECT_GT(received, 0);
+  EXPECT_EQ(last, static_cast<float>(kFrames - 1)) << "the watcher's last frame is not the latest";
 }
 
 TEST(Session, SessionLimitGivesClearError) {
