@@ -35,7 +35,9 @@ table="$out/metrics.md"
   echo "|---|---|---|---|---|---|"
 } > "$table"
 
-for pipeline in passthrough accumulate; do
+# Every pipeline the server offers, as WELCOME lists them.
+pipelines=$(build/client/dn ping --server "unix://$socket" --count 1 | awk '$1 == "pipeline" { print $2 }')
+for pipeline in $pipelines; do
   mkdir -p "$out/$pipeline"
   build/client/dn denoise -q --server "unix://$socket" --pipeline "$pipeline" --preset dnrender \
     --input "$out/input/frame_%04d.exr" --start 0 --end $((frames - 1)) \

@@ -34,7 +34,8 @@ ConfigError error(protocol::ErrorCode code, std::string field, std::string messa
 }  // namespace
 
 const std::vector<PipelineDefinition>& definitions() {
-  static const std::vector<PipelineDefinition> all = {passthrough_definition(), accumulate_definition()};
+  static const std::vector<PipelineDefinition> all = {passthrough_definition(), accumulate_definition(),
+                                                       svgf_definition()};
   return all;
 }
 

@@ -28,9 +28,19 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAndAccumulate) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateAndSvgf) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 2u);
+  ASSERT_EQ(all.size(), 3u);
+  EXPECT_EQ(all[2].name, "svgf");
+  EXPECT_EQ(all[2].required_channels,
+            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
+                protocol::channel_bit(ChannelId::Normal) | protocol::channel_bit(ChannelId::Depth) |
+                protocol::channel_bit(ChannelId::Motion));
+  EXPECT_EQ(all[2].optional_channels, protocol::channel_bit(ChannelId::Emission));
+  std::vector<std::string> svgf_names;
+  for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
+  EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
+                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth"}));
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
   EXPECT_TRUE(all[0].parameters.empty());

@@ -1,0 +1,44 @@
+// svgf guards and constants (docs/pipelines.md, "svgf in detail"): radiance
+// and albedo guards, epsilons, the history normal packing. Needs sanitize.glsl.
+#ifndef DN_SVGF_GUARDS_GLSL
+#define DN_SVGF_GUARDS_GLSL
+
+// Albedo components below this (or not finite) are not demodulated: the
+// pass divides and multiplies by 1 instead.
+const float DN_SVGF_ALBEDO_MIN = 1e-3;
+// Finite radiance components above this count as bad samples (-> 0, like
+// +Inf): it keeps l^2 of the demodulated colour (<= 1e15 after the albedo
+// guard) far from fp32 overflow in the moments.
+const float DN_SVGF_MAX_RADIANCE = 1e12;
+// Added to the filtered variance under the square root of the luminance
+// edge-stopping function (Falcor adds 1e-10, which breaks scale equivariance
+// near k = 1e-3); it matters only for luminance std devs below about 1e-10.
+const float DN_SVGF_VARIANCE_EPS = 1e-20;
+// Relative luminance guard of the 7x7 variance estimate (see svgf_variance.comp).
+const float DN_SVGF_LUMINANCE_EPS = 1e-20;
+
+vec3 dn_svgf_sanitize(vec3 c) {
+  c = dn_sanitize_radiance(c);
+  return vec3(c.x > DN_SVGF_MAX_RADIANCE ? 0.0 : c.x, c.y > DN_SVGF_MAX_RADIANCE ? 0.0 : c.y,
+              c.z > DN_SVGF_MAX_RADIANCE ? 0.0 : c.z);
+}
+
+float dn_svgf_albedo(float a) { return (dn_is_finite(a) && a >= DN_SVGF_ALBEDO_MIN) ? a : 1.0; }
+vec3 dn_svgf_albedo(vec3 a) { return vec3(dn_svgf_albedo(a.x), dn_svgf_albedo(a.y), dn_svgf_albedo(a.z)); }
+
+// Octahedral unit-normal packing into two snorm16 (history only).
+uint dn_svgf_pack_normal(vec3 n) {
+  vec3 a = abs(n);
+  n /= (a.x + a.y + a.z);
+  vec2 e = n.xy;
+  if (n.z < 0.0) e = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+  return packSnorm2x16(e);
+}
+vec3 dn_svgf_unpack_normal(uint bits) {
+  vec2 e = unpackSnorm2x16(bits);
+  vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+  if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+  return normalize(n);
+}
+
+#endif

@@ -1,0 +1,286 @@
+#include "svgf_reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dn::test {
+namespace {
+
+double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+
+bool foreground(double z) { return std::isfinite(z) && z > 0.0; }
+
+// Stored history normal: octahedral map quantized to two snorm16 and back.
+void quantize_normal(const double* in, double* out) {
+  const double l1 = std::fabs(in[0]) + std::fabs(in[1]) + std::fabs(in[2]);
+  double ex = in[0] / l1, ey = in[1] / l1;
+  const double ez = in[2] / l1;
+  auto sign = [](double v) { return v >= 0.0 ? 1.0 : -1.0; };
+  if (ez < 0.0) {
+    const double ox = ex, oy = ey;
+    ex = (1.0 - std::fabs(oy)) * sign(ox);
+    ey = (1.0 - std::fabs(ox)) * sign(oy);
+  }
+  auto snorm = [](double v) {
+    const double q = std::round(std::clamp(v, -1.0, 1.0) * 32767.0);
+    return std::clamp(q / 32767.0, -1.0, 1.0);
+  };
+  double x = snorm(ex), y = snorm(ey);
+  const double z = 1.0 - std::fabs(x) - std::fabs(y);
+  if (z < 0.0) {
+    const double ox = x, oy = y;
+    x = (1.0 - std::fabs(oy)) * sign(ox);
+    y = (1.0 - std::fabs(ox)) * sign(oy);
+  }
+  const double len = std::sqrt(x * x + y * y + z * z);
+  out[0] = x / len;
+  out[1] = y / len;
+  out[2] = z / len;
+}
+
+double distance3(const double* a, const double* b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+}  // namespace
+
+SvgfReference::SvgfReference(int width, int height, SvgfParams params) : w_(width), h_(height), p_(params) {}
+
+std::vector<double> SvgfReference::step(const SvgfFrame& f) {
+  const int w = w_, h = h_, n = w * h;
+  const bool reset = f.reset || !has_history_;
+  const int iterations = p_.atrous_iterations;
+  const int tap = std::min(p_.feedback_tap, std::max(iterations - 1, 0));
+
+  // Inputs: sanitized radiance, guarded albedo, depth, sanitized normals.
+  std::vector<double> c(3 * n), a(3 * n), nrm(3 * n, 0.0), z(n);
+  std::vector<bool> fg(n);
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double r = f.radiance[3 * i + k];
+      c[3 * i + k] = (std::isfinite(r) && r > 0.0 && r <= 1e12) ? r : 0.0;
+      const double al = f.albedo[3 * i + k];
+      a[3 * i + k] = (std::isfinite(al) && al >= static_cast<double>(1e-3f)) ? al : 1.0;
+    }
+    z[i] = f.depth[i];
+    fg[i] = foreground(z[i]);
+    if (std::isfinite(f.normal[3 * i]) && std::isfinite(f.normal[3 * i + 1]) && std::isfinite(f.normal[3 * i + 2]))
+      for (int k = 0; k < 3; ++k) nrm[3 * i + k] = f.normal[3 * i + k];
+  }
+  // Gradients: per axis min over the inside foreground neighbours of |dz| and
+  // of |dn| (independently), then max over the axes.
+  std::vector<double> dz(n, 0.0), dn(n, 0.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      if (!fg[i]) continue;
+      for (int axis = 0; axis < 2; ++axis) {
+        double bz = 1e300, bn = 1e300;
+        bool any = false;
+        for (int side : {-1, 1}) {
+          const int qx = x + (axis == 0 ? side : 0), qy = y + (axis == 1 ? side : 0);
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const int q = qy * w + qx;
+          if (!fg[q]) continue;
+          any = true;
+          bz = std::min(bz, std::fabs(z[q] - z[i]));
+          bn = std::min(bn, distance3(&nrm[3 * q], &nrm[3 * i]));
+        }
+        if (any) {
+          dz[i] = std::max(dz[i], bz);
+          dn[i] = std::max(dn[i], bn);
+        }
+      }
+    }
+
+  // Pass 1: reprojection and temporal integration.
+  std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n), hz(n, 0.0), hn(3 * n, 0.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      for (int k = 0; k < 3; ++k) d[3 * i + k] = c[3 * i + k] / a[3 * i + k];
+      const double l = luminance(&d[3 * i]);
+      if (!fg[i]) {
+        for (int k = 0; k < 3; ++k) colour[3 * i + k] = d[3 * i + k];
+        len[i] = 0.0;
+        m1[i] = l;
+        m2[i] = l * l;
+        continue;
+      }
+      const double* nc = &nrm[3 * i];
+      const bool has_normal = nc[0] * nc[0] + nc[1] * nc[1] + nc[2] * nc[2] > 0.0;
+      const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
+      double pc[3] = {0, 0, 0}, pm1 = 0, pm2 = 0, plen = 0;
+      bool valid = false;
+      const double px = x + 0.5 + mvx, py = y + 0.5 + mvy;  // previous position, centres at +0.5
+      if (!reset && has_normal && std::isfinite(mvx) && std::isfinite(mvy) && px - 0.5 > -1.0 && py - 0.5 > -1.0 &&
+          px - 0.5 < w && py - 0.5 < h) {
+        double sc[3] = {0, 0, 0}, sm1 = 0, sm2 = 0, sl = 0, sw = 0;
+        auto add = [&](int qx, int qy, double wt) {
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) return;
+          const int q = qy * w + qx;
+          if (!(z_[q] > 0.0)) return;
+          if (std::fabs(z[i] - z_[q]) / (dz[i] + 0.01) > 10.0) return;
+          if (distance3(nc, &n_[3 * q]) / (dn[i] + 0.01) > 16.0) return;
+          for (int k = 0; k < 3; ++k) sc[k] += wt * colour_[3 * q + k];
+          sm1 += wt * m1_[q];
+          sm2 += wt * m2_[q];
+          sl += wt * length_[q];
+          sw += wt;
+        };
+        const double fx = px - 0.5, fy = py - 0.5;
+        const double bx = std::floor(fx), by = std::floor(fy), tx = fx - bx, ty = fy - by;
+        const int ix = static_cast<int>(bx), iy = static_cast<int>(by);
+        add(ix, iy, (1 - tx) * (1 - ty));
+        add(ix + 1, iy, tx * (1 - ty));
+        add(ix, iy + 1, (1 - tx) * ty);
+        add(ix + 1, iy + 1, tx * ty);
+        if (sw < 1e-3) {  // 3x3 box of valid taps around the pixel containing p_prev
+          sc[0] = sc[1] = sc[2] = sm1 = sm2 = sl = sw = 0.0;
+          const int cx = static_cast<int>(std::floor(px)), cy = static_cast<int>(std::floor(py));
+          for (int yy = -1; yy <= 1; ++yy)
+            for (int xx = -1; xx <= 1; ++xx) add(cx + xx, cy + yy, 1.0);
+        }
+        if (sw > 0.0) {
+          valid = true;
+          for (int k = 0; k < 3; ++k) pc[k] = sc[k] / sw;
+          pm1 = sm1 / sw;
+          pm2 = sm2 / sw;
+          plen = std::floor(sl / sw + 0.5);
+        }
+      }
+      len[i] = valid ? std::min(plen + 1.0, p_.max_history) : 1.0;
+      const double ac = valid ? std::max(1.0 / len[i], p_.alpha_colour) : 1.0;
+      const double am = valid ? std::max(1.0 / len[i], p_.alpha_moments) : 1.0;
+      for (int k = 0; k < 3; ++k) colour[3 * i + k] = (1 - ac) * pc[k] + ac * d[3 * i + k];
+      m1[i] = (1 - am) * pm1 + am * l;
+      m2[i] = (1 - am) * pm2 + am * l * l;
+      if (has_normal) {
+        hz[i] = z[i];
+        quantize_normal(nc, &hn[3 * i]);
+      }
+    }
+  temporal_ = colour;
+
+  auto normal_weight = [&](int i, int q) {
+    const double cosv = std::max(0.0, nrm[3 * i] * nrm[3 * q] + nrm[3 * i + 1] * nrm[3 * q + 1] +
+                                          nrm[3 * i + 2] * nrm[3 * q + 2]);
+    return std::pow(std::min(cosv, 1.0), p_.phi_normal);
+  };
+
+  // Pass 2: variance.
+  std::vector<double> var(n, 0.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      if (!fg[i]) continue;
+      if (len[i] >= 4.0) {
+        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]);
+        continue;
+      }
+      const double l = luminance(&colour[3 * i]);
+      double s1 = 0, s2 = 0, sw = 0;
+      for (int yy = -3; yy <= 3; ++yy)
+        for (int xx = -3; xx <= 3; ++xx) {
+          const int qx = x + xx, qy = y + yy;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const int q = qy * w + qx;
+          if (!fg[q]) continue;
+          double wt = 1.0;
+          if (q != i) {
+            const double dist = std::sqrt(double(xx * xx + yy * yy));
+            const double wz = std::fabs(z[i] - z[q]) / (p_.phi_depth * std::max(dz[i], 1e-8) * 3.0 * dist);
+            const double wl = std::fabs(l - luminance(&colour[3 * q])) / (p_.phi_colour * l + 1e-20);
+            wt = std::exp(-wz - wl) * normal_weight(i, q);
+          }
+          s1 += wt * m1[q];
+          s2 += wt * m2[q];
+          sw += wt;
+        }
+      s1 /= sw;
+      s2 /= sw;
+      var[i] = std::max(0.0, s2 - s1 * s1) * 4.0 / len[i];
+    }
+  variance_ = var;
+
+  // Pass 3: a-trous iterations over (rgb, variance).
+  std::vector<double> cur(4 * n);
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) cur[4 * i + k] = colour[3 * i + k];
+    cur[4 * i + 3] = var[i];
+  }
+  std::vector<double> hist_colour = colour;
+  atrous_.assign(iterations, {});
+  const double kernel[5] = {1.0 / 16, 1.0 / 4, 3.0 / 8, 1.0 / 4, 1.0 / 16};
+  for (int it = 0; it < iterations; ++it) {
+    const int step = 1 << it;
+    std::vector<double> next(4 * n);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int i = y * w + x;
+        if (!fg[i]) {
+          for (int k = 0; k < 4; ++k) next[4 * i + k] = cur[4 * i + k];
+          continue;
+        }
+        double gv = 0, gw = 0;
+        for (int yy = -1; yy <= 1; ++yy)
+          for (int xx = -1; xx <= 1; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+            const double k = (xx == 0 ? 0.5 : 0.25) * (yy == 0 ? 0.5 : 0.25);
+            gv += k * cur[4 * (qy * w + qx) + 3];
+            gw += k;
+          }
+        const double phi_l = p_.phi_colour * std::sqrt(gv / gw + 1e-20);
+        const double l = luminance(&cur[4 * i]);
+        double sc[3] = {0, 0, 0}, sv = 0, sw = 0;
+        for (int yy = -2; yy <= 2; ++yy)
+          for (int xx = -2; xx <= 2; ++xx) {
+            const int qx = x + step * xx, qy = y + step * yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+            const int q = qy * w + qx;
+            if (!fg[q]) continue;
+            double wt = 1.0;
+            if (q != i) {
+              const double dist = step * std::sqrt(double(xx * xx + yy * yy));
+              const double wz = std::fabs(z[i] - z[q]) / (p_.phi_depth * std::max(dz[i], 1e-8) * dist);
+              const double wl = std::fabs(l - luminance(&cur[4 * q])) / phi_l;
+              wt = kernel[xx + 2] * kernel[yy + 2] / (kernel[2] * kernel[2]) * std::exp(-wz - wl) * normal_weight(i, q);
+            }
+            for (int k = 0; k < 3; ++k) sc[k] += wt * cur[4 * q + k];
+            sv += wt * wt * cur[4 * q + 3];
+            sw += wt;
+          }
+        for (int k = 0; k < 3; ++k) next[4 * i + k] = sc[k] / sw;
+        next[4 * i + 3] = sv / (sw * sw);
+      }
+    cur = std::move(next);
+    atrous_[it] = cur;
+    if (it == tap)
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
+  }
+
+  // Pass 4: remodulate (+ emission).
+  std::vector<double> out(3 * n);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      double e = 0.0;
+      if (!f.emission.empty()) {
+        const double v = f.emission[3 * i + k];
+        e = (std::isfinite(v) && v > 0.0 && v <= 1e12) ? v : 0.0;
+      }
+      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + e;
+    }
+
+  colour_ = std::move(hist_colour);
+  length_ = std::move(len);
+  m1_ = std::move(m1);
+  m2_ = std::move(m2);
+  z_ = std::move(hz);
+  n_ = std::move(hn);
+  has_history_ = true;
+  return out;
+}
+
+}  // namespace dn::test

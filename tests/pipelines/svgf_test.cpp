@@ -1,0 +1,396 @@
+// svgf on the device against the double-precision CPU reference
+// (svgf_reference.cpp), its properties and its hard cases.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "frames.hpp"
+#include "gpu_test_env.hpp"
+#include "pipelines/pipeline.hpp"
+#include "svgf_reference.hpp"
+
+namespace dn {
+namespace {
+
+using protocol::MotionConvention;
+using test::ChannelId;
+using test::Format;
+
+class SvgfTest : public test::GpuTest {};
+
+pipelines::SessionConfig svgf_config(int w, int h, Format in = Format::F32, Format out = Format::F32,
+                                     std::vector<protocol::Parameter> params = {}, bool emission = false) {
+  std::vector<protocol::ChannelDecl> channels = {{ChannelId::Radiance, in}, {ChannelId::Albedo, in},
+                                                 {ChannelId::Normal, in},   {ChannelId::Depth, in},
+                                                 {ChannelId::Motion, in}};
+  if (emission) channels.push_back({ChannelId::Emission, in});
+  return test::make_config("svgf", w, h, channels, out, std::move(params));
+}
+
+struct SvgfScene {
+  std::vector<float> radiance, albedo, normal, depth, motion, emission;
+};
+
+// A panning camera over tiled surfaces (test::PanningScene) plus an albedo
+// that follows the world (some channels below the 1e-3 guard, some exactly 0)
+// and a few emissive tiles.
+class SvgfSceneGen {
+ public:
+  SvgfSceneGen(int w, int h, uint32_t seed, float vx, float vy, float motion_noise, float radiance_noise,
+               double special_fraction = 0.0)
+      : w_(w), h_(h), vx_(vx), vy_(vy), scene_(w, h, seed, vx, vy, motion_noise, radiance_noise, special_fraction) {}
+
+  SvgfScene frame(int t) {
+    test::SceneFrame s = scene_.frame(t);
+    SvgfScene f{s.radiance, {}, s.normal, s.depth, s.motion, {}};
+    f.albedo.resize(3 * w_ * h_);
+    f.emission.assign(3 * w_ * h_, 0.0f);
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        const int i = y * w_ + x;
+        const double u = x + 0.5 + vx_ * t, v = y + 0.5 + vy_ * t;
+        const int cx = static_cast<int>(std::floor(u / 11.0)), cy = static_cast<int>(std::floor(v / 9.0));
+        const uint32_t hash = static_cast<uint32_t>(cx) * 2654435761u ^ static_cast<uint32_t>(cy) * 40503u;
+        for (int k = 0; k < 3; ++k) f.albedo[3 * i + k] = 0.1f + 0.8f * static_cast<float>((hash >> (4 * k)) % 16) / 15.0f;
+        if (hash % 7 == 0) f.albedo[3 * i + 1] = 0.0f;
+        if (hash % 11 == 0) f.albedo[3 * i + 2] = 5e-4f;
+        if (hash % 13 == 0)
+          for (int k = 0; k < 3; ++k) f.emission[3 * i + k] = 2.0f + k;
+      }
+    return f;
+  }
+
+ private:
+  int w_, h_;
+  float vx_, vy_;
+  test::PanningScene scene_;
+};
+
+test::HostFrame host_frame(const SvgfScene& s, int w, int h, Format in, MotionConvention conv, uint32_t flags,
+                           bool emission) {
+  test::HostFrame f;
+  f.info.flags = flags;
+  f.info.motion = conv;
+  std::vector<float> mv = s.motion;
+  for (size_t i = 0; i < mv.size(); ++i) {
+    if (conv == MotionConvention::PixelsToNext) mv[i] = -mv[i];
+    if (conv == MotionConvention::UvToPrevious) mv[i] /= static_cast<float>(i % 2 == 0 ? w : h);
+  }
+  f.add(ChannelId::Radiance, in, s.radiance);
+  f.add(ChannelId::Albedo, in, s.albedo);
+  f.add(ChannelId::Normal, in, s.normal);
+  f.add(ChannelId::Depth, in, s.depth);
+  f.add(ChannelId::Motion, in, mv);
+  if (emission) f.add(ChannelId::Emission, in, s.emission);
+  return f;
+}
+
+test::SvgfFrame reference_frame(const test::HostFrame& f, int w, int h, bool emission) {
+  auto plane = [&](ChannelId id) { return test::decode_plane(f.plane(id).bytes, f.plane(id).format); };
+  test::SvgfFrame r;
+  r.radiance = plane(ChannelId::Radiance);
+  r.albedo = plane(ChannelId::Albedo);
+  r.normal = plane(ChannelId::Normal);
+  r.depth = plane(ChannelId::Depth);
+  r.motion = plane(ChannelId::Motion);
+  if (emission) r.emission = plane(ChannelId::Emission);
+  for (size_t i = 0; i < r.motion.size(); ++i) {
+    if (f.info.motion == MotionConvention::PixelsToNext) r.motion[i] = -r.motion[i];
+    if (f.info.motion == MotionConvention::UvToPrevious) r.motion[i] *= (i % 2 == 0 ? w : h);
+  }
+  r.reset = (f.info.flags & protocol::kFrameReset) != 0;
+  return r;
+}
+
+std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, Format out = Format::F32,
+                       std::vector<protocol::PassTiming>* timings = nullptr) {
+  std::vector<uint8_t> bytes;
+  std::vector<protocol::PassTiming> t;
+  p.process(f.view(), true, bytes, timings ? *timings : t);
+  return test::decode_output(bytes, out);
+}
+
+struct Variant {
+  const char* name;
+  int w, h;
+  Format in, out;
+  MotionConvention conv;
+  bool emission;
+  std::vector<protocol::Parameter> params;
+};
+
+void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
+
+class SvgfReferenceTest : public SvgfTest, public testing::WithParamInterface<Variant> {};
+
+// Output after every frame against the reference. The graph exposes no
+// intermediate buffers, so the passes are checked one layer at a time through
+// the variants: 0 a-trous iterations (reproject + remodulate; the temporal
+// colour), 1 iteration (+ variance and one a-trous step), the defaults, and
+// the paper's 5 iterations with feedback from iteration 0.
+TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
+  const Variant& v = GetParam();
+  auto config = svgf_config(v.w, v.h, v.in, v.out, v.params, v.emission);
+  ASSERT_FALSE(pipelines::validate(config).has_value());
+  auto pipe = pipelines::create(ctx(), config);
+  test::SvgfParams params;
+  for (const auto& p : v.params) {
+    if (p.name == "alpha_colour") params.alpha_colour = p.value;
+    if (p.name == "alpha_moments") params.alpha_moments = p.value;
+    if (p.name == "max_history") params.max_history = p.value;
+    if (p.name == "atrous_iterations") params.atrous_iterations = static_cast<int>(p.value);
+    if (p.name == "feedback_tap") params.feedback_tap = static_cast<int>(p.value);
+    if (p.name == "phi_colour") params.phi_colour = p.value;
+    if (p.name == "phi_normal") params.phi_normal = p.value;
+    if (p.name == "phi_depth") params.phi_depth = p.value;
+  }
+  test::SvgfReference ref(v.w, v.h, params);
+  SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
+  const int frames = 7;
+  double worst = 0.0;
+  for (int t = 0; t < frames; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const uint32_t flags = t == 5 ? protocol::kFrameReset : 0u;
+    const test::HostFrame f = host_frame(scene.frame(t), v.w, v.h, v.in, v.conv, flags, v.emission);
+    const std::vector<float> got = run(*pipe, f, v.out);
+    const std::vector<double> want = ref.step(reference_frame(f, v.w, v.h, v.emission));
+    ASSERT_EQ(got.size(), want.size());
+    for (float g : got) ASSERT_TRUE(std::isfinite(g) && g >= 0.0f) << g;
+    const double rms = test::relative_rms(got, want);
+    worst = std::max(worst, rms);
+    EXPECT_LE(rms, 1e-3);
+    size_t gross = 0;
+    for (size_t i = 0; i < want.size(); ++i)
+      if (std::fabs(got[i] - want[i]) > 2e-2 * std::max(1.0, std::fabs(want[i]))) ++gross;
+    EXPECT_EQ(gross, 0u) << "pixels that disagree by more than 2% (a different discrete decision)";
+  }
+  std::printf("[ info     ] %s: worst relative RMS over %d frames %.3g\n", v.name, frames, worst);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Variants, SvgfReferenceTest,
+    testing::Values(
+        Variant{"temporal_only", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
+                {{"atrous_iterations", 0}}},
+        Variant{"one_iteration", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
+                {{"atrous_iterations", 1}, {"feedback_tap", 0}}},
+        Variant{"defaults", 128, 72, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true, {}},
+        Variant{"paper_fp16", 97, 61, Format::F16, Format::F16, MotionConvention::PixelsToNext, true,
+                {{"atrous_iterations", 5}, {"feedback_tap", 0}}},
+        Variant{"uv_params", 80, 50, Format::F32, Format::F32, MotionConvention::UvToPrevious, false,
+                {{"alpha_colour", 0.2}, {"alpha_moments", 0.3}, {"max_history", 8}, {"phi_colour", 4},
+                 {"phi_normal", 32}, {"phi_depth", 2}, {"atrous_iterations", 3}, {"feedback_tap", 2}}}),
+    [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
+
+// A static geometry description: one plane, unit normals, zero motion.
+struct Flat {
+  int w, h;
+  std::vector<float> albedo, normal, depth, motion;
+  Flat(int w_, int h_, float z = 3.0f) : w(w_), h(h_) {
+    const int n = w * h;
+    albedo.assign(3 * n, 0.5f);
+    normal.assign(3 * n, 0.0f);
+    depth.assign(n, z);
+    motion.assign(2 * n, 0.0f);
+    for (int i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+  }
+  test::HostFrame frame(const std::vector<float>& radiance, uint32_t flags = 0) const {
+    test::HostFrame f;
+    f.info.flags = flags;
+    f.add(ChannelId::Radiance, Format::F32, radiance);
+    f.add(ChannelId::Albedo, Format::F32, albedo);
+    f.add(ChannelId::Normal, Format::F32, normal);
+    f.add(ChannelId::Depth, Format::F32, depth);
+    f.add(ChannelId::Motion, Format::F32, motion);
+    return f;
+  }
+};
+
+TEST_F(SvgfTest, ConstantInputStaysConstant) {
+  const int w = 64, h = 48, n = w * h;
+  Flat scene(w, h);
+  for (int i = 0; i < n; ++i) {
+    scene.motion[2 * i] = 0.3f * ((i * 7) % 5) - 0.6f;
+    scene.motion[2 * i + 1] = 0.25f;
+  }
+  std::vector<float> radiance(3 * n);
+  for (int i = 0; i < n; ++i) {
+    radiance[3 * i] = 0.25f;
+    radiance[3 * i + 1] = 1.5f;
+    radiance[3 * i + 2] = 3000.0f;
+  }
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (int t = 0; t < 8; ++t) {
+    const auto out = run(*pipe, scene.frame(radiance));
+    for (int i = 0; i < 3 * n; ++i)
+      ASSERT_NEAR(out[i], radiance[i], 1e-5 * radiance[i]) << "frame " << t << " element " << i;
+  }
+}
+
+// Two depth planes (z = 1 left, z = 10 right, same normal) with different
+// noisy radiance: the filter averages within each plane and never across.
+TEST_F(SvgfTest, HardGeometricEdgeIsNotBlurred) {
+  const int w = 64, h = 32, n = w * h, edge = 32;
+  Flat scene(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = edge; x < w; ++x) scene.depth[y * w + x] = 10.0f;
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> noise(0.5f, 1.5f);
+  std::vector<float> radiance(3 * n), out;
+  for (int t = 0; t < 6; ++t) {
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) radiance[3 * i + k] = (i % w < edge ? 1.0f : 20.0f) * noise(rng);
+    out = run(*pipe, scene.frame(radiance));
+  }
+  for (int y = 0; y < h; ++y) {
+    const float left = out[3 * (y * w + edge - 1)], right = out[3 * (y * w + edge)];
+    EXPECT_LT(left, 1.6f) << "row " << y;   // mean 1, within the noise; 20 would leak in visibly
+    EXPECT_GT(right, 12.0f) << "row " << y;  // mean 20
+  }
+}
+
+TEST_F(SvgfTest, StaticNoisySceneErrorFalls) {
+  const int w = 64, h = 48, n = w * h;
+  Flat scene(w, h);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<float> noise(0.0f, 2.0f);
+  std::vector<float> radiance(3 * n);
+  std::vector<double> rms;
+  for (int t = 0; t < 24; ++t) {
+    for (auto& r : radiance) r = noise(rng);
+    const auto out = run(*pipe, scene.frame(radiance));
+    double sum = 0;
+    for (float v : out) sum += (v - 1.0) * (v - 1.0);
+    rms.push_back(std::sqrt(sum / out.size()));
+  }
+  std::printf("[ info     ] rms after 1, 4, 8, 24 frames: %.4f %.4f %.4f %.4f (input %.4f)\n", rms[0], rms[3], rms[7],
+              rms[23], 1.0 / std::sqrt(3.0));
+  EXPECT_LT(rms[0], 0.5 / std::sqrt(3.0));
+  EXPECT_LT(rms[3], rms[0]);
+  EXPECT_LT(rms[7], rms[3]);
+  EXPECT_LT(rms[23], rms[7]);
+}
+
+// After a reset the output is exactly what a fresh session makes of the frame.
+TEST_F(SvgfTest, ResetLeavesNoGhost) {
+  const int w = 40, h = 30, n = w * h;
+  Flat scene(w, h);
+  std::vector<float> a(3 * n, 5.0f), b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b[i] = 0.01f * (i % 17);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (int t = 0; t < 10; ++t) run(*pipe, scene.frame(a));
+  auto fresh = pipelines::create(ctx(), svgf_config(w, h));
+  const auto want = run(*fresh, scene.frame(b));
+  EXPECT_EQ(run(*pipe, scene.frame(b, protocol::kFrameReset)), want);
+  EXPECT_EQ(run(*pipe, scene.frame(b)), run(*fresh, scene.frame(b)));
+}
+
+TEST_F(SvgfTest, BadRadianceNeverReachesOutputOrHistoryAndPixelsRecover) {
+  const int w = 32, h = 24, n = w * h;
+  Flat scene(w, h);
+  const float value = 2.0f;
+  std::vector<float> good(3 * n, value);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (int t = 0; t < 6; ++t) run(*pipe, scene.frame(good));
+  std::vector<float> bad = good;
+  const float specials[] = {NAN, INFINITY, -INFINITY, -3.0f, 1e30f, 3e38f};
+  for (int i = 0; i < 6; ++i) bad[3 * (40 + 37 * i) + (i % 3)] = specials[i];
+  for (int k = 0; k < 3; ++k) bad[3 * 300 + k] = 1e30f;
+  auto out = run(*pipe, scene.frame(bad));
+  for (float v : out) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= value) << v;
+  for (int t = 0; t < 60; ++t) {
+    out = run(*pipe, scene.frame(good));
+    for (float v : out) ASSERT_TRUE(std::isfinite(v)) << v;
+  }
+  for (int i = 0; i < 3 * n; ++i) EXPECT_NEAR(out[i], value, 0.01 * value) << i;
+}
+
+// Zero, tiny, negative and non-finite albedo: not demodulated (factor 1), output finite.
+TEST_F(SvgfTest, ZeroAlbedoGivesFiniteOutput) {
+  const int w = 32, h = 24, n = w * h;
+  Flat scene(w, h);
+  const float specials[] = {0.0f, 1e-9f, -1.0f, NAN, INFINITY, 0.0f};
+  for (int i = 0; i < 3 * n; ++i) scene.albedo[i] = specials[i % 6];
+  std::vector<float> radiance(3 * n, 0.7f);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (int t = 0; t < 4; ++t) {
+    const auto out = run(*pipe, scene.frame(radiance));
+    for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(out[i], 0.7f, 1e-5) << i;
+  }
+}
+
+// svgf(k x) = k svgf(x): documented epsilons (variance + 1e-20, luminance
+// guard 1e-20, radiance cut 1e12) only act far outside this range.
+TEST_F(SvgfTest, OutputScalesWithInput) {
+  const int w = 64, h = 40;
+  std::vector<std::vector<float>> base;
+  for (double k : {1.0, 1e-3, 1e3, 1e-6, 1e4}) {
+    SCOPED_TRACE(k);
+    auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
+    SvgfSceneGen scene(w, h, 8, 0.6f, -0.4f, 0.3f, 0.9f);
+    double worst = 0.0;
+    for (int t = 0; t < 5; ++t) {
+      SvgfScene s = scene.frame(t);
+      for (auto& r : s.radiance) r = static_cast<float>(r * k);
+      for (auto& e : s.emission) e = static_cast<float>(e * k);
+      const auto out = run(*pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
+      if (k == 1.0) {
+        base.push_back(out);
+        continue;
+      }
+      std::vector<double> want(out.size());
+      std::vector<float> got(out.size());
+      for (size_t i = 0; i < out.size(); ++i) {
+        want[i] = base[t][i];
+        got[i] = static_cast<float>(out[i] / k);
+      }
+      const double rms = test::relative_rms(got, want);
+      worst = std::max(worst, rms);
+      EXPECT_LE(rms, 1e-3) << "frame " << t;
+    }
+    if (k != 1.0) std::printf("[ info     ] k = %g: worst relative RMS %.3g\n", k, worst);
+  }
+}
+
+TEST_F(SvgfTest, TimingsNameEveryPass) {
+  auto pipe = pipelines::create(ctx(), svgf_config(32, 32));
+  SvgfSceneGen scene(32, 32, 3, 1, 1, 0, 0.1f);
+  std::vector<protocol::PassTiming> timings;
+  run(*pipe, host_frame(scene.frame(0), 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, false),
+      Format::F32, &timings);
+  std::vector<std::string> names;
+  for (const auto& t : timings) names.push_back(t.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject", "svgf_variance", "svgf_atrous_0",
+                                             "svgf_atrous_1", "svgf_atrous_2", "svgf_atrous_3", "svgf_remodulate",
+                                             "download"}));
+}
+
+TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
+  for (auto c : {svgf_config(64, 48), svgf_config(33, 17, Format::F16, Format::F16, {}, true),
+                 svgf_config(20, 10, Format::F32, Format::F32, {{"atrous_iterations", 0}})}) {
+    auto p = pipelines::create(ctx(), c);
+    EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
+  }
+  // fp32: inputs 12+12+12+4+8, history 2*(16+16), scratch 2*16, output 12 = 156 B/px, + 96 B of constants.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + 96);
+  // fp16 planes: 6+6+6+2+4 + 64 + 32 + 6 = 126 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + 96);
+}
+
+TEST(SvgfValidate, ChannelsAndParameters) {
+  EXPECT_FALSE(pipelines::validate(svgf_config(16, 16, Format::F16, Format::F16, {}, true)).has_value());
+  auto c = svgf_config(16, 16);
+  c.channels.erase(c.channels.begin() + 1);
+  const auto err = pipelines::validate(c);
+  ASSERT_TRUE(err.has_value());
+  EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+  EXPECT_NE(err->message.find("albedo"), std::string::npos);
+  EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 9}})).has_value());
+  EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 2.5}})).has_value());
+}
+
+}  // namespace
+}  // namespace dn
