@@ -69,13 +69,13 @@ int connect_to(const std::string& url) {
 
 // Sends gathered segments with sendmsg: plane bytes go from the renderer's memory to the socket.
 void send_segments(int fd, const std::vector<std::span<const uint8_t>>& segments) {
-  size_t segment = 0, offset = 0;
-  while (segment < segments.size()) {
+  dn::protocol::SegmentCursor cursor;
+  while (!cursor.done(segments)) {
     iovec iov[64];
     size_t count = 0;
-    for (size_t i = segment; i < segments.size() && count < 64; ++i, ++count) {
-      const size_t skip = i == segment ? offset : 0;
-      iov[count] = {const_cast<uint8_t*>(segments[i].data() + skip), segments[i].size() - skip};
+    for (size_t i = cursor.segment; i < segments.size() && count < 64; ++i, ++count) {
+      const auto piece = cursor.remaining(segments, i);
+      iov[count] = {const_cast<uint8_t*>(piece.data()), piece.size()};
     }
     msghdr msg{};
     msg.msg_iov = iov;
@@ -85,17 +85,7 @@ void send_segments(int fd, const std::vector<std::span<const uint8_t>>& segments
       if (errno == EINTR) continue;
       throw std::runtime_error("send failed");
     }
-    for (size_t sent = static_cast<size_t>(n); sent > 0;) {
-      const size_t left = segments[segment].size() - offset;
-      if (sent >= left) {
-        sent -= left;
-        ++segment;
-        offset = 0;
-      } else {
-        offset += sent;
-        sent = 0;
-      }
-    }
+    cursor.advance(segments, static_cast<size_t>(n));
   }
 }
 

@@ -233,34 +233,22 @@ void ConnectionState::send(const protocol::Message& message, uint64_t request_id
     ConnectionState* self;
     ~ClearSending() { self->sending_ = false; }
   } clear_sending{this};
-  size_t segment = 0, offset = 0;  // first byte not yet sent
+  protocol::SegmentCursor cursor;
   bool has_deadline = false;
   auto deadline = deadline_from(std::nullopt, has_deadline);
-  while (segment < send_segments_.size()) {
+  while (!cursor.done(send_segments_)) {
     iovec iov[64];
     size_t count = 0;
-    for (size_t i = segment; i < send_segments_.size() && count < 64; ++i, ++count) {
-      const size_t skip = (i == segment) ? offset : 0;
-      iov[count].iov_base = const_cast<uint8_t*>(send_segments_[i].data() + skip);
-      iov[count].iov_len = send_segments_[i].size() - skip;
+    for (size_t i = cursor.segment; i < send_segments_.size() && count < 64; ++i, ++count) {
+      const auto piece = cursor.remaining(send_segments_, i);
+      iov[count] = {const_cast<uint8_t*>(piece.data()), piece.size()};
     }
     msghdr msg{};
     msg.msg_iov = iov;
     msg.msg_iovlen = count;
     const ssize_t n = ::sendmsg(fd_, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n > 0) {
-      size_t sent = size_t(n);
-      while (sent > 0) {
-        const size_t left = send_segments_[segment].size() - offset;
-        if (sent >= left) {
-          sent -= left;
-          ++segment;
-          offset = 0;
-        } else {
-          offset += sent;
-          sent = 0;
-        }
-      }
+      cursor.advance(send_segments_, size_t(n));
       deadline = deadline_from(std::nullopt, has_deadline);  // io_timeout bounds a stall, not the whole send
       continue;
     }

@@ -53,5 +53,33 @@ TEST(EncodeSegments, RejectsWhatEncodeRejects) {
   EXPECT_THROW(encode(f, 1, 0), std::invalid_argument);
 }
 
+TEST(SegmentCursor, PartialSendsReassembleTheMessage) {
+  std::mt19937 rng(99);
+  OwnedMessage m = random_message(MessageType::Frame, rng, 5000);
+  std::vector<uint8_t> scratch;
+  std::vector<std::span<const uint8_t>> segments;
+  encode_segments(m.message, 5, 0, scratch, segments);
+  const std::vector<uint8_t> expected = encode(m.message, 5, 0);
+  for (int trial = 0; trial < 50; ++trial) {
+    // A "socket" that takes a random number of bytes from the first few pieces each time.
+    SegmentCursor cursor;
+    std::vector<uint8_t> sent;
+    while (!cursor.done(segments)) {
+      size_t budget = rng() % 700 + 1;
+      size_t taken = 0;
+      for (size_t i = cursor.segment; i < segments.size() && budget > 0; ++i) {
+        auto piece = cursor.remaining(segments, i);
+        const size_t n = std::min(budget, piece.size());
+        sent.insert(sent.end(), piece.begin(), piece.begin() + static_cast<long>(n));
+        budget -= n;
+        taken += n;
+        if (n < piece.size()) break;
+      }
+      cursor.advance(segments, taken);
+    }
+    ASSERT_EQ(sent, expected);
+  }
+}
+
 }  // namespace
 }  // namespace dn::protocol::test

@@ -40,6 +40,31 @@ std::vector<uint8_t> encode(const Message& message, uint64_t request_id = 0, uin
 void encode_segments(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& scratch,
                      std::vector<std::span<const uint8_t>>& segments);
 
+// Where a gathered send stands: the first byte of `segments` not yet sent.
+// advance(n) moves past n bytes the socket took; writers build their
+// iovecs from remaining(i) for i = segment, segment + 1, ...
+struct SegmentCursor {
+  size_t segment = 0;
+  size_t offset = 0;
+
+  bool done(std::span<const std::span<const uint8_t>> segments) const { return segment >= segments.size(); }
+  std::span<const uint8_t> remaining(std::span<const std::span<const uint8_t>> segments, size_t i) const {
+    return segments[i].subspan(i == segment ? offset : 0);
+  }
+  void advance(std::span<const std::span<const uint8_t>> segments, size_t n) {
+    while (n > 0 && segment < segments.size()) {
+      const size_t left = segments[segment].size() - offset;
+      if (n < left) {
+        offset += n;
+        return;
+      }
+      n -= left;
+      ++segment;
+      offset = 0;
+    }
+  }
+};
+
 // Validates and parses a fixed header: magic, version (major must match, any
 // minor), known type, reserved flags zero, payload length within
 // max_payload_bytes(type, max_message_bytes).
