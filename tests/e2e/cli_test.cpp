@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -18,11 +19,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Runs a command, capturing its output in a file of its own: ctest runs tests in parallel
+// processes, and tests in one process run commands from several threads.
 int shell(const std::string& command, std::string* output = nullptr) {
-  std::string cmd = command + " > /tmp/dn-cli-test.out 2>&1";
+  static std::atomic<int> counter{0};
+  const std::string path = "/tmp/dn-cli-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".out";
+  std::string cmd = command + " > " + path + " 2>&1";
   int status = std::system(cmd.c_str());
+  struct Remove {
+    const std::string& p;
+    ~Remove() { std::filesystem::remove(p); }
+  } remove{path};
   if (output) {
-    std::ifstream in("/tmp/dn-cli-test.out");
+    std::ifstream in(path);
     std::stringstream ss;
     ss << in.rdbuf();
     *output = ss.str();
