@@ -1,7 +1,7 @@
 #version 450
 // svgf_atrous: one edge-stopping a-trous iteration (docs/pipelines.md,
 // "svgf in detail", 3); one pipeline specialization per iteration (STEP).
-// One invocation per pixel. For a foreground pixel p with (c_p, v_p):
+// For a foreground pixel p with (c_p, v_p):
 //   g   = 3x3 gaussian {1/4, 1/2, 1/4}^2 of the variance over the pixels inside
 //         the image, renormalised
 //   phi_l = phi_colour * sqrt(g + 1e-20)
@@ -10,86 +10,141 @@
 //                           - |l_p - l_q| / phi_l) * max(0, n_p.n_q)^phi_normal
 //     with h = {1/6, 2/3, 1, 2/3, 1/6} (the B3 kernel {1/16, 1/4, 3/8, 1/4, 1/16} / (3/8))
 //   p itself has weight 1; c = sum w c / sum w, v = sum w^2 v / (sum w)^2.
-// Background pixels are copied. With FEEDBACK the result's rgb also becomes
-// the colour history (length kept).
+// Background pixels (and pixels without a normal, which take no tap) are
+// copied. With FEEDBACK the result's rgb also becomes the colour history
+// (length kept). Depth, dz and the (octahedral, unit) normal come from the
+// guide written by svgf_reproject.
 //
-// Bindings: 0 FrameConstants, 1 normal, 2 depth, 3 source illumination,
-//   4 destination illumination, 5 current colour history (writes .rgb if FEEDBACK)
-// Specialization: 0 workgroup size, 1 normal is fp16, 2 depth is fp16, 3 step, 4 feedback
+// Register blocking: one invocation filters a BLOCK x BLOCK set of pixels
+// spaced STEP apart, base + STEP * (i, j). Their taps form one
+// (BLOCK + 4)^2 window on the same STEP lattice, and each window pixel is
+// loaded and decoded once for all the block pixels it is a tap of (on
+// lavapipe every storage-buffer word read is a per-lane scalar load, so this
+// is what the pass costs). Invocation (ix, iy) of a grid of
+// (ceil(W / (STEP * BLOCK)) * STEP) x (ceil(H / (STEP * BLOCK)) * STEP):
+// base = (ix / STEP * STEP * BLOCK + ix % STEP, same in y).
+//
+// Bindings: 0 FrameConstants, 1 guide, 2 source illumination,
+//   3 destination illumination, 4 colour history (writes .rgb if FEEDBACK)
+// Specialization: 0 workgroup size, 3 step, 4 feedback, 5 block
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
-#include "plane.glsl"
 #include "sanitize.glsl"
 #include "luminance.glsl"
+#include "svgf_guards.glsl"
 
-layout(constant_id = 1) const bool NORMAL_HALF = false;
-layout(constant_id = 2) const bool DEPTH_HALF = false;
 layout(constant_id = 3) const int STEP = 1;
 layout(constant_id = 4) const bool FEEDBACK = false;
+layout(constant_id = 5) const int BLOCK = 4;
 
-layout(std430, set = 0, binding = 1) readonly buffer NormalPlane { uint data[]; } normal;
-layout(std430, set = 0, binding = 2) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 3) readonly buffer Source { vec4 data[]; } src;
-layout(std430, set = 0, binding = 4) writeonly buffer Destination { vec4 data[]; } dst;
-layout(std430, set = 0, binding = 5) writeonly buffer CurColour { vec4 data[]; } cur_colour;
+layout(std430, set = 0, binding = 1) readonly buffer Guide { uvec4 data[]; } guide;
+layout(std430, set = 0, binding = 2) readonly buffer Source { vec4 data[]; } src;
+layout(std430, set = 0, binding = 3) writeonly buffer Destination { vec4 data[]; } dst;
+layout(std430, set = 0, binding = 4) writeonly buffer Colour { vec4 data[]; } colour_history;
 
-#include "svgf.glsl"
+const int B = BLOCK;
+const int WIN = BLOCK + 4;
 
 void main() {
-  uint p = dn_invocation_index();
-  if (p >= frame.size.z) return;
   ivec2 size = ivec2(frame.size.xy);
-  ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec4 centre = src.data[p];
-  float z = dn_svgf_depth(p);
-  if (!dn_is_foreground(z)) {
-    dst.data[p] = centre;
-    if (FEEDBACK) cur_colour.data[p].rgb = centre.rgb;
-    return;
-  }
-  vec3 n = dn_svgf_normal(p);
+  int span = STEP * B;
+  int nx = (size.x + span - 1) / span * STEP;
+  int ny = (size.y + span - 1) / span * STEP;
+  uint inv = dn_invocation_index();
+  int ix = int(inv % uint(nx)), iy = int(inv / uint(nx));
+  if (iy >= ny) return;
+  ivec2 base = ivec2(ix / STEP * span + ix % STEP, iy / STEP * span + iy % STEP);
 
-  const float g[3] = float[3](0.25, 0.5, 0.25);
-  float gv = 0.0, gw = 0.0;
-  for (int yy = -1; yy <= 1; ++yy) {
-    for (int xx = -1; xx <= 1; ++xx) {
-      ivec2 q = pos + ivec2(xx, yy);
-      if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-      float k = g[xx + 1] * g[yy + 1];
-      gv += k * src.data[uint(q.y) * uint(size.x) + uint(q.x)].w;
-      gw += k;
+  float phi_n = DN_PARAM_VALUE(DN_P_svgf_phi_normal);
+  float phi_c = DN_PARAM_VALUE(DN_P_svgf_phi_colour);
+  float phi_z = DN_PARAM_VALUE(DN_P_svgf_phi_depth) * float(STEP);
+
+  // Block pixels: centre data.
+  float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];
+  vec3 cn[B * B];
+  bool act[B * B];
+  vec3 sc[B * B];
+  float sv[B * B], sw[B * B];
+  [[unroll]] for (int j = 0; j < B; ++j) {
+    [[unroll]] for (int i = 0; i < B; ++i) {
+      int k = j * B + i;
+      ivec2 p = base + STEP * ivec2(i, j);
+      ivec2 pc = min(p, size - 1);
+      uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
+      uvec4 gd = guide.data[pi];
+      cz[k] = uintBitsToFloat(gd.x);
+      act[k] = p.x < size.x && p.y < size.y && cz[k] > 0.0;
+      cn[k] = dn_svgf_unpack_normal(gd.y);
+      vec4 cs = src.data[pi];
+      cl[k] = dn_luminance(cs.rgb);
+      sc[k] = cs.rgb;  // p itself, weight 1
+      sv[k] = cs.w;
+      sw[k] = 1.0;
+      ipz[k] = 0.0;
+      ipl[k] = 0.0;
+      if (act[k]) {
+        const float g[3] = float[3](0.25, 0.5, 0.25);
+        float gv = 0.0, gw = 0.0;
+        for (int yy = -1; yy <= 1; ++yy) {
+          for (int xx = -1; xx <= 1; ++xx) {
+            ivec2 q = p + ivec2(xx, yy);
+            if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+            float kk = g[xx + 1] * g[yy + 1];
+            gv += kk * src.data[uint(q.y) * uint(size.x) + uint(q.x)].w;
+            gw += kk;
+          }
+        }
+        ipl[k] = 1.0 / (phi_c * sqrt(gv / gw + DN_SVGF_VARIANCE_EPS));
+        ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
+      }
     }
   }
-  float inv_phi_l = 1.0 / (DN_PARAM_VALUE(DN_P_svgf_phi_colour) * sqrt(gv / gw + DN_SVGF_VARIANCE_EPS));
-  float inv_phi_z = 1.0 / (DN_PARAM_VALUE(DN_P_svgf_phi_depth) * max(dn_svgf_gradients(pos, z, n).x, 1e-8) * float(STEP));
-  float phi_n = DN_PARAM_VALUE(DN_P_svgf_phi_normal);
-  float l = dn_luminance(centre.rgb);
 
   const float h[5] = float[5](1.0 / 6.0, 2.0 / 3.0, 1.0, 2.0 / 3.0, 1.0 / 6.0);
-  vec3 sum_c = centre.rgb;
-  float sum_v = centre.w;
-  float sum_w = 1.0;
-  for (int yy = -2; yy <= 2; ++yy) {
-    for (int xx = -2; xx <= 2; ++xx) {
-      if (xx == 0 && yy == 0) continue;
-      ivec2 q = pos + STEP * ivec2(xx, yy);
-      if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-      uint qi = uint(q.y) * uint(size.x) + uint(q.x);
-      float zq = dn_svgf_depth(qi);
-      if (!dn_is_foreground(zq)) continue;
-      float cos_n = dot(n, dn_svgf_normal(qi));
-      if (!(cos_n > 0.0)) continue;  // normal weight 0
+  [[unroll]] for (int r = 0; r < WIN; ++r) {
+    [[unroll]] for (int c = 0; c < WIN; ++c) {
+      ivec2 q = base + STEP * ivec2(c - 2, r - 2);
+      ivec2 qc = clamp(q, ivec2(0), size - 1);
+      bool inside = q == qc;
+      uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
+      uvec2 gq = guide.data[qi].xy;
       vec4 s = src.data[qi];
-      float w_z = abs(z - zq) * inv_phi_z * inversesqrt(float(xx * xx + yy * yy));
-      float w_l = abs(l - dn_luminance(s.rgb)) * inv_phi_l;
-      // exp(-w_z - w_l) * cos_n^phi_normal with one exp2 and one log2
-      float w = h[xx + 2] * h[yy + 2] * exp2(phi_n * log2(cos_n) - (w_z + w_l) * 1.4426950408889634);
-      sum_c += w * s.rgb;
-      sum_v += w * w * s.w;
-      sum_w += w;
+      float zq = uintBitsToFloat(gq.x);
+      bool tap_ok = inside && zq > 0.0;
+      vec3 nq = dn_svgf_unpack_normal(gq.y);
+      float lq = dn_luminance(s.rgb);
+      [[unroll]] for (int j = 0; j < B; ++j) {
+        int dy = r - j - 2;
+        if (dy < -2 || dy > 2) continue;
+        [[unroll]] for (int i = 0; i < B; ++i) {
+          int dx = c - i - 2;
+          if (dx < -2 || dx > 2) continue;
+          int k = j * B + i;
+          if (dx == 0 && dy == 0) continue;  // p itself: added above
+          float cos_n = dot(cn[k], nq);
+          float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
+          float w_l = abs(cl[k] - lq) * ipl[k];
+          float w = h[dx + 2] * h[dy + 2] *
+                    exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+          w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
+          sc[k] += w * s.rgb;
+          sv[k] += w * w * s.w;
+          sw[k] += w;
+        }
+      }
     }
   }
-  vec4 result = vec4(sum_c / sum_w, sum_v / (sum_w * sum_w));
-  dst.data[p] = result;
-  if (FEEDBACK) cur_colour.data[p].rgb = result.rgb;
+
+  [[unroll]] for (int j = 0; j < B; ++j) {
+    [[unroll]] for (int i = 0; i < B; ++i) {
+      int k = j * B + i;
+      ivec2 p = base + STEP * ivec2(i, j);
+      if (p.x >= size.x || p.y >= size.y) continue;
+      uint pi = uint(p.y) * uint(size.x) + uint(p.x);
+      vec4 result = vec4(sc[k] / sw[k], sv[k] / (sw[k] * sw[k]));
+      dst.data[pi] = result;
+      if (FEEDBACK) colour_history.data[pi].rgb = result.rgb;
+    }
+  }
 }

@@ -4,11 +4,17 @@
 // One invocation per pixel.
 //
 // Bindings: 0 FrameConstants, 1 radiance, 2 albedo, 3 normal, 4 depth, 5 motion,
-//   6 previous colour history, 7 previous aux history,
-//   8 current colour history, 9 current aux history, 10 illumination (scratch)
+//   6 colour history, 7 aux history (single copies: read here, rewritten by
+//   svgf_variance and the feedback a-trous iteration after this pass),
+//   8 illumination (scratch), 9 guide (scratch), 10 temporal (scratch)
 // Colour history: vec4(demodulated rgb, length), fp32. Aux history: uvec4(m1, m2,
 //   depth (0 = no history here) as fp32 bits, octahedral snorm16x2 normal).
 // Illumination: vec4(temporal demodulated rgb, 0) (the variance pass fills .w).
+// Guide (read by every later pass instead of the depth and normal planes):
+//   uvec4(gz, octahedral snorm16x2 normal, depth gradient dz, 0) with gz = depth
+//   for a foreground pixel with a normal, -depth for one without (it takes no
+//   neighbour and no pixel takes it), 0 for background.
+// Temporal: vec4(m1, m2, length, luminance of the temporal colour).
 // Specialization: 0 workgroup size, 1..5 radiance/albedo/normal/depth/motion are fp16
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
@@ -30,9 +36,9 @@ layout(std430, set = 0, binding = 4) readonly buffer DepthPlane { uint data[]; }
 layout(std430, set = 0, binding = 5) readonly buffer MotionPlane { uint data[]; } motion;
 layout(std430, set = 0, binding = 6) readonly buffer PrevColour { vec4 data[]; } prev_colour;
 layout(std430, set = 0, binding = 7) readonly buffer PrevAux { uvec4 data[]; } prev_aux;
-layout(std430, set = 0, binding = 8) writeonly buffer CurColour { vec4 data[]; } cur_colour;
-layout(std430, set = 0, binding = 9) writeonly buffer CurAux { uvec4 data[]; } cur_aux;
-layout(std430, set = 0, binding = 10) writeonly buffer Illumination { vec4 data[]; } illum;
+layout(std430, set = 0, binding = 8) writeonly buffer Illumination { vec4 data[]; } illum;
+layout(std430, set = 0, binding = 9) writeonly buffer Guide { uvec4 data[]; } guide;
+layout(std430, set = 0, binding = 10) writeonly buffer Temporal { vec4 data[]; } temporal;
 
 #include "svgf.glsl"
 
@@ -73,9 +79,9 @@ void main() {
   vec2 m = vec2(l, l * l);
   float z = dn_svgf_depth(p);
   if (!dn_is_foreground(z)) {
-    cur_colour.data[p] = vec4(d, 0.0);
-    cur_aux.data[p] = uvec4(floatBitsToUint(m), 0u, 0u);
     illum.data[p] = vec4(d, 0.0);
+    guide.data[p] = uvec4(0u);
+    temporal.data[p] = vec4(m, 0.0, l);
     return;
   }
   vec3 n = dn_svgf_normal(p);
@@ -121,8 +127,8 @@ void main() {
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(DN_P_svgf_alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
-  cur_colour.data[p] = vec4(colour, len);
-  cur_aux.data[p] = uvec4(floatBitsToUint(moments), floatBitsToUint(has_normal ? z : 0.0),
-                         has_normal ? dn_svgf_pack_normal(n) : 0u);
   illum.data[p] = vec4(colour, 0.0);
+  guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
+                        floatBitsToUint(grad.x), 0u);
+  temporal.data[p] = vec4(moments, len, dn_luminance(colour));
 }

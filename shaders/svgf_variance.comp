@@ -1,6 +1,7 @@
 #version 450
 // svgf_variance: per-pixel luminance variance from the temporal moments
-// (docs/pipelines.md, "svgf in detail", 2). One invocation per pixel.
+// (docs/pipelines.md, "svgf in detail", 2), and the history write-back.
+// One invocation per pixel.
 //   background: 0
 //   len >= 4:   max(0, m2 - m1^2)
 //   len < 4:    Falcor's 7x7 estimate: moments averaged over the foreground
@@ -9,69 +10,126 @@
 //                   - |l_p - l_q| / (phi_colour * l_p + 1e-20)) * max(0, n_p.n_q)^phi_normal
 //               else; variance = max(0, m2 - m1^2) * 4 / len.
 // The luminance term is relative to l_p here (Falcor divides by phi_colour
-// alone, in absolute units), so the filter stays scale-equivariant.
+// alone, in absolute units), so the filter stays scale-equivariant. Normals
+// are the guide's octahedral snorm16x2 ones (unit length).
+// History: this pass runs after every read of the (single-copy) history by
+// svgf_reproject, and writes it for the next frame: colour vec4(temporal rgb,
+// len) (the feedback a-trous iteration later replaces .rgb) and aux
+// uvec4(m1, m2, depth or 0 without normal, packed normal or 0).
 //
-// Bindings: 0 FrameConstants, 1 normal, 2 depth, 3 current colour history (reads .a = length, .rgb),
-//   4 current aux history (reads m1, m2), 5 illumination (writes .w = variance)
-// Specialization: 0 workgroup size, 1 normal is fp16, 2 depth is fp16
+// Register blocking as in svgf_atrous.comp: one invocation handles the
+// BLOCK x BLOCK pixels base + (i, j), base = BLOCK * (ix, iy) over a
+// ceil(W / BLOCK) x ceil(H / BLOCK) grid, and loads their (BLOCK + 6)^2
+// window once when any of them needs the 7x7 estimate.
+//
+// Bindings: 0 FrameConstants, 1 guide, 2 temporal, 3 illumination (reads .rgb, writes .w),
+//   4 colour history (written), 5 aux history (written)
+// Specialization: 0 workgroup size, 1 block
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
-#include "plane.glsl"
 #include "sanitize.glsl"
 #include "luminance.glsl"
+#include "svgf_guards.glsl"
 
-layout(constant_id = 1) const bool NORMAL_HALF = false;
-layout(constant_id = 2) const bool DEPTH_HALF = false;
+layout(constant_id = 1) const int BLOCK = 2;
 
-layout(std430, set = 0, binding = 1) readonly buffer NormalPlane { uint data[]; } normal;
-layout(std430, set = 0, binding = 2) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 3) readonly buffer CurColour { vec4 data[]; } cur_colour;
-layout(std430, set = 0, binding = 4) readonly buffer CurAux { uvec4 data[]; } cur_aux;
-layout(std430, set = 0, binding = 5) buffer Illumination { vec4 data[]; } illum;
+layout(std430, set = 0, binding = 1) readonly buffer Guide { uvec4 data[]; } guide;
+layout(std430, set = 0, binding = 2) readonly buffer Temporal { vec4 data[]; } temporal;
+layout(std430, set = 0, binding = 3) buffer Illumination { vec4 data[]; } illum;
+layout(std430, set = 0, binding = 4) writeonly buffer Colour { vec4 data[]; } colour_history;
+layout(std430, set = 0, binding = 5) writeonly buffer Aux { uvec4 data[]; } aux_history;
 
-#include "svgf.glsl"
+const int B = BLOCK;
+const int WIN = BLOCK + 6;
 
 void main() {
-  uint p = dn_invocation_index();
-  if (p >= frame.size.z) return;
   ivec2 size = ivec2(frame.size.xy);
-  ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  float z = dn_svgf_depth(p);
-  if (!dn_is_foreground(z)) {
-    illum.data[p].w = 0.0;
-    return;
-  }
-  vec4 h = cur_colour.data[p];
-  vec2 m = uintBitsToFloat(cur_aux.data[p].xy);
-  float len = h.a;
-  if (len >= 4.0) {
-    illum.data[p].w = max(0.0, m.y - m.x * m.x);
-    return;
-  }
-  vec3 n = dn_svgf_normal(p);
-  float inv_phi_z = 1.0 / (DN_PARAM_VALUE(DN_P_svgf_phi_depth) * max(dn_svgf_gradients(pos, z, n).x, 1e-8) * 3.0);
-  float l = dn_luminance(h.rgb);
-  float inv_phi_l = 1.0 / (DN_PARAM_VALUE(DN_P_svgf_phi_colour) * l + DN_SVGF_LUMINANCE_EPS);
+  int nx = (size.x + B - 1) / B;
+  uint inv = dn_invocation_index();
+  ivec2 base = B * ivec2(int(inv % uint(nx)), int(inv / uint(nx)));
+  if (base.y >= size.y) return;
+
   float phi_n = DN_PARAM_VALUE(DN_P_svgf_phi_normal);
-  vec2 sum_m = m;
-  float sum_w = 1.0;
-  for (int yy = -3; yy <= 3; ++yy) {
-    for (int xx = -3; xx <= 3; ++xx) {
-      if (xx == 0 && yy == 0) continue;
-      ivec2 q = pos + ivec2(xx, yy);
-      if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-      uint qi = uint(q.y) * uint(size.x) + uint(q.x);
-      float zq = dn_svgf_depth(qi);
-      if (!dn_is_foreground(zq)) continue;
-      float cos_n = dot(n, dn_svgf_normal(qi));
-      if (!(cos_n > 0.0)) continue;  // normal weight 0
-      float w_z = abs(z - zq) * inv_phi_z * inversesqrt(float(xx * xx + yy * yy));
-      float w_l = abs(l - dn_luminance(cur_colour.data[qi].rgb)) * inv_phi_l;
-      float w = exp2(phi_n * log2(cos_n) - (w_z + w_l) * 1.4426950408889634);
-      sum_m += w * uintBitsToFloat(cur_aux.data[qi].xy);
-      sum_w += w;
+  float phi_z = DN_PARAM_VALUE(DN_P_svgf_phi_depth) * 3.0;
+  float phi_c = DN_PARAM_VALUE(DN_P_svgf_phi_colour);
+  float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B], len[B * B], var[B * B], sw[B * B];
+  vec3 cn[B * B];
+  vec2 sm[B * B];
+  bool inside[B * B], act[B * B];
+  bool any_act = false;
+  [[unroll]] for (int j = 0; j < B; ++j) {
+    [[unroll]] for (int i = 0; i < B; ++i) {
+      int k = j * B + i;
+      ivec2 p = base + ivec2(i, j);
+      inside[k] = p.x < size.x && p.y < size.y;
+      ivec2 pc = min(p, size - 1);
+      uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
+      uvec4 gd = guide.data[pi];
+      vec4 t = temporal.data[pi];
+      float gz = uintBitsToFloat(gd.x);
+      len[k] = t.z;
+      if (inside[k]) {
+        colour_history.data[pi] = vec4(illum.data[pi].rgb, t.z);
+        aux_history.data[pi] = uvec4(floatBitsToUint(t.xy), floatBitsToUint(max(gz, 0.0)), gd.y);
+      }
+      // background 0; len >= 4: from the moments; else the 7x7 estimate
+      // (without a normal no neighbour is taken: act false, own moments).
+      var[k] = gz == 0.0 ? 0.0 : max(0.0, t.y - t.x * t.x);
+      act[k] = inside[k] && gz > 0.0 && t.z < 4.0;
+      any_act = any_act || act[k];
+      cz[k] = gz;
+      cn[k] = dn_svgf_unpack_normal(gd.y);
+      cl[k] = t.w;
+      ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
+      ipl[k] = 1.0 / (phi_c * t.w + DN_SVGF_LUMINANCE_EPS);
+      sm[k] = t.xy;  // p itself, weight 1
+      sw[k] = 1.0;
     }
   }
-  m = sum_m / sum_w;
-  illum.data[p].w = max(0.0, m.y - m.x * m.x) * 4.0 / len;
+  if (any_act) {
+    [[unroll]] for (int r = 0; r < WIN; ++r) {
+      [[unroll]] for (int c = 0; c < WIN; ++c) {
+        ivec2 q = base + ivec2(c - 3, r - 3);
+        ivec2 qc = clamp(q, ivec2(0), size - 1);
+        uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
+        uvec2 gq = guide.data[qi].xy;
+        vec4 tq = temporal.data[qi];
+        float zq = uintBitsToFloat(gq.x);
+        bool tap_ok = q == qc && zq > 0.0;
+        vec3 nq = dn_svgf_unpack_normal(gq.y);
+        [[unroll]] for (int j = 0; j < B; ++j) {
+          int dy = r - j - 3;
+          if (dy < -3 || dy > 3) continue;
+          [[unroll]] for (int i = 0; i < B; ++i) {
+            int dx = c - i - 3;
+            if (dx < -3 || dx > 3) continue;
+            if (dx == 0 && dy == 0) continue;  // p itself: added above
+            int k = j * B + i;
+            float cos_n = dot(cn[k], nq);
+            float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
+            float w_l = abs(cl[k] - tq.w) * ipl[k];
+            float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+            w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
+            sm[k] += w * tq.xy;
+            sw[k] += w;
+          }
+        }
+      }
+    }
+  }
+  [[unroll]] for (int j = 0; j < B; ++j) {
+    [[unroll]] for (int i = 0; i < B; ++i) {
+      int k = j * B + i;
+      if (!inside[k]) continue;
+      ivec2 p = base + ivec2(i, j);
+      uint pi = uint(p.y) * uint(size.x) + uint(p.x);
+      float v = var[k];
+      if (cz[k] != 0.0 && len[k] < 4.0) {
+        vec2 m = sm[k] / sw[k];
+        v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
+      }
+      illum.data[pi].w = v;
+    }
+  }
 }

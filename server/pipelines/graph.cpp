@@ -86,6 +86,14 @@ void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
   buffers.push_back(std::move(b));
 }
 
+void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Persistent;
+  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
+  buffers.push_back(std::move(b));
+}
+
 GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
   for (auto& n : nodes_)
     if (n.spec->name == name) return n;
@@ -144,7 +152,8 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
         pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage);
       }
 
-      const uint64_t items = (pixels + ps.pixels_per_invocation - 1) / ps.pixels_per_invocation;
+      const uint64_t items =
+          ps.invocations ? ps.invocations : (pixels + ps.pixels_per_invocation - 1) / ps.pixels_per_invocation;
       const uint64_t groups = std::max<uint64_t>(1, (items + kWorkgroupSize - 1) / kWorkgroupSize);
       const uint64_t gx = std::min<uint64_t>(groups, context.limits().max_compute_work_group_count[0]);
       const uint64_t gy = (groups + gx - 1) / gx;

@@ -10,6 +10,9 @@
 //             a pass binds the Current or the Previous copy, and the two
 //             descriptor sets of each pass swap them on alternate frames
 //  - Scratch: transient device-only intermediate
+//  - Persistent: per-session state kept across frames in a single copy (no
+//             ping-pong): for state whose every read in a frame comes before
+//             the pass that overwrites it (Slot is ignored)
 // Every binding of a pass is a storage buffer (bindings 1..n, in order);
 // binding 0 is the FrameConstants uniform buffer.
 #pragma once
@@ -42,7 +45,7 @@ static_assert(sizeof(FrameConstants) == 96);
 inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
 inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass
 
-enum class BufferRole { Input, Output, History, Scratch };
+enum class BufferRole { Input, Output, History, Scratch, Persistent };
 enum class Slot { Current, Previous };
 
 struct BufferSpec {
@@ -65,6 +68,7 @@ struct PassSpec {
   std::vector<BindingRef> bindings;
   std::vector<gpu::SpecConstant> spec_constants;  // ids >= 1 (0 is the workgroup size)
   uint32_t pixels_per_invocation = 2;             // linear dispatch over pixels
+  uint64_t invocations = 0;                       // if nonzero: dispatch this many invocations instead
 };
 
 struct GraphSpec {
@@ -85,6 +89,7 @@ struct GraphSpec {
   void add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name);
   void add_output(const SessionConfig& config);
   void add_history(std::string name, uint64_t bytes_per_pixel);
+  void add_persistent(std::string name, uint64_t bytes_per_pixel);
 };
 
 uint64_t round_up4(uint64_t bytes);

@@ -13,12 +13,22 @@ namespace {
 
 using protocol::ChannelId;
 
-// Per pixel, ping-ponged: vec4(demodulated rgb, length) fp32 and
-// uvec4(m1, m2, depth as fp32 bits, octahedral snorm16x2 normal).
+// Per pixel, a single persistent copy (svgf_reproject reads it; svgf_variance
+// and the feedback a-trous iteration rewrite it after that pass):
+// vec4(demodulated rgb, length) fp32 and uvec4(m1, m2, depth as fp32 bits,
+// octahedral snorm16x2 normal).
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
 // Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
 constexpr uint64_t kIlluminationBytes = 16;
+// Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
+// temporal vec4(m1, m2, length, luminance), written by svgf_reproject.
+constexpr uint64_t kGuideBytes = 16;
+constexpr uint64_t kTemporalBytes = 16;
+// a-trous register block: one invocation filters kAtrousBlock^2 pixels.
+constexpr uint32_t kAtrousBlock = 4;
+// svgf_variance register block: kVarianceBlock^2 pixels per invocation.
+constexpr uint32_t kVarianceBlock = 2;
 
 // Slots of parameters.def (svgf rows).
 constexpr uint32_t kIterationsSlot = 3;
@@ -39,17 +49,18 @@ GraphSpec build(const SessionConfig& config) {
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   if (emission) g.add_input(config, ChannelId::Emission, "emission");
-  g.add_history("svgf_colour", kColourHistoryBytes);
-  g.add_history("svgf_aux", kAuxHistoryBytes);
+  g.add_persistent("svgf_colour", kColourHistoryBytes);
+  g.add_persistent("svgf_aux", kAuxHistoryBytes);
   const uint32_t iterations = static_cast<uint32_t>(g.parameters[kIterationsSlot]);
   const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters[kFeedbackSlot]), iterations ? iterations - 1 : 0u);
   const uint64_t pixels = uint64_t{config.width} * config.height;
-  for (const char* name : {"svgf_illum_a", "svgf_illum_b"}) {
+  for (auto [name, bytes] : {std::pair{"svgf_illum_a", kIlluminationBytes}, std::pair{"svgf_illum_b", kIlluminationBytes},
+                              std::pair{"svgf_guide", kGuideBytes}, std::pair{"svgf_temporal", kTemporalBytes}}) {
     if (iterations == 0 && std::string(name) == "svgf_illum_b") continue;
     BufferSpec b;
     b.name = name;
     b.role = BufferRole::Scratch;
-    b.bytes = round_up4(pixels * kIlluminationBytes);
+    b.bytes = round_up4(pixels * bytes);
     g.buffers.push_back(std::move(b));
   }
   g.add_output(config);
@@ -67,20 +78,21 @@ GraphSpec build(const SessionConfig& config) {
                         {"normal"},
                         {"depth"},
                         {"motion"},
-                        {"svgf_colour", Slot::Previous},
-                        {"svgf_aux", Slot::Previous},
-                        {"svgf_colour", Slot::Current},
-                        {"svgf_aux", Slot::Current},
-                        {"svgf_illum_a"}};
+                        {"svgf_colour"},
+                        {"svgf_aux"},
+                        {"svgf_illum_a"},
+                        {"svgf_guide"},
+                        {"svgf_temporal"}};
   reproject.spec_constants = {{1, radiance_half}, {2, albedo_half}, {3, normal_half}, {4, depth_half}, {5, motion_half}};
   reproject.pixels_per_invocation = 1;
   g.passes.push_back(std::move(reproject));
 
   PassSpec variance;
   variance.name = variance.shader = "svgf_variance";
-  variance.bindings = {{"normal"}, {"depth"}, {"svgf_colour", Slot::Current}, {"svgf_aux", Slot::Current}, {"svgf_illum_a"}};
-  variance.spec_constants = {{1, normal_half}, {2, depth_half}};
-  variance.pixels_per_invocation = 1;
+  variance.bindings = {{"svgf_guide"}, {"svgf_temporal"}, {"svgf_illum_a"}, {"svgf_colour"}, {"svgf_aux"}};
+  variance.spec_constants = {{1, kVarianceBlock}};
+  variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
+                         ((config.height + kVarianceBlock - 1) / kVarianceBlock);
   g.passes.push_back(std::move(variance));
 
   std::string current = "svgf_illum_a", other = "svgf_illum_b";
@@ -88,9 +100,11 @@ GraphSpec build(const SessionConfig& config) {
     PassSpec atrous;
     atrous.name = "svgf_atrous_" + std::to_string(i);
     atrous.shader = "svgf_atrous";
-    atrous.bindings = {{"normal"}, {"depth"}, {current}, {other}, {"svgf_colour", Slot::Current}};
-    atrous.spec_constants = {{1, normal_half}, {2, depth_half}, {3, 1u << i}, {4, i == tap ? 1u : 0u}};
-    atrous.pixels_per_invocation = 1;
+    atrous.bindings = {{"svgf_guide"}, {current}, {other}, {"svgf_colour"}};
+    atrous.spec_constants = {{3, 1u << i}, {4, i == tap ? 1u : 0u}, {5, kAtrousBlock}};
+    // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
+    const uint64_t step = uint64_t{1} << i, span = step * kAtrousBlock;
+    atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
     g.passes.push_back(std::move(atrous));
     std::swap(current, other);
   }

@@ -1,5 +1,6 @@
-// Shared by the svgf passes that read geometry (docs/pipelines.md, "svgf in
-// detail"): guards (svgf_guards.glsl) and the per-pixel geometry gradients.
+// Geometry access of svgf_reproject, the only svgf pass that reads the depth
+// and normal planes (the later passes read its guide; docs/pipelines.md, "svgf
+// in detail"): guards (svgf_guards.glsl) and the per-pixel geometry gradients.
 // Requires, declared before the include: the planes `depth` and `normal`
 // ({ uint data[]; }) and the bools DEPTH_HALF and NORMAL_HALF, plus
 // frame.glsl, plane.glsl, sanitize.glsl and luminance.glsl.

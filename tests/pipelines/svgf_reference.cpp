@@ -162,9 +162,16 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     }
   temporal_ = colour;
 
+  // The edge-stopping normals of the variance and a-trous passes are the
+  // device's per-frame guide: the octahedral snorm16x2 encoding (unit length);
+  // a zero (sanitized) normal stays zero and takes no tap.
+  std::vector<double> gn(3 * n, 0.0);
+  for (int i = 0; i < n; ++i)
+    if (nrm[3 * i] * nrm[3 * i] + nrm[3 * i + 1] * nrm[3 * i + 1] + nrm[3 * i + 2] * nrm[3 * i + 2] > 0.0)
+      quantize_normal(&nrm[3 * i], &gn[3 * i]);
   auto normal_weight = [&](int i, int q) {
-    const double cosv = std::max(0.0, nrm[3 * i] * nrm[3 * q] + nrm[3 * i + 1] * nrm[3 * q + 1] +
-                                          nrm[3 * i + 2] * nrm[3 * q + 2]);
+    const double cosv =
+        std::max(0.0, gn[3 * i] * gn[3 * q] + gn[3 * i + 1] * gn[3 * q + 1] + gn[3 * i + 2] * gn[3 * q + 2]);
     return std::pow(std::min(cosv, 1.0), p_.phi_normal);
   };
 

@@ -374,9 +374,10 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 2*(16+16), scratch 2*16, output 12 = 156 B/px, + 96 B of constants.
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy), scratch 4*16 (2 illumination, guide, temporal),
+  // output 12 = 156 B/px, + 96 B of constants.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + 96);
-  // fp16 planes: 6+6+6+2+4 + 64 + 32 + 6 = 126 B/px.
+  // fp16 planes: 6+6+6+2+4 + 32 + 64 + 6 = 126 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + 96);
 }
 
