@@ -265,6 +265,10 @@ std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::Pipelin
   std::vector<dn::protocol::ChannelDecl> out;
   for (const auto& c : dn::protocol::kChannels)
     if (desc.required_channels & dn::protocol::channel_bit(c.id)) out.push_back({c.id, format});
+  // svgf takes radiance or diffuse + specular, so radiance is optional there: send it.
+  const uint64_t radiance = dn::protocol::channel_bit(dn::protocol::ChannelId::Radiance);
+  if (!(desc.required_channels & radiance) && (desc.optional_channels & radiance))
+    out.insert(out.begin(), {dn::protocol::ChannelId::Radiance, format});
   return out;
 }
 

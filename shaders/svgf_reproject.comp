@@ -15,7 +15,10 @@
 //   for a foreground pixel with a normal, -depth for one without (it takes no
 //   neighbour and no pixel takes it), 0 for background.
 // Temporal: vec4(m1, m2, length, luminance of the temporal colour).
-// Specialization: 0 workgroup size, 1..5 radiance/albedo/normal/depth/motion are fp16
+// Specialization: 0 workgroup size, 1..5 radiance/albedo/normal/depth/motion are fp16,
+//   6 demodulate by albedo (false: the specular chain of split mode, albedo = 1),
+//   7 write the guide (false: a later chain of split mode, which reads the one
+//   the first chain wrote; binding 1 is then its signal: diffuse or specular)
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
@@ -28,6 +31,8 @@ layout(constant_id = 2) const bool ALBEDO_HALF = false;
 layout(constant_id = 3) const bool NORMAL_HALF = false;
 layout(constant_id = 4) const bool DEPTH_HALF = false;
 layout(constant_id = 5) const bool MOTION_HALF = false;
+layout(constant_id = 6) const bool DEMODULATE = true;
+layout(constant_id = 7) const bool WRITE_GUIDE = true;
 
 layout(std430, set = 0, binding = 1) readonly buffer RadiancePlane { uint data[]; } radiance;
 layout(std430, set = 0, binding = 2) readonly buffer AlbedoPlane { uint data[]; } albedo;
@@ -73,14 +78,14 @@ void main() {
   ivec2 pos = ivec2(p % size.x, p / size.x);
 
   vec3 c = dn_svgf_sanitize(DN_LOAD3(radiance, RADIANCE_HALF, p));
-  vec3 a = dn_svgf_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
+  vec3 a = DEMODULATE ? dn_svgf_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p)) : vec3(1.0);
   vec3 d = c / a;
   float l = dn_luminance(d);
   vec2 m = vec2(l, l * l);
   float z = dn_svgf_depth(p);
   if (!dn_is_foreground(z)) {
     illum.data[p] = vec4(d, 0.0);
-    guide.data[p] = uvec4(0u);
+    if (WRITE_GUIDE) guide.data[p] = uvec4(0u);
     temporal.data[p] = vec4(m, 0.0, l);
     return;
   }
@@ -128,7 +133,8 @@ void main() {
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
   illum.data[p] = vec4(colour, 0.0);
-  guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
-                        floatBitsToUint(grad.x), 0u);
+  if (WRITE_GUIDE)
+    guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
+                          floatBitsToUint(grad.x), 0u);
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));
 }

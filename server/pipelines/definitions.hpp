@@ -3,6 +3,7 @@
 // from a validated SessionConfig.
 #pragma once
 
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -14,6 +15,9 @@ namespace dn::pipelines {
 struct PipelineDefinition {
   PipelineDescription description;
   GraphSpec (*build)(const SessionConfig& config);
+  // Optional channel rules beyond the required/optional masks (run by
+  // validate() after the per-channel checks); nullptr if none.
+  std::optional<ConfigError> (*check_channels)(const SessionConfig& config) = nullptr;
 };
 
 PipelineDefinition passthrough_definition();

@@ -134,6 +134,8 @@ std::optional<ConfigError> validate_config(const SessionConfig& config) {
   if (const uint64_t missing = desc.required_channels & ~declared)
     return error(ErrorCode::MissingChannel, "OPEN_SESSION.channels",
                  "pipeline " + desc.name + " requires channel(s) " + channel_list(missing));
+  if (def->check_channels)
+    if (auto err = def->check_channels(config)) return err;
 
   std::set<std::string> seen;
   for (size_t i = 0; i < config.parameters.size(); ++i) {

@@ -2,8 +2,12 @@
 // Falcor's defaults (shaders/svgf_*.comp, docs/pipelines.md "svgf in detail").
 // Passes: svgf_reproject, svgf_variance, svgf_atrous_<i> for i < atrous_iterations
 // (step 2^i as specialization constant 3: one pipeline per iteration),
-// svgf_remodulate.
+// svgf_remodulate. Split mode (Diffuse + Specular declared instead of
+// Radiance): one reproject/variance/a-trous chain per signal (pass names
+// suffixed _diffuse / _specular), specular not demodulated (spec constant 6
+// of svgf_reproject), the guide written by the diffuse chain only (7).
 #include <algorithm>
+#include <optional>
 #include <string>
 
 #include "pipelines/definitions.hpp"
@@ -43,7 +47,14 @@ bool has_channel(const SessionConfig& config, ChannelId id) {
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   const bool emission = has_channel(config, ChannelId::Emission);
-  g.add_input(config, ChannelId::Radiance, "radiance");
+  // Split mode (validate() guarantees Diffuse and Specular together, without Radiance).
+  const bool split = has_channel(config, ChannelId::Diffuse);
+  if (split) {
+    g.add_input(config, ChannelId::Diffuse, "diffuse");
+    g.add_input(config, ChannelId::Specular, "specular");
+  } else {
+    g.add_input(config, ChannelId::Radiance, "radiance");
+  }
   g.add_input(config, ChannelId::Albedo, "albedo");
   g.add_input(config, ChannelId::Normal, "normal");
   g.add_input(config, ChannelId::Depth, "depth");
@@ -51,12 +62,22 @@ GraphSpec build(const SessionConfig& config) {
   if (emission) g.add_input(config, ChannelId::Emission, "emission");
   g.add_persistent("svgf_colour", kColourHistoryBytes);
   g.add_persistent("svgf_aux", kAuxHistoryBytes);
+  if (split) {
+    g.add_persistent("svgf_spec_colour", kColourHistoryBytes);
+    g.add_persistent("svgf_spec_aux", kAuxHistoryBytes);
+  }
   const uint32_t iterations = static_cast<uint32_t>(g.parameters[kIterationsSlot]);
   const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters[kFeedbackSlot]), iterations ? iterations - 1 : 0u);
   const uint64_t pixels = uint64_t{config.width} * config.height;
+  // Split mode: the specular chain ping-pongs between svgf_illum_c and the
+  // diffuse chain's non-final illumination buffer (the diffuse result stays
+  // for svgf_remodulate); guide and temporal are shared (the diffuse chain
+  // is done with temporal before the specular reprojection rewrites it).
   for (auto [name, bytes] : {std::pair{"svgf_illum_a", kIlluminationBytes}, std::pair{"svgf_illum_b", kIlluminationBytes},
-                              std::pair{"svgf_guide", kGuideBytes}, std::pair{"svgf_temporal", kTemporalBytes}}) {
+                              std::pair{"svgf_illum_c", kIlluminationBytes}, std::pair{"svgf_guide", kGuideBytes},
+                              std::pair{"svgf_temporal", kTemporalBytes}}) {
     if (iterations == 0 && std::string(name) == "svgf_illum_b") continue;
+    if (!split && std::string(name) == "svgf_illum_c") continue;
     BufferSpec b;
     b.name = name;
     b.role = BufferRole::Scratch;
@@ -65,59 +86,108 @@ GraphSpec build(const SessionConfig& config) {
   }
   g.add_output(config);
 
-  const uint32_t radiance_half = is_half(channel_format(config, ChannelId::Radiance));
   const uint32_t albedo_half = is_half(channel_format(config, ChannelId::Albedo));
   const uint32_t normal_half = is_half(channel_format(config, ChannelId::Normal));
   const uint32_t depth_half = is_half(channel_format(config, ChannelId::Depth));
   const uint32_t motion_half = is_half(channel_format(config, ChannelId::Motion));
 
-  PassSpec reproject;
-  reproject.name = reproject.shader = "svgf_reproject";
-  reproject.bindings = {{"radiance"},
-                        {"albedo"},
-                        {"normal"},
-                        {"depth"},
-                        {"motion"},
-                        {"svgf_colour"},
-                        {"svgf_aux"},
-                        {"svgf_illum_a"},
-                        {"svgf_guide"},
-                        {"svgf_temporal"}};
-  reproject.spec_constants = {{1, radiance_half}, {2, albedo_half}, {3, normal_half}, {4, depth_half}, {5, motion_half}};
-  reproject.pixels_per_invocation = 1;
-  g.passes.push_back(std::move(reproject));
+  // One reproject / variance / a-trous chain over `signal`; returns the
+  // buffer holding its final illumination. The first chain writes the guide
+  // (spec constant 7), the others only read what it wrote.
+  auto chain = [&](ChannelId channel, const std::string& signal, const std::string& colour, const std::string& aux,
+                   std::string current, std::string other, bool demodulate, bool write_guide,
+                   const std::string& suffix) {
+    PassSpec reproject;
+    reproject.name = "svgf_reproject" + suffix;
+    reproject.shader = "svgf_reproject";
+    reproject.bindings = {{signal}, {"albedo"}, {"normal"},       {"depth"},      {"motion"},
+                          {colour}, {aux},      {current},        {"svgf_guide"}, {"svgf_temporal"}};
+    reproject.spec_constants = {{1, is_half(channel_format(config, channel))}, {2, albedo_half}, {3, normal_half},
+                                {4, depth_half}, {5, motion_half}};
+    if (!demodulate) reproject.spec_constants.push_back({6, 0u});
+    if (!write_guide) reproject.spec_constants.push_back({7, 0u});
+    reproject.pixels_per_invocation = 1;
+    g.passes.push_back(std::move(reproject));
 
-  PassSpec variance;
-  variance.name = variance.shader = "svgf_variance";
-  variance.bindings = {{"svgf_guide"}, {"svgf_temporal"}, {"svgf_illum_a"}, {"svgf_colour"}, {"svgf_aux"}};
-  variance.spec_constants = {{1, kVarianceBlock}};
-  variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
-                         ((config.height + kVarianceBlock - 1) / kVarianceBlock);
-  g.passes.push_back(std::move(variance));
+    PassSpec variance;
+    variance.name = "svgf_variance" + suffix;
+    variance.shader = "svgf_variance";
+    variance.bindings = {{"svgf_guide"}, {"svgf_temporal"}, {current}, {colour}, {aux}};
+    variance.spec_constants = {{1, kVarianceBlock}};
+    variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
+                           ((config.height + kVarianceBlock - 1) / kVarianceBlock);
+    g.passes.push_back(std::move(variance));
 
-  std::string current = "svgf_illum_a", other = "svgf_illum_b";
-  for (uint32_t i = 0; i < iterations; ++i) {
-    PassSpec atrous;
-    atrous.name = "svgf_atrous_" + std::to_string(i);
-    atrous.shader = "svgf_atrous";
-    atrous.bindings = {{"svgf_guide"}, {current}, {other}, {"svgf_colour"}};
-    atrous.spec_constants = {{3, 1u << i}, {4, i == tap ? 1u : 0u}, {5, kAtrousBlock}};
-    // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
-    const uint64_t step = uint64_t{1} << i, span = step * kAtrousBlock;
-    atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
-    g.passes.push_back(std::move(atrous));
-    std::swap(current, other);
+    for (uint32_t i = 0; i < iterations; ++i) {
+      PassSpec atrous;
+      atrous.name = "svgf_atrous_" + std::to_string(i) + suffix;
+      atrous.shader = "svgf_atrous";
+      atrous.bindings = {{"svgf_guide"}, {current}, {other}, {colour}};
+      atrous.spec_constants = {{3, 1u << i}, {4, i == tap ? 1u : 0u}, {5, kAtrousBlock}};
+      // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
+      const uint64_t step = uint64_t{1} << i, span = step * kAtrousBlock;
+      atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
+      g.passes.push_back(std::move(atrous));
+      std::swap(current, other);
+    }
+    return current;
+  };
+
+  std::string diffuse_result, specular_result;
+  if (split) {
+    diffuse_result = chain(ChannelId::Diffuse, "diffuse", "svgf_colour", "svgf_aux", "svgf_illum_a", "svgf_illum_b",
+                           true, true, "_diffuse");
+    const std::string spare = diffuse_result == "svgf_illum_a" ? "svgf_illum_b" : "svgf_illum_a";
+    specular_result = chain(ChannelId::Specular, "specular", "svgf_spec_colour", "svgf_spec_aux", "svgf_illum_c",
+                            spare, false, false, "_specular");
+  } else {
+    diffuse_result = chain(ChannelId::Radiance, "radiance", "svgf_colour", "svgf_aux", "svgf_illum_a",
+                           "svgf_illum_b", true, true, "");
   }
 
   PassSpec remodulate;
   remodulate.name = remodulate.shader = "svgf_remodulate";
-  remodulate.bindings = {{current}, {"albedo"}, {emission ? "emission" : "albedo"}, {"output"}};
+  remodulate.bindings = {{diffuse_result},
+                         {"albedo"},
+                         {emission ? "emission" : "albedo"},
+                         {"output"},
+                         {split ? specular_result : diffuse_result}};
   remodulate.spec_constants = {{1, albedo_half},
                                {2, emission ? is_half(channel_format(config, ChannelId::Emission)) : 0u},
                                {3, emission ? 1u : 0u},
-                               {4, is_half(config.output_format)}};
+                               {4, is_half(config.output_format)},
+                               {5, split ? 1u : 0u}};
   g.passes.push_back(std::move(remodulate));
   return g;
+}
+
+// The either/or rule of the lighting channels (validate() has checked each
+// channel on its own and the required ones).
+std::optional<ConfigError> check_channels(const SessionConfig& config) {
+  using protocol::ErrorCode;
+  int radiance = -1, diffuse = -1, specular = -1;
+  for (size_t i = 0; i < config.channels.size(); ++i) {
+    if (config.channels[i].id == ChannelId::Radiance) radiance = static_cast<int>(i);
+    if (config.channels[i].id == ChannelId::Diffuse) diffuse = static_cast<int>(i);
+    if (config.channels[i].id == ChannelId::Specular) specular = static_cast<int>(i);
+  }
+  if (radiance >= 0 && (diffuse >= 0 || specular >= 0)) {
+    const int other = diffuse >= 0 ? diffuse : specular;
+    return ConfigError{ErrorCode::InvalidChannel,
+                       "OPEN_SESSION.channels[" + std::to_string(std::max(radiance, other)) + "].id",
+                       "pipeline svgf takes either radiance or diffuse + specular, not both (radiance and " +
+                           std::string(diffuse >= 0 ? "diffuse" : "specular") + " declared)"};
+  }
+  if (diffuse >= 0 && specular < 0)
+    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                       "pipeline svgf requires channel specular together with diffuse"};
+  if (specular >= 0 && diffuse < 0)
+    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                       "pipeline svgf requires channel diffuse together with specular"};
+  if (radiance < 0 && diffuse < 0)
+    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                       "pipeline svgf requires channel radiance, or diffuse and specular"};
+  return std::nullopt;
 }
 
 }  // namespace
@@ -129,13 +199,17 @@ PipelineDefinition svgf_definition() {
       "Spatiotemporal variance-guided filtering (Schied 2017, Falcor defaults): albedo demodulation, temporal "
       "integration of colour and luminance moments, variance-guided a-trous wavelet filter; Emission is added back "
       "unfiltered.";
-  d.description.required_channels =
-      protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
-      protocol::channel_bit(ChannelId::Normal) | protocol::channel_bit(ChannelId::Depth) |
-      protocol::channel_bit(ChannelId::Motion);
-  d.description.optional_channels = protocol::channel_bit(ChannelId::Emission);
+  // Radiance, or Diffuse + Specular (check_channels): both forms are optional in the masks.
+  d.description.required_channels = protocol::channel_bit(ChannelId::Albedo) |
+                                     protocol::channel_bit(ChannelId::Normal) |
+                                     protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) |
+                                     protocol::channel_bit(ChannelId::Diffuse) |
+                                     protocol::channel_bit(ChannelId::Specular) |
+                                     protocol::channel_bit(ChannelId::Emission);
   d.description.parameters = parameters_of("svgf");
   d.build = build;
+  d.check_channels = check_channels;
   return d;
 }
 

@@ -52,13 +52,17 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   const int iterations = p_.atrous_iterations;
   const int tap = std::min(p_.feedback_tap, std::max(iterations - 1, 0));
 
-  // Inputs: sanitized radiance, guarded albedo, depth, sanitized normals.
-  std::vector<double> c(3 * n), a(3 * n), nrm(3 * n, 0.0), z(n);
+  // Inputs: sanitized radiance (split: diffuse, specular), guarded albedo, depth, sanitized normals.
+  const bool split = !f.diffuse.empty();
+  auto sanitize = [&](const std::vector<double>& in) {
+    std::vector<double> out(3 * n);
+    for (int i = 0; i < 3 * n; ++i) out[i] = (std::isfinite(in[i]) && in[i] > 0.0 && in[i] <= 1e12) ? in[i] : 0.0;
+    return out;
+  };
+  std::vector<double> a(3 * n), nrm(3 * n, 0.0), z(n);
   std::vector<bool> fg(n);
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
-      const double r = f.radiance[3 * i + k];
-      c[3 * i + k] = (std::isfinite(r) && r > 0.0 && r <= 1e12) ? r : 0.0;
       const double al = f.albedo[3 * i + k];
       a[3 * i + k] = (std::isfinite(al) && al >= static_cast<double>(1e-3f)) ? al : 1.0;
     }
@@ -93,12 +97,43 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
     }
 
+  // The geometry history the next frame reads: depth and quantized normal of
+  // the foreground pixels with a normal.
+  std::vector<double> hz(n, 0.0), hn(3 * n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const double* nc = &nrm[3 * i];
+    if (fg[i] && nc[0] * nc[0] + nc[1] * nc[1] + nc[2] * nc[2] > 0.0) {
+      hz[i] = z[i];
+      quantize_normal(nc, &hn[3 * i]);
+    }
+  }
+
+  // The edge-stopping normals of the variance and a-trous passes are the
+  // device's per-frame guide: the octahedral snorm16x2 encoding (unit length);
+  // a zero (sanitized) normal stays zero and takes no tap.
+  std::vector<double> gn(3 * n, 0.0);
+  for (int i = 0; i < n; ++i)
+    if (nrm[3 * i] * nrm[3 * i] + nrm[3 * i + 1] * nrm[3 * i + 1] + nrm[3 * i + 2] * nrm[3 * i + 2] > 0.0)
+      quantize_normal(&nrm[3 * i], &gn[3 * i]);
+  auto normal_weight = [&](int i, int q) {
+    const double cosv =
+        std::max(0.0, gn[3 * i] * gn[3 * q] + gn[3 * i + 1] * gn[3 * q + 1] + gn[3 * i + 2] * gn[3 * q + 2]);
+    return std::pow(std::min(cosv, 1.0), p_.phi_normal);
+  };
+
+  // Passes 1-3 over one signal c (sanitized) demodulated by demod; returns the
+  // last a-trous result (rgb, variance) and updates the chain's history.
+  auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod) {
+  const std::vector<double>& colour_ = ch.colour;
+  const std::vector<double>& length_ = ch.length;
+  const std::vector<double>& m1_ = ch.m1;
+  const std::vector<double>& m2_ = ch.m2;
   // Pass 1: reprojection and temporal integration.
-  std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n), hz(n, 0.0), hn(3 * n, 0.0);
+  std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const int i = y * w + x;
-      for (int k = 0; k < 3; ++k) d[3 * i + k] = c[3 * i + k] / a[3 * i + k];
+      for (int k = 0; k < 3; ++k) d[3 * i + k] = c[3 * i + k] / demod[3 * i + k];
       const double l = luminance(&d[3 * i]);
       if (!fg[i]) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = d[3 * i + k];
@@ -155,25 +190,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       for (int k = 0; k < 3; ++k) colour[3 * i + k] = (1 - ac) * pc[k] + ac * d[3 * i + k];
       m1[i] = (1 - am) * pm1 + am * l;
       m2[i] = (1 - am) * pm2 + am * l * l;
-      if (has_normal) {
-        hz[i] = z[i];
-        quantize_normal(nc, &hn[3 * i]);
-      }
     }
-  temporal_ = colour;
-
-  // The edge-stopping normals of the variance and a-trous passes are the
-  // device's per-frame guide: the octahedral snorm16x2 encoding (unit length);
-  // a zero (sanitized) normal stays zero and takes no tap.
-  std::vector<double> gn(3 * n, 0.0);
-  for (int i = 0; i < n; ++i)
-    if (nrm[3 * i] * nrm[3 * i] + nrm[3 * i + 1] * nrm[3 * i + 1] + nrm[3 * i + 2] * nrm[3 * i + 2] > 0.0)
-      quantize_normal(&nrm[3 * i], &gn[3 * i]);
-  auto normal_weight = [&](int i, int q) {
-    const double cosv =
-        std::max(0.0, gn[3 * i] * gn[3 * q] + gn[3 * i + 1] * gn[3 * q + 1] + gn[3 * i + 2] * gn[3 * q + 2]);
-    return std::pow(std::min(cosv, 1.0), p_.phi_normal);
-  };
+  ch.temporal = colour;
 
   // Pass 2: variance.
   std::vector<double> var(n, 0.0);
@@ -208,7 +226,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       s2 /= sw;
       var[i] = std::max(0.0, s2 - s1 * s1) * 4.0 / len[i];
     }
-  variance_ = var;
+  ch.variance = var;
 
   // Pass 3: a-trous iterations over (rgb, variance).
   std::vector<double> cur(4 * n);
@@ -217,7 +235,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     cur[4 * i + 3] = var[i];
   }
   std::vector<double> hist_colour = colour;
-  atrous_.assign(iterations, {});
+  ch.atrous.assign(iterations, {});
   const double kernel[5] = {1.0 / 16, 1.0 / 4, 3.0 / 8, 1.0 / 4, 1.0 / 16};
   for (int it = 0; it < iterations; ++it) {
     const int step = 1 << it;
@@ -262,13 +280,28 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         next[4 * i + 3] = sv / (sw * sw);
       }
     cur = std::move(next);
-    atrous_[it] = cur;
+    ch.atrous[it] = cur;
     if (it == tap)
       for (int i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
   }
 
-  // Pass 4: remodulate (+ emission).
+  ch.colour = std::move(hist_colour);
+  ch.length = std::move(len);
+  ch.m1 = std::move(m1);
+  ch.m2 = std::move(m2);
+  return cur;
+  };
+
+  std::vector<double> cur, spec;
+  if (split) {
+    cur = filter(chains_[0], sanitize(f.diffuse), a);
+    spec = filter(chains_[1], sanitize(f.specular), std::vector<double>(3 * n, 1.0));
+  } else {
+    cur = filter(chains_[0], sanitize(f.radiance), a);
+  }
+
+  // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
@@ -277,13 +310,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         const double v = f.emission[3 * i + k];
         e = (std::isfinite(v) && v > 0.0 && v <= 1e12) ? v : 0.0;
       }
-      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + e;
+      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] : 0.0) + e;
     }
 
-  colour_ = std::move(hist_colour);
-  length_ = std::move(len);
-  m1_ = std::move(m1);
-  m2_ = std::move(m2);
   z_ = std::move(hz);
   n_ = std::move(hn);
   has_history_ = true;

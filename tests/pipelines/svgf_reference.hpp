@@ -21,8 +21,13 @@ struct SvgfParams {
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
 // pixels towards the previous frame. emission empty when the session has none.
+// Split mode: radiance empty, diffuse and specular set; each goes through its
+// own chain of the same passes (diffuse demodulated by albedo, specular with
+// albedo 1) with its own history, and the output is diffuse x albedo +
+// specular + emission.
 struct SvgfFrame {
   std::vector<double> radiance, albedo, normal, depth, motion, emission;
+  std::vector<double> diffuse, specular;
   bool reset = false;
 };
 
@@ -32,20 +37,26 @@ class SvgfReference {
   // Returns the Output plane, 3 per pixel.
   std::vector<double> step(const SvgfFrame& frame);
 
-  // Results of the last step, per pass.
-  const std::vector<double>& temporal_colour() const { return temporal_; }    // 3 per pixel (demodulated)
-  const std::vector<double>& variance() const { return variance_; }           // 1 per pixel
-  const std::vector<double>& atrous(int i) const { return atrous_[i]; }       // 4 per pixel: rgb, variance
-  const std::vector<double>& history_length() const { return length_; }       // 1 per pixel
+  // Results of the last step, per pass, of the radiance (or, split, diffuse: chain 0) or specular (chain 1) chain.
+  const std::vector<double>& temporal_colour(int c = 0) const { return chains_[c].temporal; }  // 3 per pixel
+  const std::vector<double>& variance(int c = 0) const { return chains_[c].variance; }         // 1 per pixel
+  const std::vector<double>& atrous(int i, int c = 0) const { return chains_[c].atrous[i]; }   // 4 per pixel
+  const std::vector<double>& history_length(int c = 0) const { return chains_[c].length; }     // 1 per pixel
 
  private:
+  // One signal's history (previous frame: demodulated colour, length,
+  // moments) and the per-pass results of the last step.
+  struct Chain {
+    std::vector<double> colour, length, m1, m2;
+    std::vector<double> temporal, variance;
+    std::vector<std::vector<double>> atrous;
+  };
   int w_, h_;
   SvgfParams p_;
   bool has_history_ = false;
-  // History (previous frame): demodulated colour, length, moments, depth (0 = none), normal.
-  std::vector<double> colour_, length_, m1_, m2_, z_, n_;
-  std::vector<double> temporal_, variance_;
-  std::vector<std::vector<double>> atrous_;
+  Chain chains_[2];
+  // Geometry history (previous frame): depth (0 = none), normal.
+  std::vector<double> z_, n_;
 };
 
 }  // namespace dn::test

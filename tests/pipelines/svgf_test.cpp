@@ -28,6 +28,15 @@ pipelines::SessionConfig svgf_config(int w, int h, Format in = Format::F32, Form
   return test::make_config("svgf", w, h, channels, out, std::move(params));
 }
 
+// Split mode: Diffuse + Specular instead of Radiance.
+pipelines::SessionConfig svgf_split_config(int w, int h, Format in = Format::F32, Format out = Format::F32,
+                                           std::vector<protocol::Parameter> params = {}, bool emission = false) {
+  auto c = svgf_config(w, h, in, out, std::move(params), emission);
+  c.channels[0] = {ChannelId::Diffuse, in};
+  c.channels.insert(c.channels.begin() + 1, {ChannelId::Specular, in});
+  return c;
+}
+
 struct SvgfScene {
   std::vector<float> radiance, albedo, normal, depth, motion, emission;
 };
@@ -67,8 +76,9 @@ class SvgfSceneGen {
   test::PanningScene scene_;
 };
 
+// specular non-null: split mode, s.radiance is sent as Diffuse and *specular as Specular.
 test::HostFrame host_frame(const SvgfScene& s, int w, int h, Format in, MotionConvention conv, uint32_t flags,
-                           bool emission) {
+                           bool emission, const std::vector<float>* specular = nullptr) {
   test::HostFrame f;
   f.info.flags = flags;
   f.info.motion = conv;
@@ -77,7 +87,12 @@ test::HostFrame host_frame(const SvgfScene& s, int w, int h, Format in, MotionCo
     if (conv == MotionConvention::PixelsToNext) mv[i] = -mv[i];
     if (conv == MotionConvention::UvToPrevious) mv[i] /= static_cast<float>(i % 2 == 0 ? w : h);
   }
-  f.add(ChannelId::Radiance, in, s.radiance);
+  if (specular) {
+    f.add(ChannelId::Diffuse, in, s.radiance);
+    f.add(ChannelId::Specular, in, *specular);
+  } else {
+    f.add(ChannelId::Radiance, in, s.radiance);
+  }
   f.add(ChannelId::Albedo, in, s.albedo);
   f.add(ChannelId::Normal, in, s.normal);
   f.add(ChannelId::Depth, in, s.depth);
@@ -86,10 +101,15 @@ test::HostFrame host_frame(const SvgfScene& s, int w, int h, Format in, MotionCo
   return f;
 }
 
-test::SvgfFrame reference_frame(const test::HostFrame& f, int w, int h, bool emission) {
+test::SvgfFrame reference_frame(const test::HostFrame& f, int w, int h, bool emission, bool split = false) {
   auto plane = [&](ChannelId id) { return test::decode_plane(f.plane(id).bytes, f.plane(id).format); };
   test::SvgfFrame r;
-  r.radiance = plane(ChannelId::Radiance);
+  if (split) {
+    r.diffuse = plane(ChannelId::Diffuse);
+    r.specular = plane(ChannelId::Specular);
+  } else {
+    r.radiance = plane(ChannelId::Radiance);
+  }
   r.albedo = plane(ChannelId::Albedo);
   r.normal = plane(ChannelId::Normal);
   r.depth = plane(ChannelId::Depth);
@@ -391,6 +411,167 @@ TEST(SvgfValidate, ChannelsAndParameters) {
   EXPECT_NE(err->message.find("albedo"), std::string::npos);
   EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 9}})).has_value());
   EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 2.5}})).has_value());
+}
+
+// A noisy specular signal loosely following the scene: 0.4 x radiance x U(0.3, 1.7) per component.
+std::vector<float> specular_of(const SvgfScene& s, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.3f, 1.7f);
+  std::vector<float> out(s.radiance.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = 0.4f * s.radiance[i] * u(rng);
+  return out;
+}
+
+// Split mode: diffuse and specular each through their own chain, against the
+// reference over frames (reset at frame 4).
+TEST_F(SvgfTest, SplitMatchesCpuReferenceOverFrames) {
+  struct SplitVariant {
+    const char* name;
+    int w, h;
+    Format in, out;
+    bool emission;
+    std::vector<protocol::Parameter> params;
+    test::SvgfParams ref;
+  };
+  test::SvgfParams zero_iter;
+  zero_iter.atrous_iterations = 0;
+  test::SvgfParams paper;
+  paper.atrous_iterations = 5;
+  paper.feedback_tap = 0;
+  const SplitVariant variants[] = {
+      {"split_defaults", 128, 72, Format::F32, Format::F32, true, {}, test::SvgfParams{}},
+      {"split_temporal_only", 96, 64, Format::F32, Format::F32, false, {{"atrous_iterations", 0}}, zero_iter},
+      {"split_paper_fp16", 97, 61, Format::F16, Format::F16, true, {{"atrous_iterations", 5}, {"feedback_tap", 0}},
+       paper},
+  };
+  for (const auto& v : variants) {
+    SCOPED_TRACE(v.name);
+    auto config = svgf_split_config(v.w, v.h, v.in, v.out, v.params, v.emission);
+    ASSERT_FALSE(pipelines::validate(config).has_value());
+    auto pipe = pipelines::create(ctx(), config);
+    test::SvgfReference ref(v.w, v.h, v.ref);
+    SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
+    const int frames = 6;
+    double worst = 0.0;
+    for (int t = 0; t < frames; ++t) {
+      SCOPED_TRACE(testing::Message() << "frame " << t);
+      const uint32_t flags = t == 4 ? protocol::kFrameReset : 0u;
+      const SvgfScene s = scene.frame(t);
+      const std::vector<float> spec = specular_of(s, 77 + t);
+      const test::HostFrame f =
+          host_frame(s, v.w, v.h, v.in, MotionConvention::PixelsToPrevious, flags, v.emission, &spec);
+      const std::vector<float> got = run(*pipe, f, v.out);
+      const std::vector<double> want = ref.step(reference_frame(f, v.w, v.h, v.emission, true));
+      ASSERT_EQ(got.size(), want.size());
+      for (float g : got) ASSERT_TRUE(std::isfinite(g) && g >= 0.0f) << g;
+      const double rms = test::relative_rms(got, want);
+      worst = std::max(worst, rms);
+      EXPECT_LE(rms, 1e-3);
+    }
+    std::printf("[ info     ] %s: worst relative RMS over %d frames %.3g\n", v.name, frames, worst);
+  }
+}
+
+// Split mode with specular = 0 is radiance mode with radiance = diffuse.
+TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
+  const int w = 80, h = 56;
+  auto radiance_pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
+  auto split_pipe = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, {}, true));
+  SvgfSceneGen scene(w, h, 11, 0.8f, 0.5f, 0.3f, 0.9f, 0.003);
+  const std::vector<float> zero(3 * w * h, 0.0f);
+  for (int t = 0; t < 6; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const SvgfScene s = scene.frame(t);
+    const auto want = run(*radiance_pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
+    const auto got =
+        run(*split_pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true, &zero));
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < got.size(); ++i)
+      ASSERT_NEAR(got[i], want[i], 1e-5 * std::max(1.0f, std::fabs(want[i]))) << i;
+  }
+}
+
+TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
+  auto pipe = pipelines::create(ctx(), svgf_split_config(32, 32, Format::F32, Format::F32, {{"atrous_iterations", 2}}));
+  SvgfSceneGen scene(32, 32, 3, 1, 1, 0, 0.1f);
+  const SvgfScene s = scene.frame(0);
+  std::vector<protocol::PassTiming> timings;
+  run(*pipe, host_frame(s, 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &s.radiance), Format::F32,
+      &timings);
+  std::vector<std::string> names;
+  for (const auto& t : timings) names.push_back(t.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject_diffuse", "svgf_variance_diffuse",
+                                             "svgf_atrous_0_diffuse", "svgf_atrous_1_diffuse",
+                                             "svgf_reproject_specular", "svgf_variance_specular",
+                                             "svgf_atrous_0_specular", "svgf_atrous_1_specular", "svgf_remodulate",
+                                             "download"}));
+}
+
+TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
+  for (auto c : {svgf_split_config(64, 48), svgf_split_config(33, 17, Format::F16, Format::F16, {}, true),
+                 svgf_split_config(20, 10, Format::F32, Format::F32, {{"atrous_iterations", 0}}),
+                 svgf_split_config(21, 11, Format::F32, Format::F32, {{"atrous_iterations", 1}})}) {
+    auto p = pipelines::create(ctx(), c);
+    EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
+  }
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16), scratch 5*16 (3 illumination,
+  // guide, temporal), output 12 = 216 B/px, + 96 B of constants.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + 96);
+  // fp16 planes: 6+6+6+6+2+4 + 64 + 80 + 6 = 180 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
+            64u * 48 * 180 + 96);
+}
+
+TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
+  using protocol::ErrorCode;
+  EXPECT_FALSE(pipelines::validate(svgf_split_config(16, 16)).has_value());
+  EXPECT_FALSE(pipelines::validate(svgf_split_config(16, 16, Format::F16, Format::F16, {}, true)).has_value());
+  auto expect = [](pipelines::SessionConfig c, ErrorCode code, const std::string& field, const std::string& part) {
+    const auto err = pipelines::validate(c);
+    ASSERT_TRUE(err.has_value());
+    EXPECT_EQ(err->code, code);
+    EXPECT_EQ(err->field, field);
+    EXPECT_NE(err->message.find(part), std::string::npos) << err->message;
+  };
+  {  // radiance + diffuse + specular: the later of the clashing declarations is named
+    auto c = svgf_split_config(16, 16);
+    c.channels.push_back({ChannelId::Radiance, Format::F32});
+    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[6].id", "either radiance or diffuse + specular");
+  }
+  {  // radiance + specular
+    auto c = svgf_config(16, 16);
+    c.channels.push_back({ChannelId::Specular, Format::F32});
+    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "specular");
+  }
+  {  // radiance + diffuse
+    auto c = svgf_config(16, 16);
+    c.channels.push_back({ChannelId::Diffuse, Format::F32});
+    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "diffuse");
+  }
+  {  // diffuse alone
+    auto c = svgf_split_config(16, 16);
+    c.channels.erase(c.channels.begin() + 1);
+    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "specular");
+  }
+  {  // specular alone
+    auto c = svgf_split_config(16, 16);
+    c.channels.erase(c.channels.begin());
+    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "diffuse");
+  }
+  {  // no lighting channel at all
+    auto c = svgf_config(16, 16);
+    c.channels.erase(c.channels.begin());
+    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance, or diffuse and specular");
+  }
+  // Other pipelines keep their rules: passthrough takes diffuse + specular alongside radiance, and still
+  // requires radiance.
+  EXPECT_FALSE(pipelines::validate(test::make_config("passthrough", 16, 16,
+                                                     {{ChannelId::Radiance, Format::F32},
+                                                      {ChannelId::Diffuse, Format::F32},
+                                                      {ChannelId::Specular, Format::F32}}))
+                   .has_value());
+  expect(test::make_config("passthrough", 16, 16, {{ChannelId::Diffuse, Format::F32}, {ChannelId::Specular, Format::F32}}),
+         ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance");
 }
 
 }  // namespace

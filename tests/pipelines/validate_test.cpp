@@ -32,11 +32,14 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateAndSvgf) {
   const auto& all = pipelines::available_pipelines();
   ASSERT_EQ(all.size(), 3u);
   EXPECT_EQ(all[2].name, "svgf");
-  EXPECT_EQ(all[2].required_channels,
-            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
-                protocol::channel_bit(ChannelId::Normal) | protocol::channel_bit(ChannelId::Depth) |
-                protocol::channel_bit(ChannelId::Motion));
-  EXPECT_EQ(all[2].optional_channels, protocol::channel_bit(ChannelId::Emission));
+  EXPECT_EQ(all[2].required_channels, protocol::channel_bit(ChannelId::Albedo) |
+                                          protocol::channel_bit(ChannelId::Normal) |
+                                          protocol::channel_bit(ChannelId::Depth) |
+                                          protocol::channel_bit(ChannelId::Motion));
+  // Radiance, or Diffuse + Specular (the either/or rule is checked by validate()).
+  EXPECT_EQ(all[2].optional_channels,
+            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Diffuse) |
+                protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::Emission));
   std::vector<std::string> svgf_names;
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
