@@ -68,31 +68,48 @@ TEST(Auth, NonLoopbackListenerWithTokenStarts) {
 }
 
 // Connects to the Unix socket as `uid` in a child process; returns the ERROR
-// code received (0 for WELCOME, -1 when the connection itself failed).
-int hello_as_uid(const std::string& url, uid_t uid) {
+// code received (0 for WELCOME, negative when something else happened) and
+// fills `detail` with what the child saw, for the failure message.
+int hello_as_uid(const std::string& url, uid_t uid, std::string& detail) {
   int pipe_fds[2];
   if (::pipe(pipe_fds) != 0) return -2;
   pid_t pid = ::fork();
   if (pid == 0) {
     ::close(pipe_fds[0]);
     int result = -1;
+    std::string what = "setgid/setuid failed";
     if (::setgid(uid) == 0 && ::setuid(uid) == 0) {
+      what = "no reply within 30 s";
       try {
         RawClient c(url);
-        c.send(protocol::Hello{0, "uid-test", ""}, 1);
-        auto r = c.receive(10.0);
-        if (r && std::get_if<protocol::Welcome>(&r->message)) result = 0;
-        if (r && std::get_if<protocol::Error>(&r->message))
+        // A refused peer is answered at accept time and the server stops reading: our HELLO
+        // may then fail with EPIPE, but the ERROR is already waiting to be read.
+        try {
+          c.send(protocol::Hello{0, "uid-test", ""}, 1);
+        } catch (const std::exception&) {
+        }
+        auto r = c.receive(30.0);
+        if (r && std::get_if<protocol::Welcome>(&r->message)) result = 0, what = "WELCOME";
+        if (r && std::get_if<protocol::Error>(&r->message)) {
           result = static_cast<int>(std::get<protocol::Error>(r->message).code);
-      } catch (...) {
+          what = "ERROR " + std::get<protocol::Error>(r->message).message;
+        }
+      } catch (const std::exception& e) {
+        result = -4;
+        what = e.what();
       }
     }
-    [[maybe_unused]] auto w = ::write(pipe_fds[1], &result, sizeof result);
+    what.resize(std::min<size_t>(what.size(), 200));
+    [[maybe_unused]] auto w1 = ::write(pipe_fds[1], &result, sizeof result);
+    [[maybe_unused]] auto w2 = ::write(pipe_fds[1], what.data(), what.size());
     ::_exit(0);
   }
   ::close(pipe_fds[1]);
   int result = -3;
   [[maybe_unused]] auto r = ::read(pipe_fds[0], &result, sizeof result);
+  char buf[256];
+  ssize_t n = ::read(pipe_fds[0], buf, sizeof buf);
+  detail.assign(buf, n > 0 ? static_cast<size_t>(n) : 0);
   ::close(pipe_fds[0]);
   ::waitpid(pid, nullptr, 0);
   return result;
@@ -101,9 +118,11 @@ int hello_as_uid(const std::string& url, uid_t uid) {
 TEST(Auth, UnixPeerCredentialsChecked) {
   if (::geteuid() != 0) GTEST_SKIP() << "needs root to connect as other uids";
   ServerProcess server({"--allow-uid", "12345"});
-  EXPECT_EQ(hello_as_uid(server.unix_url(), 12345), 0) << "an allowed uid was refused";
-  EXPECT_EQ(hello_as_uid(server.unix_url(), 23456), static_cast<int>(ErrorCode::Unauthenticated))
-      << "a uid not allowed got in";
+  std::string detail;
+  EXPECT_EQ(hello_as_uid(server.unix_url(), 12345, detail), 0)
+      << "an allowed uid was refused: " << detail << "\n" << server.log();
+  EXPECT_EQ(hello_as_uid(server.unix_url(), 23456, detail), static_cast<int>(ErrorCode::Unauthenticated))
+      << "a uid not allowed got in: " << detail << "\n" << server.log();
   // The TCP listener does not use peer credentials.
   RawClient tcp(server.tcp_url());
   EXPECT_NO_THROW(tcp.hello());
