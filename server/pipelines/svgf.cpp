@@ -23,6 +23,9 @@ using protocol::ChannelId;
 // octahedral snorm16x2 normal).
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
+// TAA (taa_alpha > 0): the previous final output, rgb fp32, one persistent
+// copy (read by svgf_remodulate, rewritten by svgf_taa after it).
+constexpr uint64_t kTaaHistoryBytes = 12;
 // Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
 constexpr uint64_t kIlluminationBytes = 16;
 // Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
@@ -37,6 +40,7 @@ constexpr uint32_t kVarianceBlock = 2;
 // Slots of parameters.def (svgf rows).
 constexpr uint32_t kIterationsSlot = 3;
 constexpr uint32_t kFeedbackSlot = 4;
+constexpr uint32_t kTaaAlphaSlot = 8;
 
 bool has_channel(const SessionConfig& config, ChannelId id) {
   for (const auto& c : config.channels)
@@ -66,6 +70,8 @@ GraphSpec build(const SessionConfig& config) {
     g.add_persistent("svgf_spec_colour", kColourHistoryBytes);
     g.add_persistent("svgf_spec_aux", kAuxHistoryBytes);
   }
+  const bool taa = g.parameters[kTaaAlphaSlot] > 0.0f;
+  if (taa) g.add_persistent("svgf_taa", kTaaHistoryBytes);
   const uint32_t iterations = static_cast<uint32_t>(g.parameters[kIterationsSlot]);
   const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters[kFeedbackSlot]), iterations ? iterations - 1 : 0u);
   const uint64_t pixels = uint64_t{config.width} * config.height;
@@ -145,19 +151,37 @@ GraphSpec build(const SessionConfig& config) {
                            "svgf_illum_b", true, true, "");
   }
 
+  // With TAA, svgf_remodulate writes the current colour to svgf_temporal and
+  // the reprojected TAA history to svgf_guide (both free once the a-trous
+  // chains are done) instead of Output; svgf_taa blends them. Without it,
+  // bindings 6..10 are stand-ins the shader does not touch.
   PassSpec remodulate;
   remodulate.name = remodulate.shader = "svgf_remodulate";
   remodulate.bindings = {{diffuse_result},
                          {"albedo"},
                          {emission ? "emission" : "albedo"},
                          {"output"},
-                         {split ? specular_result : diffuse_result}};
+                         {split ? specular_result : diffuse_result},
+                         {"depth"},
+                         {"motion"},
+                         {taa ? "svgf_taa" : "albedo"},
+                         {"svgf_temporal"},
+                         {"svgf_guide"}};
   remodulate.spec_constants = {{1, albedo_half},
                                {2, emission ? is_half(channel_format(config, ChannelId::Emission)) : 0u},
                                {3, emission ? 1u : 0u},
                                {4, is_half(config.output_format)},
                                {5, split ? 1u : 0u}};
+  if (taa) remodulate.spec_constants.insert(remodulate.spec_constants.end(), {{6, 1u}, {7, depth_half}, {8, motion_half}});
   g.passes.push_back(std::move(remodulate));
+
+  if (taa) {
+    PassSpec blend;
+    blend.name = blend.shader = "svgf_taa";
+    blend.bindings = {{"svgf_temporal"}, {"svgf_guide"}, {"output"}, {"svgf_taa"}};
+    blend.spec_constants = {{1, is_half(config.output_format)}};
+    g.passes.push_back(std::move(blend));
+  }
   return g;
 }
 

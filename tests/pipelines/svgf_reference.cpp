@@ -313,6 +313,47 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] : 0.0) + e;
     }
 
+  remodulated_ = out;
+  // Pass 5 (taa_alpha > 0): previous final output at p + mv (bilinear over
+  // the taps inside the image, renormalized, at least 1e-3 of weight) for a
+  // foreground pixel without reset, clamped per channel to the 3x3 min/max of
+  // the current colour, out = mix(clamped, current, taa_alpha).
+  if (p_.taa_alpha > 0.0) {
+    const std::vector<double>& cur_c = remodulated_;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int i = y * w + x;
+        const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
+        if (reset || !fg[i] || !std::isfinite(mvx) || !std::isfinite(mvy)) continue;
+        const double fx = x + mvx, fy = y + mvy;  // previous position - 0.5
+        if (!(fx > -1.0 && fy > -1.0 && fx < w && fy < h)) continue;
+        const double bx = std::floor(fx), by = std::floor(fy), tx = fx - bx, ty = fy - by;
+        const int ox = static_cast<int>(bx), oy = static_cast<int>(by);
+        double s[3] = {0.0, 0.0, 0.0}, sw = 0.0;
+        for (int k = 0; k < 4; ++k) {
+          const int qx = ox + (k & 1), qy = oy + (k >> 1);
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const double wk = ((k & 1) ? tx : 1.0 - tx) * ((k >> 1) ? ty : 1.0 - ty);
+          for (int c = 0; c < 3; ++c) s[c] += wk * taa_[3 * (qy * w + qx) + c];
+          sw += wk;
+        }
+        if (!(sw >= static_cast<double>(1e-3f))) continue;
+        for (int c = 0; c < 3; ++c) {
+          double lo = cur_c[3 * i + c], hi = lo;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int qx = x + dx, qy = y + dy;
+              if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+              lo = std::min(lo, cur_c[3 * (qy * w + qx) + c]);
+              hi = std::max(hi, cur_c[3 * (qy * w + qx) + c]);
+            }
+          const double prev = std::clamp(s[c] / sw, lo, hi);
+          out[3 * i + c] = prev * (1.0 - p_.taa_alpha) + cur_c[3 * i + c] * p_.taa_alpha;
+        }
+      }
+    taa_ = out;
+  }
+
   z_ = std::move(hz);
   n_ = std::move(hn);
   has_history_ = true;

@@ -17,6 +17,7 @@ struct SvgfParams {
   double phi_colour = 10.0;
   double phi_normal = 128.0;
   double phi_depth = 1.0;
+  double taa_alpha = 0.0;  // > 0: the final TAA blend (pass 5)
 };
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
@@ -42,6 +43,8 @@ class SvgfReference {
   const std::vector<double>& variance(int c = 0) const { return chains_[c].variance; }         // 1 per pixel
   const std::vector<double>& atrous(int i, int c = 0) const { return chains_[c].atrous[i]; }   // 4 per pixel
   const std::vector<double>& history_length(int c = 0) const { return chains_[c].length; }     // 1 per pixel
+  // The remodulated colour before the TAA blend (= the output without TAA), 3 per pixel.
+  const std::vector<double>& remodulated() const { return remodulated_; }
 
  private:
   // One signal's history (previous frame: demodulated colour, length,
@@ -57,6 +60,9 @@ class SvgfReference {
   Chain chains_[2];
   // Geometry history (previous frame): depth (0 = none), normal.
   std::vector<double> z_, n_;
+  // TAA history: the previous final output, 3 per pixel.
+  std::vector<double> taa_;
+  std::vector<double> remodulated_;
 };
 
 }  // namespace dn::test

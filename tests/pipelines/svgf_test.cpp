@@ -164,6 +164,7 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
     if (p.name == "phi_colour") params.phi_colour = p.value;
     if (p.name == "phi_normal") params.phi_normal = p.value;
     if (p.name == "phi_depth") params.phi_depth = p.value;
+    if (p.name == "taa_alpha") params.taa_alpha = p.value;
   }
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
@@ -200,7 +201,12 @@ INSTANTIATE_TEST_SUITE_P(
                 {{"atrous_iterations", 5}, {"feedback_tap", 0}}},
         Variant{"uv_params", 80, 50, Format::F32, Format::F32, MotionConvention::UvToPrevious, false,
                 {{"alpha_colour", 0.2}, {"alpha_moments", 0.3}, {"max_history", 8}, {"phi_colour", 4},
-                 {"phi_normal", 32}, {"phi_depth", 2}, {"atrous_iterations", 3}, {"feedback_tap", 2}}}),
+                 {"phi_normal", 32}, {"phi_depth", 2}, {"atrous_iterations", 3}, {"feedback_tap", 2}}},
+        // The final TAA blend (taa_alpha > 0): moving camera, reset at frame 5.
+        Variant{"taa", 128, 72, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
+                {{"taa_alpha", 0.1}}},
+        Variant{"taa_fp16_uv", 97, 61, Format::F16, Format::F16, MotionConvention::UvToPrevious, false,
+                {{"taa_alpha", 0.25}, {"atrous_iterations", 2}}}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 // A static geometry description: one plane, unit normals, zero motion.
@@ -438,11 +444,14 @@ TEST_F(SvgfTest, SplitMatchesCpuReferenceOverFrames) {
   test::SvgfParams paper;
   paper.atrous_iterations = 5;
   paper.feedback_tap = 0;
+  test::SvgfParams taa;
+  taa.taa_alpha = 0.1;
   const SplitVariant variants[] = {
       {"split_defaults", 128, 72, Format::F32, Format::F32, true, {}, test::SvgfParams{}},
       {"split_temporal_only", 96, 64, Format::F32, Format::F32, false, {{"atrous_iterations", 0}}, zero_iter},
       {"split_paper_fp16", 97, 61, Format::F16, Format::F16, true, {{"atrous_iterations", 5}, {"feedback_tap", 0}},
        paper},
+      {"split_taa", 96, 64, Format::F32, Format::F32, true, {{"taa_alpha", 0.1}}, taa},
   };
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
@@ -572,6 +581,127 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
                    .has_value());
   expect(test::make_config("passthrough", 16, 16, {{ChannelId::Diffuse, Format::F32}, {ChannelId::Specular, Format::F32}}),
          ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance");
+}
+
+
+// ---- The final TAA blend (taa_alpha > 0, pass svgf_taa) ----
+
+uint64_t round_up4_bytes(uint64_t b) { return (b + 3) / 4 * 4; }
+
+std::vector<std::string> pass_names(pipelines::Pipeline& p, const test::HostFrame& f) {
+  std::vector<protocol::PassTiming> timings;
+  std::vector<uint8_t> bytes;
+  p.process(f.view(), true, bytes, timings);
+  std::vector<std::string> names;
+  for (const auto& t : timings) names.push_back(t.name);
+  return names;
+}
+
+// taa_alpha = 0 (the default) is the graph without TAA: same passes, same
+// bytes, bit-identical output; taa_alpha > 0 adds svgf_taa after
+// svgf_remodulate and 12 B/px of persistent history, nothing else.
+TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
+  const int w = 64, h = 40;
+  SvgfSceneGen scene(w, h, 77, 1.3f, 0.4f, 0.3f, 0.5f);
+  std::vector<test::HostFrame> frames;  // the scene's noise differs per call: make each frame once
+  for (int t = 0; t < 5; ++t)
+    frames.push_back(host_frame(scene.frame(t), w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
+  auto frame = [&](int t) -> const test::HostFrame& { return frames[t]; };
+  auto base = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
+  auto off = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0}}, true));
+  auto on = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0.1}}, true));
+  const std::vector<std::string> without = {"upload",        "svgf_reproject", "svgf_variance", "svgf_atrous_0",
+                                            "svgf_atrous_1", "svgf_atrous_2",  "svgf_atrous_3", "svgf_remodulate",
+                                            "download"};
+  EXPECT_EQ(pass_names(*off, frame(0)), without);
+  std::vector<std::string> with = without;
+  with.insert(with.end() - 1, "svgf_taa");
+  EXPECT_EQ(pass_names(*on, frame(0)), with);
+  EXPECT_EQ(off->device_bytes(), base->device_bytes());
+  EXPECT_EQ(on->device_bytes(), base->device_bytes() + round_up4_bytes(uint64_t{w} * h * 12));
+  run(*base, frame(0));
+  for (int t = 1; t < 5; ++t) EXPECT_EQ(run(*off, frame(t)), run(*base, frame(t))) << "frame " << t;
+}
+
+TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
+  for (auto c : {svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}}),
+                 svgf_config(33, 17, Format::F16, Format::F16, {{"taa_alpha", 1}}, true),
+                 svgf_split_config(20, 10, Format::F32, Format::F32, {{"taa_alpha", 0.5}, {"atrous_iterations", 0}})}) {
+    auto p = pipelines::create(ctx(), c);
+    EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
+  }
+  // 156 B/px without TAA + 12 B/px of TAA history.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
+            64u * 48 * 168 + 96);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
+            64u * 48 * 138 + 96);
+}
+
+// Static camera, a step edge whose sides swap at frame 4: at every pixel the
+// blended output stays inside the 3x3 min/max of the current colour (the same
+// session without TAA), so the old edge leaves no ghost beyond the clamp;
+// away from the edge the output is the current colour right after the swap.
+TEST_F(SvgfTest, TaaStaysInsideTheNeighbourhoodOfAStepEdge) {
+  const int w = 48, h = 32, n = w * h;
+  Flat scene(w, h);
+  auto radiance = [&](int t) {
+    std::vector<float> r(3 * n);
+    for (int i = 0; i < n; ++i) {
+      const bool left = (i % w) < w / 2;
+      const float v = (left == (t < 4)) ? 8.0f : 0.2f;
+      for (int k = 0; k < 3; ++k) r[3 * i + k] = v * (1.0f + 0.05f * k) * (1.0f + 0.02f * ((i * 7 + t * 3) % 5));
+    }
+    return r;
+  };
+  auto on = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0.1}}));
+  auto off = pipelines::create(ctx(), svgf_config(w, h));
+  test::SvgfParams params;
+  params.taa_alpha = 0.1;
+  test::SvgfReference ref(w, h, params);
+  for (int t = 0; t < 8; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const test::HostFrame f = scene.frame(radiance(t));
+    const auto got = run(*on, f);
+    const auto cur = run(*off, f);
+    const auto want = ref.step(reference_frame(f, w, h, false));
+    EXPECT_LE(test::relative_rms(got, want), 1e-3);
+    size_t outside = 0, ghost = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < 3; ++k) {
+          float lo = INFINITY, hi = -INFINITY;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int qx = x + dx, qy = y + dy;
+              if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+              lo = std::min(lo, cur[3 * (qy * w + qx) + k]);
+              hi = std::max(hi, cur[3 * (qy * w + qx) + k]);
+            }
+          const float g = got[3 * (y * w + x) + k], tol = 1e-6f * std::max(1.0f, hi);
+          if (g < lo - tol || g > hi + tol) ++outside;
+          if (t == 4 && std::abs(x - w / 2) > 6 && std::fabs(g - cur[3 * (y * w + x) + k]) > 0.02f * hi) ++ghost;
+        }
+    EXPECT_EQ(outside, 0u) << "values outside the 3x3 min/max of the current frame";
+    EXPECT_EQ(ghost, 0u) << "the swapped edge left a ghost away from it";
+  }
+}
+
+// After a reset the TAA output is exactly what a fresh session makes of the
+// frame, which is the output without TAA.
+TEST_F(SvgfTest, TaaResetLeavesNoGhost) {
+  const int w = 40, h = 30, n = w * h;
+  Flat scene(w, h);
+  std::vector<float> a(3 * n, 5.0f), b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b[i] = 0.01f * (i % 17);
+  const std::vector<protocol::Parameter> taa = {{"taa_alpha", 0.1}};
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, taa));
+  for (int t = 0; t < 10; ++t) run(*pipe, scene.frame(a));
+  auto fresh = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, taa));
+  auto plain = pipelines::create(ctx(), svgf_config(w, h));
+  const auto want = run(*fresh, scene.frame(b));
+  EXPECT_EQ(want, run(*plain, scene.frame(b)));
+  EXPECT_EQ(run(*pipe, scene.frame(b, protocol::kFrameReset)), want);
+  EXPECT_EQ(run(*pipe, scene.frame(b)), run(*fresh, scene.frame(b)));
 }
 
 }  // namespace

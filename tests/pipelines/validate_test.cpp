@@ -43,7 +43,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateAndSvgf) {
   std::vector<std::string> svgf_names;
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
-                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth"}));
+                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha"}));
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
   EXPECT_TRUE(all[0].parameters.empty());
