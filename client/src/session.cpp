@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "connection_state.hpp"
+#include "result_from_message.hpp"
 #include "dn/protocol/channels.hpp"
 #include "dn/protocol/codec.hpp"
 
@@ -222,30 +223,12 @@ Result Session::finish(const Outstanding& o, detail::Incoming&& in) {
                                 "RESULT for session " + std::to_string(r.session_id) + " frame " +
                                     std::to_string(r.frame_index) + " answers the FRAME of session " +
                                     std::to_string(info_.session_id) + " frame " + std::to_string(o.frame_index));
-  Result out;
-  out.session_id = r.session_id;
-  out.frame_index = r.frame_index;
-  out.width = info_.width;
-  out.height = info_.height;
-  out.format = info_.output_format;
-  out.timings = std::move(r.timings);
-  out.latency = std::chrono::duration<double, std::milli>(in.received - o.submitted);
-  for (size_t i = 0; i < r.planes.size(); ++i) {
-    const auto& p = r.planes[i];
-    if (p.id != ChannelId::Output) continue;
-    const uint64_t expected = uint64_t(info_.width) * info_.height * 3 * protocol::bytes_per_component(p.format);
-    if (p.bytes.size() != expected)
-      throw Error::protocol_error(ep, protocol::ErrorCode::InvalidChannel,
-                                  "RESULT.planes[" + std::to_string(i) + "].byte_length",
-                                  "output plane has " + std::to_string(p.bytes.size()) + " bytes, expected " +
-                                      std::to_string(expected));
-    out.format = p.format;
-    out.output = p.bytes;
-  }
+  const auto received = in.received;
+  Result out = detail::result_from_message(std::move(in), info_, ep);
+  out.latency = std::chrono::duration<double, std::milli>(received - o.submitted);
   if (!o.no_output && out.output.empty())
     throw Error::protocol_error(ep, protocol::ErrorCode::MissingChannel, "RESULT.planes",
                                 "RESULT of frame " + std::to_string(o.frame_index) + " has no output plane");
-  out.storage = std::move(in.payload);
   return out;
 }
 

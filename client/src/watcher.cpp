@@ -1,6 +1,7 @@
 #include "dn/client/watcher.hpp"
 
 #include "connection_state.hpp"
+#include "result_from_message.hpp"
 
 namespace dn::client {
 
@@ -56,28 +57,7 @@ std::optional<Result> Watcher::take_newest(bool throw_end) {
     newest = std::move(in);
   }
   if (!newest) return std::nullopt;
-  auto& r = std::get<protocol::Result>(newest->message);
-  Result out;
-  out.session_id = r.session_id;
-  out.frame_index = r.frame_index;
-  out.width = info_.width;
-  out.height = info_.height;
-  out.format = info_.output_format;
-  out.timings = std::move(r.timings);
-  for (size_t i = 0; i < r.planes.size(); ++i) {
-    const auto& p = r.planes[i];
-    if (p.id != protocol::ChannelId::Output) continue;
-    const uint64_t expected = uint64_t(info_.width) * info_.height * 3 * protocol::bytes_per_component(p.format);
-    if (p.bytes.size() != expected)
-      throw Error::protocol_error(state_->endpoint(), protocol::ErrorCode::InvalidChannel,
-                                  "RESULT.planes[" + std::to_string(i) + "].byte_length",
-                                  "output plane has " + std::to_string(p.bytes.size()) + " bytes, expected " +
-                                      std::to_string(expected));
-    out.format = p.format;
-    out.output = p.bytes;
-  }
-  out.storage = std::move(newest->payload);
-  return out;
+  return detail::result_from_message(std::move(*newest), info_, state_->endpoint());
 }
 
 std::optional<Result> Watcher::try_next() {
