@@ -1,0 +1,209 @@
+#include "cli.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "dn/image/metrics.hpp"
+#include "dn/image/png.hpp"
+#include "frame_exr.hpp"
+#include "reference_cache.hpp"
+#include "scenes.hpp"
+#include "stream.hpp"
+
+namespace dn::render {
+
+const char* const kUsage =
+    "usage: dnrender [options]\n"
+    "Path-traces a built-in scene (CPU, Embree) with the channels the denoising service takes.\n"
+    "\n"
+    "  --scene N          1 room, 2 pillars (disocclusion), 3 gap (indirect), 4 fireflies (default 1)\n"
+    "  --frames N         number of frames (default 1)\n"
+    "  --first F          first frame index (default 0)\n"
+    "  --width W          image width (default 640)\n"
+    "  --height H         image height (default 360)\n"
+    "  --spp X            samples per pixel; fractions allowed: 0.25 samples each pixel with probability 0.25\n"
+    "                     (default 1)\n"
+    "  --seed S           random seed (default 1)\n"
+    "  --max-depth D      bounces after the primary hit (default 8)\n"
+    "  --threads T        render threads (default: all cores)\n"
+    "  --jitter           per-frame Halton sub-pixel camera jitter (written as dn.jitter)\n"
+    "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1)\n"
+    "  --spec-hit         also the first non-mirror hit behind mirror-like pixels (spec_hit_* layers)\n"
+    "  --out DIR          write DIR/frame_%04d.exr (dnrender layout, docs/client.md)\n"
+    "  --png              with --out, also DIR/frame_%04d.png (ACES tone-mapped radiance preview)\n"
+    "  --reference SPP    render SPP-sample references into the cache (reused when present);\n"
+    "                     with --out also copied to DIR/ref_%04d.exr\n"
+    "  --cache DIR        reference cache (default out/cache)\n"
+    "  --server URL       stream frames to dnserver (tcp://HOST:PORT or unix:///path), write\n"
+    "                     DIR/denoised_%04d.exr when --out is given\n"
+    "  --pipeline P       server pipeline for --server (svgf, svgf-fb, ...)\n"
+    "  --in-flight K      frames in flight to the server (default 2)\n"
+    "  --send-split       send diffuse + specular instead of radiance when the pipeline takes both\n"
+    "  --quiet            no per-frame lines\n"
+    "  --help             this help\n"
+    "Without --out, --server or --reference, frames are rendered and only timed (ms, Mrays/s).\n";
+
+namespace {
+
+double parse_number(const std::string& flag, const std::string& text, double lo, double hi) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size())
+    throw UsageError(flag + ": expected a number, got '" + text + "'");
+  if (!(v >= lo && v <= hi))
+    throw UsageError(flag + ": " + text + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return v;
+}
+
+int parse_int(const std::string& flag, const std::string& text, long long lo, long long hi) {
+  long long v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size())
+    throw UsageError(flag + ": expected an integer, got '" + text + "'");
+  if (v < lo || v > hi)
+    throw UsageError(flag + ": " + text + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+CliOptions parse_cli(const std::vector<std::string>& args) {
+  CliOptions o;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
+      return args[++i];
+    };
+    if (a == "--help" || a == "-h") o.help = true;
+    else if (a == "--scene") o.scene = parse_int(a, value(), 1, kSceneCount);
+    else if (a == "--frames") o.frames = parse_int(a, value(), 1, 1000000);
+    else if (a == "--first") o.first = parse_int(a, value(), 0, 1000000);
+    else if (a == "--width") o.render.width = parse_int(a, value(), 1, 8192);
+    else if (a == "--height") o.render.height = parse_int(a, value(), 1, 8192);
+    else if (a == "--spp") {
+      o.render.spp = parse_number(a, value(), 0.0, 1 << 20);
+      if (o.render.spp <= 0.0) throw UsageError("--spp must be > 0");
+    } else if (a == "--seed") o.render.seed = static_cast<uint32_t>(parse_int(a, value(), 0, 0x7FFFFFFF));
+    else if (a == "--max-depth") o.render.max_depth = parse_int(a, value(), 1, 64);
+    else if (a == "--threads") o.render.threads = parse_int(a, value(), 1, 1024);
+    else if (a == "--jitter") o.render.jitter = true;
+    else if (a == "--stats") o.render.channels.statistics = true;
+    else if (a == "--spec-hit") o.render.channels.specular_hit = true;
+    else if (a == "--out") o.out = value();
+    else if (a == "--reference") o.reference_spp = parse_int(a, value(), 1, 1 << 20);
+    else if (a == "--cache") o.cache = value();
+    else if (a == "--server") o.server = value();
+    else if (a == "--pipeline") o.pipeline = value();
+    else if (a == "--in-flight") o.in_flight = parse_int(a, value(), 1, 64);
+    else if (a == "--send-split") o.send_split = true;
+    else if (a == "--png") o.png = true;
+    else if (a == "--quiet" || a == "-q") o.quiet = true;
+    else throw UsageError("unknown argument '" + a + "'");
+  }
+  if (!o.server.empty() && o.pipeline.empty()) throw UsageError("--server needs --pipeline");
+  if (o.png && o.out.empty()) throw UsageError("--png needs --out");
+  if (o.server.empty() && !o.pipeline.empty()) throw UsageError("--pipeline needs --server");
+  return o;
+}
+
+namespace {
+
+std::string frame_file(const std::string& dir, const char* pattern, int frame) {
+  char name[64];
+  std::snprintf(name, sizeof name, pattern, frame);
+  return (std::filesystem::path(dir) / name).string();
+}
+
+void make_references(const Scene& scene, const CliOptions& o) {
+  for (int f = o.first; f < o.first + o.frames; ++f) {
+    ReferenceRequest rq;
+    rq.scene_id = o.scene;
+    rq.width = o.render.width;
+    rq.height = o.render.height;
+    rq.frame = f;
+    rq.spp = *o.reference_spp;
+    rq.seed = o.render.seed;
+    rq.threads = o.render.threads;
+    rq.cache_dir = o.cache;
+    const auto t0 = std::chrono::steady_clock::now();
+    bool rendered = false;
+    const std::string path = ensure_reference(scene, rq, rendered);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (rendered) std::fprintf(stderr, "dnrender: reference rendered %s (%.1f s)\n", path.c_str(), s);
+    else std::fprintf(stderr, "dnrender: reference reused %s\n", path.c_str());
+    if (!o.out.empty()) {
+      std::filesystem::create_directories(o.out);
+      std::filesystem::copy_file(path, frame_file(o.out, "ref_%04d.exr", f),
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
+  }
+}
+
+}  // namespace
+
+int run_cli(const CliOptions& o) {
+  if (o.help) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  const std::unique_ptr<Scene> scene = build_scene(o.scene);
+  if (o.reference_spp) make_references(*scene, o);
+  const bool timing_only = o.out.empty() && o.server.empty();
+  if (o.reference_spp && timing_only) return 0;
+
+  if (!o.out.empty()) std::filesystem::create_directories(o.out);
+  std::unique_ptr<FrameStreamer> streamer;
+  std::vector<double> ms, mrays, rays_per_pixel;
+  FrameBuffers fb;
+  for (int f = o.first; f < o.first + o.frames; ++f) {
+    const Camera camera = frame_camera(o.scene, f, o.render);
+    const Camera previous = frame_camera(o.scene, f - 1, o.render);
+    render_frame_into(*scene, camera, previous, f, o.render, fb);
+    ms.push_back(fb.seconds * 1e3);
+    mrays.push_back(static_cast<double>(fb.rays) / fb.seconds * 1e-6);
+    rays_per_pixel.push_back(static_cast<double>(fb.rays) / (double(fb.width) * fb.height));
+    if (!o.quiet)
+      std::fprintf(stderr, "dnrender: frame %04d  %.1f ms  %.2f Mrays  %.1f Mrays/s\n", f, ms.back(),
+                   static_cast<double>(fb.rays) * 1e-6, mrays.back());
+    if (!o.out.empty()) {
+      std::map<std::string, std::string> attributes = {{"dn.scene", scene_name(o.scene)},
+                                                       {"dn.frame", std::to_string(f)},
+                                                       {"dn.spp", std::to_string(o.render.spp)},
+                                                       {"dn.seed", std::to_string(o.render.seed)}};
+      write_frame_exr(frame_file(o.out, "frame_%04d.exr", f), fb, camera, previous, attributes);
+      if (o.png) {
+        const auto bytes = image::to_srgb8(fb.radiance.data(), fb.radiance.size() / 3);
+        image::write_png_rgb8(frame_file(o.out, "frame_%04d.png", f), fb.width, fb.height, bytes.data());
+      }
+    }
+    if (!o.server.empty()) {
+      if (!streamer) {
+        StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
+        streamer = std::make_unique<FrameStreamer>(so, fb);
+        if (!o.quiet) {
+          std::string names;
+          for (const auto& n : streamer->channel_names()) names += " " + n;
+          std::fprintf(stderr, "dnrender: streaming to %s, pipeline %s, channels:%s\n", o.server.c_str(),
+                       o.pipeline.c_str(), names.c_str());
+        }
+      }
+      streamer->submit(f, fb, camera, previous, f == o.first);
+    }
+  }
+  if (streamer) streamer->finish();
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  };
+  std::fprintf(stderr, "dnrender: %d frame%s of %dx%d at %g spp: median %.1f ms/frame, %.1f Mrays/s, %.2f rays/pixel\n",
+               o.frames, o.frames == 1 ? "" : "s", o.render.width, o.render.height, o.render.spp, median(ms),
+               median(mrays), median(rays_per_pixel));
+  return 0;
+}
+
+}  // namespace dn::render

@@ -1,0 +1,41 @@
+// dnrender's command line: parsing (testable, no side effects) and the run.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "render.hpp"
+
+namespace dn::render {
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct CliOptions {
+  int scene = 1;
+  int frames = 1;
+  int first = 0;
+  RenderSettings render;
+  std::string out;                  // frames to DIR/frame_%04d.exr
+  std::optional<int> reference_spp;
+  std::string cache = "out/cache";
+  std::string server, pipeline;
+  int in_flight = 2;
+  bool send_split = false;
+  bool png = false;                 // also DIR/frame_%04d.png, tone-mapped radiance
+  bool quiet = false;
+  bool help = false;
+};
+
+extern const char* const kUsage;
+
+// Throws UsageError with a message naming the offending argument.
+CliOptions parse_cli(const std::vector<std::string>& args);
+
+// Runs what the options ask for; returns the process exit status.
+int run_cli(const CliOptions& options);
+
+}  // namespace dn::render

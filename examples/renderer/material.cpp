@@ -1,0 +1,61 @@
+#include "material.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dn::render {
+namespace {
+
+// 0 or 1: which of the two pattern values applies at p.
+float pattern_select(Pattern pattern, const glm::vec3& p, float scale) {
+  const glm::vec3 q = p * scale;
+  switch (pattern) {
+    case Pattern::None:
+      return 0.0f;
+    case Pattern::Checker:
+      return static_cast<float>((static_cast<int>(std::floor(q.x)) + static_cast<int>(std::floor(q.y)) +
+                                 static_cast<int>(std::floor(q.z))) & 1);
+    case Pattern::Stripes:
+      return std::fmod(std::fabs(q.x + 0.5f * q.z), 1.0f) < 0.5f ? 1.0f : 0.0f;
+    case Pattern::Tiles: {
+      // Grout lines between square tiles: a thin grid.
+      const float fx = q.x - std::floor(q.x), fz = q.z - std::floor(q.z);
+      return (fx < 0.06f || fz < 0.06f) ? 1.0f : 0.0f;
+    }
+  }
+  return 0.0f;
+}
+
+}  // namespace
+
+SurfaceParams evaluate_material(const Material& m, const glm::vec3& p) {
+  SurfaceParams s;
+  if (m.kind == MaterialKind::Emitter) {
+    s.emission = m.emission;
+    return s;
+  }
+  const glm::vec3 colour = glm::mix(m.albedo, m.albedo2, pattern_select(m.albedo_map, p, m.map_scale));
+  const float alpha = std::max(kMinAlpha, glm::mix(m.alpha, m.alpha2, pattern_select(m.roughness_map, p, m.map_scale)));
+  switch (m.kind) {
+    case MaterialKind::Diffuse:
+      s.diffuse_albedo = colour;
+      s.has_diffuse = true;
+      break;
+    case MaterialKind::Metal:
+      s.f0 = colour;
+      s.alpha = alpha;
+      s.has_specular = true;
+      break;
+    case MaterialKind::Coated:
+      s.diffuse_albedo = colour;
+      s.f0 = glm::vec3(kDielectricF0);
+      s.alpha = alpha;
+      s.has_diffuse = s.has_specular = true;
+      break;
+    case MaterialKind::Emitter:
+      break;
+  }
+  return s;
+}
+
+}  // namespace dn::render

@@ -1,0 +1,78 @@
+// Renders one frame: noisy radiance (split into diffuse and specular) and the
+// G-buffers the denoising pipelines take, on a pool of threads over tiles.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "camera.hpp"
+#include "scene.hpp"
+
+namespace dn::render {
+
+// Which outputs to compute. Radiance is always computed; the rest costs time
+// or memory, so each is asked for.
+struct ChannelSet {
+  bool split = true;          // diffuse, specular, emission
+  bool gbuffer = true;        // albedo, specular_f0, roughness, normal, depth, position
+  bool motion = true;
+  bool sample_count = true;
+  bool statistics = false;    // paper 003 Alg. 1 per pixel (stat_* planes)
+  bool specular_hit = false;  // first non-specular hit behind mirror-like primaries (spec_hit_* planes)
+  bool record_samples = false;  // every sample's radiance, for tests
+};
+
+struct RenderSettings {
+  int width = 640, height = 360;
+  double spp = 1.0;       // < 1: each pixel is sampled with this probability; fractions add a sample likewise
+  uint32_t seed = 1;
+  bool jitter = false;    // per-frame Halton sub-pixel camera jitter
+  int max_depth = 8;      // path vertices after the primary hit
+  bool next_event = true; // false: BSDF sampling only (tests compare the two estimators)
+  int threads = 0;        // 0: hardware concurrency
+  int tile = 16;
+  ChannelSet channels;
+};
+
+// All planes interleaved per pixel, rows top-first; a plane not asked for is empty.
+struct FrameBuffers {
+  int width = 0, height = 0;
+  std::vector<float> radiance, diffuse, specular, emission;  // 3
+  std::vector<float> albedo, specular_f0, normal, position;  // 3
+  std::vector<float> roughness, depth;                        // 1
+  std::vector<float> motion;                                  // 2
+  std::vector<float> sample_count;                            // 1
+  // Statistics of the samples x of each colour channel, Box-Cox lambda = 1/2:
+  // x' = 2 sqrt(x) - 2. Count n, mean of x', the sums M2 = sum (x' - mean)^2
+  // and M3 = sum (x' - mean)^3 as Alg. 1 accumulates them (central moments
+  // are M/n), and the mean of the raw x.
+  std::vector<float> stat_count;                              // 1
+  std::vector<float> stat_mean, stat_m2, stat_m3, stat_raw_mean;  // 3
+  // For primaries with alpha < kSpecularAlphaThreshold: the first non-specular
+  // hit along the mirror chain (position, diffuse albedo) and the primary's
+  // mirror direction; zeros elsewhere.
+  std::vector<float> spec_hit_position, spec_hit_albedo, spec_hit_direction;  // 3
+  std::vector<float> samples;  // record_samples: samples_stride RGB samples per pixel, unused slots 0
+  int samples_stride = 0;
+  uint64_t rays = 0;  // Embree rays traced (rtcIntersect1 + rtcOccluded1)
+  double seconds = 0.0;
+};
+
+// Number of samples pixel `pixel` takes this frame for a (possibly fractional) spp.
+int samples_for_pixel(double spp, uint32_t seed, int frame, uint32_t pixel);
+
+FrameBuffers render_frame(const Scene& scene, const Camera& camera, const Camera& previous, int frame,
+                          const RenderSettings& settings);
+// The same into `fb`, reusing its memory (a sequence then never page-faults fresh planes in).
+void render_frame_into(const Scene& scene, const Camera& camera, const Camera& previous, int frame,
+                       const RenderSettings& settings, FrameBuffers& fb);
+
+// Convenience for the built-in scenes: camera path, jitter when asked.
+Camera frame_camera(int scene_id, int frame, const RenderSettings& settings);
+
+// The world position seen through a continuous pixel position, or nothing
+// for the background; for tests of the motion vectors.
+bool primary_position(const Scene& scene, const Camera& camera, int width, int height, float px, float py,
+                      glm::vec3& position);
+
+}  // namespace dn::render

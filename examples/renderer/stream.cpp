@@ -1,0 +1,125 @@
+#include "stream.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+
+#include "dn/client/client.hpp"
+#include "dn/image/exr_io.hpp"
+#include "frame_exr.hpp"
+
+namespace dn::render {
+
+using protocol::ChannelId;
+
+namespace {
+
+const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
+  switch (id) {
+    case ChannelId::Radiance: return &fb.radiance;
+    case ChannelId::Diffuse: return &fb.diffuse;
+    case ChannelId::Specular: return &fb.specular;
+    case ChannelId::Albedo: return &fb.albedo;
+    case ChannelId::SpecularF0: return &fb.specular_f0;
+    case ChannelId::Roughness: return &fb.roughness;
+    case ChannelId::Normal: return &fb.normal;
+    case ChannelId::Depth: return &fb.depth;
+    case ChannelId::Motion: return &fb.motion;
+    case ChannelId::Emission: return &fb.emission;
+    case ChannelId::Position: return &fb.position;
+    case ChannelId::SampleCount: return &fb.sample_count;
+    default: return nullptr;
+  }
+}
+
+}  // namespace
+
+struct FrameStreamer::State {
+  client::Connection connection;
+  std::optional<client::Session> session;
+  std::vector<ChannelId> channels;
+};
+
+FrameStreamer::FrameStreamer(const StreamOptions& options, const FrameBuffers& sample) : options_(options) {
+  client::ConnectOptions copts;
+  copts.client_name = "dnrender";
+  state_ = std::make_unique<State>(State{client::Connection::connect(options.url, copts), std::nullopt, {}});
+  const protocol::PipelineInfo* info = state_->connection.find_pipeline(options.pipeline);
+  if (!info) {
+    std::string names;
+    for (const auto& p : state_->connection.welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
+    throw std::runtime_error("server " + state_->connection.endpoint() + " has no pipeline '" + options.pipeline +
+                             "' (it offers: " + names + ")");
+  }
+  const uint64_t takes = info->required_channels | info->optional_channels;
+  auto has = [&](ChannelId id) { const auto* p = plane_of(sample, id); return p && !p->empty(); };
+  auto bit = [](ChannelId id) { return protocol::channel_bit(id); };
+  const bool split = has(ChannelId::Diffuse) && has(ChannelId::Specular) && (takes & bit(ChannelId::Diffuse)) &&
+                     (takes & bit(ChannelId::Specular)) &&
+                     (options.send_split || !(takes & bit(ChannelId::Radiance)));
+  client::SessionDesc desc;
+  desc.width = static_cast<uint32_t>(sample.width);
+  desc.height = static_cast<uint32_t>(sample.height);
+  desc.pipeline = options.pipeline;
+  desc.max_in_flight = static_cast<uint32_t>(options.in_flight);
+  for (const auto& c : protocol::kChannels) {
+    if (c.id == ChannelId::Output || !(takes & bit(c.id)) || !has(c.id)) continue;
+    if (split && c.id == ChannelId::Radiance) continue;
+    if (!split && (c.id == ChannelId::Diffuse || c.id == ChannelId::Specular)) continue;
+    desc.channel(c.id);
+    state_->channels.push_back(c.id);
+    channel_names_.emplace_back(c.name);
+  }
+  for (const auto& c : protocol::kChannels)
+    if ((info->required_channels & bit(c.id)) && !has(c.id))
+      throw std::runtime_error("pipeline " + options.pipeline + " requires channel " + std::string(c.name) +
+                               ", which this render does not produce");
+  state_->session.emplace(state_->connection.open_session(desc));
+  if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
+}
+
+FrameStreamer::~FrameStreamer() = default;
+
+void FrameStreamer::submit(int frame, const FrameBuffers& fb, const Camera& camera, const Camera& previous,
+                           bool reset) {
+  client::FrameInput in;
+  in.frame_index = static_cast<uint64_t>(frame);
+  in.fill_previous_camera = false;
+  in.info.view = to_array(camera.view);
+  in.info.projection = to_array(camera.projection);
+  in.info.jitter = {camera.jitter.x, camera.jitter.y};
+  in.info.prev_view = to_array(previous.view);
+  in.info.prev_projection = to_array(previous.projection);
+  in.info.prev_jitter = {previous.jitter.x, previous.jitter.y};
+  in.no_output = options_.out_dir.empty();
+  if (reset) in.reset();
+  for (ChannelId id : state_->channels) in.add(id, std::span<const float>(*plane_of(fb, id)));
+  state_->session->submit(in);
+  write_ready(false);
+}
+
+void FrameStreamer::write_ready(bool block) {
+  client::Session& s = *state_->session;
+  while (s.in_flight() > 0) {
+    std::optional<client::Result> r = block ? std::optional<client::Result>(s.wait()) : s.poll();
+    if (!r) return;
+    if (!options_.quiet)
+      std::fprintf(stderr, "dnrender: denoised frame %llu  e2e %.1f ms  server %.1f ms\n",
+                   static_cast<unsigned long long>(r->frame_index), r->latency.count(), r->total_timing_ms());
+    if (!options_.out_dir.empty() && r->has_output()) {
+      char name[64];
+      std::snprintf(name, sizeof name, "denoised_%04llu.exr", static_cast<unsigned long long>(r->frame_index));
+      const std::vector<float> rgb = r->rgb();
+      image::write_exr_rgb((std::filesystem::path(options_.out_dir) / name).string(), static_cast<int>(r->width),
+                           static_cast<int>(r->height), rgb.data(), image::ExrPixelType::Half);
+    }
+  }
+}
+
+void FrameStreamer::finish() {
+  write_ready(true);
+  state_->session->close();
+}
+
+}  // namespace dn::render
