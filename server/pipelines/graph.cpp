@@ -100,6 +100,60 @@ GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
   throw std::logic_error("pipeline graph: pass binds unknown buffer " + name);
 }
 
+const gpu::Buffer& GraphPipeline::bound(const BindingRef& ref, uint32_t parity) {
+  Node& n = node(ref.buffer);
+  uint32_t copy = 0;
+  if (n.spec->role == BufferRole::History) copy = ref.slot == Slot::Current ? parity : parity ^ 1u;
+  return n.copies[copy];
+}
+
+void GraphPipeline::set_capture(bool on) {
+  std::lock_guard lock(mutex_);
+  for (auto& pass : passes_) {
+    pass.captures.clear();
+    if (!on) continue;
+    for (const auto& ref : pass.spec->bindings) {
+      const BufferSpec* b = spec_.find(ref.buffer);
+      if (b->role == BufferRole::Input) continue;
+      pass.captures.push_back({ref.buffer, ref.slot,
+                               gpu::Buffer(context_, b->bytes, gpu::BufferKind::StorageDownload,
+                                           pass.spec->name + ":" + ref.buffer)});
+    }
+  }
+}
+
+std::vector<uint8_t> GraphPipeline::captured(const std::string& pass, const std::string& buffer) const {
+  for (const auto& p : passes_) {
+    if (p.spec->name != pass) continue;
+    for (const auto& c : p.captures) {
+      if (c.buffer != buffer) continue;
+      std::vector<uint8_t> bytes(c.copy.size());
+      c.copy.read(bytes);
+      return bytes;
+    }
+  }
+  throw std::out_of_range("pipeline graph: nothing captured for buffer " + buffer + " after pass " + pass);
+}
+
+// After the pass: copy each captured binding (and, when the capture buffer is
+// staged, on to its host-visible copy); the next pass waits for the copies
+// before it may overwrite what they read.
+void GraphPipeline::record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity) {
+  if (pass.captures.empty()) return;
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
+  for (const auto& c : pass.captures) {
+    const VkBufferCopy region{0, 0, c.copy.size()};
+    vkCmdCopyBuffer(cmd, bound({c.buffer, c.slot}, parity).handle(), c.copy.handle(), 1, &region);
+  }
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                      VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+  for (const auto& c : pass.captures) c.copy.record_download(cmd, c.copy.size());
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_HOST_READ_BIT);
+}
+
 GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config, GraphSpec spec)
     : context_(context), spec_(std::move(spec)), output_format_(config.output_format) {
   const uint64_t limit = context.limits().max_storage_buffer_range;
@@ -143,12 +197,7 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
 
       for (uint32_t parity = 0; parity < 2; ++parity) {
         std::vector<VkBuffer> storage;
-        for (const auto& ref : ps.bindings) {
-          Node& n = node(ref.buffer);
-          uint32_t copy = 0;
-          if (n.spec->role == BufferRole::History) copy = ref.slot == Slot::Current ? parity : parity ^ 1u;
-          storage.push_back(n.copies[copy].handle());
-        }
+        for (const auto& ref : ps.bindings) storage.push_back(bound(ref, parity).handle());
         pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage);
       }
 
@@ -271,6 +320,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
                             nullptr);
     vkCmdDispatch(cmd, pass.groups_x, pass.groups_y, 1);
     timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
+    record_captures(cmd, pass, parity);
   }
 
   const uint64_t out_bytes = out_node ? out_node->spec->plane_bytes : 0;

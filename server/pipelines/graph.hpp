@@ -109,13 +109,28 @@ class GraphPipeline final : public Pipeline {
 
   const GraphSpec& spec() const { return spec_; }
 
+  // Inspection for tests and debugging (the server never turns it on): while
+  // on, every binding of every pass except Input planes is copied right
+  // after the pass into a host-readable buffer; captured() returns those
+  // bytes for the last completed frame. Costs one copy per binding per pass.
+  void set_capture(bool on);
+  // The bytes of `buffer` as pass `pass` left them in the last frame;
+  // throws std::out_of_range when that pass does not bind that buffer.
+  std::vector<uint8_t> captured(const std::string& pass, const std::string& buffer) const;
+
  private:
   struct Node {
     const BufferSpec* spec = nullptr;
     gpu::Buffer copies[2];  // History: [parity]; otherwise copies[0] only
   };
+  struct Capture {
+    std::string buffer;
+    Slot slot = Slot::Current;
+    gpu::Buffer copy;
+  };
   struct Pass {
     const PassSpec* spec = nullptr;
+    std::vector<Capture> captures;  // set_capture(true) only
     std::shared_ptr<const gpu::Kernel> kernel;
     VkDescriptorSet sets[2] = {VK_NULL_HANDLE, VK_NULL_HANDLE};  // [parity]
     uint32_t groups_x = 1, groups_y = 1;
@@ -124,6 +139,8 @@ class GraphPipeline final : public Pipeline {
   void run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
            std::vector<protocol::PassTiming>& timings);
   Node& node(const std::string& name);
+  const gpu::Buffer& bound(const BindingRef& ref, uint32_t parity);
+  void record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity);
 
   gpu::Context& context_;
   GraphSpec spec_;
