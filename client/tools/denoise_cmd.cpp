@@ -51,6 +51,8 @@ const std::vector<Args::Spec> kSpecs = {
      "motion vectors in the input: to-previous | to-next | uv (default: preset's)", "NAME"},
     {"timeout", "", true, false, "seconds to wait for any one reply (default 120)", "SECONDS"},
     {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
+    {"warmup", "", true, false,
+     "denoise the first N frames but leave them out of the means (metrics, timings, temporal error)", "N"},
     {"quiet", "-q", false, false, "no per-frame output", ""},
     {"help", "-h", false, false, "this help", ""},
 };
@@ -85,10 +87,18 @@ struct Metrics {
 };
 
 struct Totals {
-  size_t frames = 0, with_ref = 0;
-  double latency_ms = 0, server_ms = 0;
-  double rmse = 0, relmse = 0, ssim = 0;
+  size_t frames = 0, with_ref = 0, temporal_pairs = 0;
+  double latency_ms = 0, server_ms = 0, device_ms = 0;
+  double rmse = 0, relmse = 0, ssim = 0, temporal = 0;
 };
+
+// Device time of a frame: its passes, without the host-side upload and download stages.
+double device_pass_ms(const client::Result& r) {
+  double ms = 0;
+  for (const auto& t : r.timings)
+    if (t.name != "upload" && t.name != "download") ms += t.milliseconds;
+  return ms;
+}
 
 }  // namespace
 
@@ -115,6 +125,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   const long long step = args.get_int("step", 1, 1, 1 << 30);
   const long long in_flight = args.get_int("in-flight", 3, 1, 1024);
   const double timeout_s = args.get_double("timeout", 120.0);
+  const long long warmup = args.get_int("warmup", 0, 0, INT64_MAX / 2);
   const float exposure = float(args.get_double("exposure", 1.0));
   image::Tonemap tonemap = image::Tonemap::Aces;
   try {
@@ -213,7 +224,8 @@ int run_denoise(const std::vector<std::string>& argv) {
                  static_cast<unsigned long long>(session.id()), conn.endpoint().c_str(),
                  static_cast<unsigned long long>(session.id()));
 
-  const bool want_output = output || png || reference;
+  // The summary's temporal error needs the frames too.
+  const bool want_output = output || png || reference || args.has("summary");
   const auto motion = motion_override.value_or(protocol::MotionConvention::PixelsToPrevious);
 
   // ---- the pipelined loop ------------------------------------------------------
@@ -221,12 +233,16 @@ int run_denoise(const std::vector<std::string>& argv) {
   Totals totals;
   const auto t_begin = std::chrono::steady_clock::now();
   std::deque<long long> submitted;  // frame numbers in flight, in order
+  std::vector<float> previous_rgb;  // the last output, for the temporal error
+  long long handled = 0;            // results received so far
 
   auto handle = [&](const client::Result& r) {
     const long long number = (long long)r.frame_index;
     submitted.pop_front();
     std::vector<float> rgb;
     if (r.has_output()) rgb = r.rgb();
+    const long long position = handled++;
+    const bool measured = position >= warmup;
     if (output) {
       const std::string path = format_frame_path(*output, number);
       ensure_parent_dir(path);
@@ -250,14 +266,24 @@ int run_denoise(const std::vector<std::string>& argv) {
       m = Metrics{image::rmse(rgb.data(), ref.data(), rgb.size()),
                   image::relative_mse(rgb.data(), ref.data(), rgb.size()),
                   image::ssim_tonemapped(rgb.data(), ref.data(), rw, rh, tonemap, exposure)};
-      totals.with_ref++;
-      totals.rmse += m->rmse;
-      totals.relmse += m->relmse;
-      totals.ssim += m->ssim;
+      if (measured) {
+        totals.with_ref++;
+        totals.rmse += m->rmse;
+        totals.relmse += m->relmse;
+        totals.ssim += m->ssim;
+      }
     }
-    totals.frames++;
-    totals.latency_ms += r.latency.count();
-    totals.server_ms += r.total_timing_ms();
+    if (measured) {
+      totals.frames++;
+      totals.latency_ms += r.latency.count();
+      totals.server_ms += r.total_timing_ms();
+      totals.device_ms += device_pass_ms(r);
+    }
+    if (position > warmup && !rgb.empty() && previous_rgb.size() == rgb.size()) {
+      totals.temporal += image::temporal_error(rgb.data(), previous_rgb.data(), size_t(r.width) * r.height);
+      totals.temporal_pairs++;
+    }
+    previous_rgb = std::move(rgb);
 
     char head[96];
     std::snprintf(head, sizeof head, "frame %04lld  e2e %.1f ms  server %.1f ms", number, r.latency.count(),
@@ -326,7 +352,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   if (!quiet) {
     const double n = double(std::max<size_t>(totals.frames, 1));
     std::fprintf(stderr, "dn: %zu frames in %.2f s (%.2f fps), mean e2e %.1f ms, mean server %.1f ms\n", totals.frames,
-                 wall, wall > 0 ? double(totals.frames) / wall : 0.0, totals.latency_ms / n, totals.server_ms / n);
+                 wall, wall > 0 ? double(handled) / wall : 0.0, totals.latency_ms / n, totals.server_ms / n);
   }
   if (reference && totals.with_ref) {
     const double n = double(totals.with_ref);
@@ -340,10 +366,13 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double n = double(std::max<size_t>(totals.frames, 1));
     const double r = double(std::max<size_t>(totals.with_ref, 1));
     const bool have_ref = totals.with_ref > 0;
-    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\n");
-    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\n", have_ref ? totals.rmse / r : NAN,
+    const double pixels = double(session.info().width) * session.info().height;
+    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel\n");
+    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f\n", have_ref ? totals.rmse / r : NAN,
                  have_ref ? totals.relmse / r : NAN, have_ref ? totals.ssim / r : NAN, totals.latency_ms / n,
-                 totals.server_ms / n, totals.frames, wall > 0 ? double(totals.frames) / wall : 0.0);
+                 totals.server_ms / n, totals.frames, wall > 0 ? double(handled) / wall : 0.0,
+                 totals.device_ms / n, totals.temporal_pairs ? totals.temporal / double(totals.temporal_pairs) : NAN,
+                 pixels > 0 ? double(session.info().device_bytes) / pixels : 0.0);
     std::fclose(f);
   }
   return 0;

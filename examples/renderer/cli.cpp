@@ -23,6 +23,8 @@ const char* const kUsage =
     "  --scene N          1 room, 2 pillars (disocclusion), 3 gap (indirect), 4 fireflies (default 1)\n"
     "  --frames N         number of frames (default 1)\n"
     "  --first F          first frame index (default 0)\n"
+    "  --hold-camera F    keep the camera of path frame F for every frame (still scene, new noise\n"
+    "                     each frame: for temporal stability)\n"
     "  --width W          image width (default 640)\n"
     "  --height H         image height (default 360)\n"
     "  --spp X            samples per pixel; fractions allowed: 0.25 samples each pixel with probability 0.25\n"
@@ -83,6 +85,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--scene") o.scene = parse_int(a, value(), 1, kSceneCount);
     else if (a == "--frames") o.frames = parse_int(a, value(), 1, 1000000);
     else if (a == "--first") o.first = parse_int(a, value(), 0, 1000000);
+    else if (a == "--hold-camera") o.hold_camera = parse_int(a, value(), 0, 1000000);
     else if (a == "--width") o.render.width = parse_int(a, value(), 1, 8192);
     else if (a == "--height") o.render.height = parse_int(a, value(), 1, 8192);
     else if (a == "--spp") {
@@ -125,7 +128,7 @@ void make_references(const Scene& scene, const CliOptions& o) {
     rq.scene_id = o.scene;
     rq.width = o.render.width;
     rq.height = o.render.height;
-    rq.frame = f;
+    rq.frame = o.hold_camera.value_or(f);
     rq.spp = *o.reference_spp;
     rq.seed = o.render.seed;
     rq.threads = o.render.threads;
@@ -161,8 +164,9 @@ int run_cli(const CliOptions& o) {
   std::vector<double> ms, mrays, rays_per_pixel;
   FrameBuffers fb;
   for (int f = o.first; f < o.first + o.frames; ++f) {
-    const Camera camera = frame_camera(o.scene, f, o.render);
-    const Camera previous = frame_camera(o.scene, f - 1, o.render);
+    const int path_frame = o.hold_camera.value_or(f);
+    const Camera camera = frame_camera(o.scene, path_frame, o.render);
+    const Camera previous = o.hold_camera ? camera : frame_camera(o.scene, f - 1, o.render);
     render_frame_into(*scene, camera, previous, f, o.render, fb);
     ms.push_back(fb.seconds * 1e3);
     mrays.push_back(static_cast<double>(fb.rays) / fb.seconds * 1e-6);

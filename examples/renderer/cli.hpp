@@ -18,6 +18,7 @@ struct CliOptions {
   int scene = 1;
   int frames = 1;
   int first = 0;
+  std::optional<int> hold_camera;   // every frame seen from this path frame's camera (fresh noise per frame)
   RenderSettings render;
   std::string out;                  // frames to DIR/frame_%04d.exr
   std::optional<int> reference_spp;

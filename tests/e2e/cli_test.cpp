@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <thread>
 
+#include "dn/image/exr_io.hpp"
 #include "raw_client.hpp"
 #include "server_process.hpp"
 
@@ -48,6 +50,19 @@ double summary_rmse(const std::string& path) {
   return std::stod(values.substr(0, values.find('\t')));
 }
 
+// Every column of a `dn denoise --summary` file by its header name.
+std::map<std::string, double> summary_columns(const std::string& path) {
+  std::ifstream in(path);
+  std::string header, values;
+  std::getline(in, header);
+  std::getline(in, values);
+  std::stringstream h(header), v(values);
+  std::map<std::string, double> columns;
+  std::string name, value;
+  while (std::getline(h, name, '\t') && std::getline(v, value, '\t')) columns[name] = std::stod(value);
+  return columns;
+}
+
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -81,6 +96,63 @@ TEST_F(Cli, DenoiseSequenceThroughRealServer) {
   }
   // Temporal accumulation of unit-variance noise must beat the noisy input.
   EXPECT_LT(rmse["accumulate"], 0.8 * rmse["passthrough"]);
+}
+
+// The summary's device time, temporal error and device memory, checked
+// against the per-frame log and a direct computation over the written frames.
+TEST_F(Cli, SummaryReportsDeviceTimeTemporalErrorAndDeviceBytes) {
+  ServerProcess server;
+  const std::string out = dir_.string() + "/summary";
+  std::string log;
+  int rc = shell(std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
+                     " --pipeline accumulate --preset dnrender --input '" + dir_.string() +
+                     "/in/frame_%04d.exr' --start 0 --end 5 --exr-float --output '" + out + "/f_%04d.exr' --summary " +
+                     out + "/summary.tsv",
+                 &log);
+  ASSERT_EQ(rc, 0) << log;
+  auto columns = summary_columns(out + "/summary.tsv");
+  for (const char* name : {"device_ms", "server_ms", "temporal", "device_bytes_per_pixel", "frames"})
+    ASSERT_TRUE(columns.count(name)) << name;
+  EXPECT_EQ(columns["frames"], 6);
+  EXPECT_GT(columns["device_ms"], 0.0);
+  EXPECT_LT(columns["device_ms"], columns["server_ms"]);  // server time adds upload and download
+  // accumulate holds at least its fp32 history (colour + length) and the
+  // declared fp32 planes; well under a kilobyte a pixel.
+  EXPECT_GE(columns["device_bytes_per_pixel"], 16.0);
+  EXPECT_LT(columns["device_bytes_per_pixel"], 1024.0);
+
+  // Per consecutive pair: the mean |Y_t - Y_{t-1}|, Rec. 709 luminance.
+  std::vector<double> pair_error;
+  std::vector<float> previous;
+  for (int i = 0; i < 6; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/f_%04d.exr", i);
+    int w = 0, h = 0;
+    std::vector<float> rgb = image::read_exr_rgb(out + name, w, h);
+    if (!previous.empty()) {
+      double d = 0.0;
+      for (size_t p = 0; p < rgb.size(); p += 3) {
+        const double y = 0.2126 * rgb[p] + 0.7152 * rgb[p + 1] + 0.0722 * rgb[p + 2];
+        const double y0 = 0.2126 * previous[p] + 0.7152 * previous[p + 1] + 0.0722 * previous[p + 2];
+        d += std::fabs(y - y0);
+      }
+      pair_error.push_back(d / double(rgb.size() / 3));
+    }
+    previous = std::move(rgb);
+  }
+  const double all_pairs = (pair_error[0] + pair_error[1] + pair_error[2] + pair_error[3] + pair_error[4]) / 5.0;
+  EXPECT_NEAR(columns["temporal"], all_pairs, 1e-4 * all_pairs);
+
+  // --warmup 2: frames 2..5 measured, pairs (3,2) (4,3) (5,4).
+  rc = shell(std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
+                 " --pipeline accumulate --preset dnrender --input '" + dir_.string() +
+                 "/in/frame_%04d.exr' --start 0 --end 5 --warmup 2 --summary " + out + "/warm.tsv",
+             &log);
+  ASSERT_EQ(rc, 0) << log;
+  auto warm = summary_columns(out + "/warm.tsv");
+  EXPECT_EQ(warm["frames"], 4);
+  const double late_pairs = (pair_error[2] + pair_error[3] + pair_error[4]) / 3.0;
+  EXPECT_NEAR(warm["temporal"], late_pairs, 1e-4 * late_pairs);
 }
 
 TEST_F(Cli, DenoiseFailsClearlyOnServerError) {

@@ -7,7 +7,7 @@ namespace dn::render {
 namespace {
 
 TEST(RendererCli, ParsesEveryOption) {
-  const CliOptions o = parse_cli({"--scene", "3", "--frames", "10", "--first", "5", "--width", "320", "--height",
+  const CliOptions o = parse_cli({"--scene", "3", "--frames", "10", "--first", "5", "--hold-camera", "7", "--width", "320", "--height",
                                   "180", "--spp", "0.25", "--seed", "9", "--out", "o", "--reference", "512", "--cache",
                                   "c", "--server", "tcp://h:1", "--pipeline", "svgf", "--in-flight", "3", "--stats",
                                   "--spec-hit", "--jitter", "--max-depth", "5", "--threads", "2", "--send-split",
@@ -15,6 +15,7 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_EQ(o.scene, 3);
   EXPECT_EQ(o.frames, 10);
   EXPECT_EQ(o.first, 5);
+  EXPECT_EQ(o.hold_camera, 7);
   EXPECT_EQ(o.render.width, 320);
   EXPECT_EQ(o.render.height, 180);
   EXPECT_DOUBLE_EQ(o.render.spp, 0.25);

@@ -1,0 +1,173 @@
+#!/usr/bin/env bash
+# Speed against error. For each dnrender scene: a moving-camera sequence with
+# high-sample references and a still shot (--hold-camera) are rendered once,
+# then streamed through every pipeline the server offers and the baselines
+# (the noisy input, plain temporal accumulation, and a non-temporal
+# edge-avoiding a-trous filter). Writes to OUT: results.tsv, results.md (the
+# table), speed_error.png (plot) and scene<N>.png (side by side with crops).
+# --docs also copies the images to docs/images/ and puts the section into
+# docs/results.md between its speed-error markers.
+# Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
+# skips scripts/setup.sh (the tests run this on a build they just made).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+scenes="1 2 3 4"
+frames=12        # moving-camera frames per scene
+still=16         # still-camera frames per scene (the second half is measured)
+size=320x180
+ref_spp=256
+out=out/bench
+cache=out/cache
+docs=0
+usage() {
+  cat <<EOF
+usage: bench/speed_error.sh [--scenes "1 2 3 4"] [--frames N] [--still N] [--size WxH]
+                            [--ref-spp S] [--out DIR] [--cache DIR] [--docs]
+defaults: --scenes "$scenes" --frames $frames --still $still --size $size --ref-spp $ref_spp --out $out
+EOF
+}
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --scenes) scenes=$2; shift 2 ;;
+    --frames) frames=$2; shift 2 ;;
+    --still) still=$2; shift 2 ;;
+    --size) size=$2; shift 2 ;;
+    --ref-spp) ref_spp=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --cache) cache=$2; shift 2 ;;
+    --docs) docs=1; shift ;;
+    -h | --help) usage; exit 0 ;;
+    *) echo "speed_error: unknown option '$1'" >&2; usage >&2; exit 2 ;;
+  esac
+done
+width=${size%x*}
+height=${size#*x}
+case "$width$height" in *[!0-9]* | "") echo "speed_error: --size wants WxH, got '$size'" >&2; exit 2 ;; esac
+[ "$frames" -ge 2 ] && [ "$still" -ge 4 ] || { echo "speed_error: need --frames >= 2 and --still >= 4" >&2; exit 2; }
+
+[ "${DN_SKIP_SETUP:-0}" = 1 ] || ./scripts/setup.sh
+bin=${DN_BUILD_DIR:-build}
+dnrender=$bin/examples/renderer/dnrender
+dn=$bin/client/dn
+mkdir -p "$out"
+
+socket="/tmp/dnserver-bench-$$.sock"
+"$bin/server/dnserver" --listen "unix://$socket" --log-level warn 2> "$out/dnserver.log" &
+server=$!
+trap 'kill -TERM $server 2>/dev/null || true; wait $server 2>/dev/null || true' EXIT
+for _ in $(seq 1 300); do [ -S "$socket" ] && break; sleep 0.1; done
+[ -S "$socket" ] || { echo "speed_error: dnserver did not start:" >&2; cat "$out/dnserver.log" >&2; exit 1; }
+server_url="unix://$socket"
+device=$("$dn" ping --server "$server_url" --count 1 | sed -n '1s/.* on //p')
+
+# Rows: "label pipeline [NAME=VALUE ...]". The baselines first, then every
+# other pipeline the server offers (new ones are picked up without changes).
+rows=("noisy passthrough" "accumulate accumulate" "atrous svgf max_history=1")
+for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" { print $2 }'); do
+  case "$p" in passthrough | accumulate) ;; *) rows+=("$p $p") ;; esac
+done
+
+# Column NAME of a `dn denoise --summary` file.
+column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
+
+results="$out/results.tsv"
+printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\te2e_ms\tbytes_per_pixel\n' > "$results"
+last=$(printf '%04d' $((frames - 1)))
+for s in $scenes; do
+  dir="$out/scene$s"
+  echo "speed_error: scene $s: rendering $frames frames + $still still frames at ${width}x${height}, references at $ref_spp spp"
+  "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/input" \
+    --reference "$ref_spp" --cache "$cache" --quiet
+  "$dnrender" --scene "$s" --frames "$still" --hold-camera 0 --width "$width" --height "$height" \
+    --out "$dir/still" --quiet
+  panels=()
+  for row in "${rows[@]}"; do
+    read -r label pipeline params <<< "$row"
+    param_args=()
+    for p in $params; do param_args+=(--param "$p"); done
+    echo "speed_error: scene $s: $label"
+    "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
+      --input "$dir/input/frame_%04d.exr" --start 0 --end $((frames - 1)) \
+      --output "$dir/$label/frame_%04d.exr" -r "$dir/input/ref_%04d.exr" --summary "$dir/$label/moving.tsv"
+    "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
+      --input "$dir/still/frame_%04d.exr" --start 0 --end $((still - 1)) --warmup $((still / 2)) \
+      --summary "$dir/$label/still.tsv"
+    m="$dir/$label/moving.tsv"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" "$(column "$m" relmse)" \
+      "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" "$(column "$m" device_ms)" \
+      "$(column "$m" e2e_ms)" "$(column "$m" device_bytes_per_pixel)" >> "$results"
+    panels+=("$dir/$label/frame_$last.exr")
+  done
+  # Detail areas (fractions of the frame) per scene.
+  case "$s" in
+    1) crops=(--crop 0.30,0.62,0.25,0.25 --crop 0.55,0.35,0.2,0.2) ;;
+    2) crops=(--crop 0.05,0.3,0.3,0.3 --crop 0.55,0.5,0.3,0.3) ;;
+    3) crops=(--crop 0.1,0.5,0.3,0.3 --crop 0.5,0.3,0.3,0.3) ;;
+    *) crops=(--crop 0.35,0.55,0.3,0.3 --crop 0.6,0.3,0.25,0.25) ;;
+  esac
+  "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panels[@]}" "$dir/input/ref_$last.exr"
+done
+
+# The table, grouped by scene.
+labels=""
+for row in "${rows[@]}"; do labels+="${row%% *} "; done
+{
+  echo "| scene | method | RMSE | relMSE | SSIM | temporal | device ms/frame | end-to-end ms/frame | device B/pixel |"
+  echo "|---|---|---|---|---|---|---|---|---|"
+  awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9 }' "$results"
+} > "$out/results.md"
+
+# The plot: relMSE against device time, one colour per scene, points labelled.
+plot_files=""
+for s in $scenes; do
+  awk -F'\t' -v s="$s" 'NR > 1 && $1 == s { print $2, ($7 > 0.01 ? $7 : 0.01), $4 }' "$results" > "$out/plot_scene$s.dat"
+  plot_files+="$s "
+done
+gnuplot <<EOF
+set terminal png size 960,600 font ",11"
+set output '$out/speed_error.png'
+set logscale xy
+set grid
+set key outside right top title 'scene'
+set xlabel 'device time per frame, ms (${width}x${height}, $device)'
+set ylabel 'relMSE against the ${ref_spp}-spp reference (mean over $frames frames)'
+set title 'Speed against error'
+files = '$plot_files'
+plot for [s in files] '$out/plot_scene'.s.'.dat' using 2:3 with points pt 7 ps 1.5 title s, \
+     for [s in files] '$out/plot_scene'.s.'.dat' using 2:3:1 with labels offset char 1,0.6 left font ",9" notitle
+EOF
+
+cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
+{
+  echo "Machine: $(nproc) cores of ${cpu:-unknown CPU}, device \`$device\`; $(date -u +%Y-%m-%d)."
+  echo "Command: \`bench/speed_error.sh --scenes \"$scenes\" --frames $frames --still $still --size $size --ref-spp $ref_spp\`."
+  echo
+  cat "$out/results.md"
+  echo
+  echo "![speed against error](images/speed_error.png)"
+  for s in $scenes; do
+    echo
+    echo "Scene $s, last moving frame: $labels| reference"
+    echo
+    echo "![scene $s](images/scene$s.png)"
+  done
+} > "$out/section.md"
+
+if [ "$docs" = 1 ]; then
+  mkdir -p docs/images
+  cp "$out/speed_error.png" docs/images/speed_error.png
+  for s in $scenes; do cp "$out/scene$s.png" "docs/images/scene$s.png"; done
+  awk -v section="$out/section.md" '
+    /<!-- speed-error:begin -->/ { print; while ((getline line < section) > 0) print line; skip = 1; next }
+    /<!-- speed-error:end -->/ { skip = 0 }
+    !skip { print }' docs/results.md > "$out/results.md.new"
+  grep -q '<!-- speed-error:begin -->' docs/results.md || { echo "speed_error: docs/results.md has no speed-error markers" >&2; exit 1; }
+  mv "$out/results.md.new" docs/results.md
+  echo "speed_error: docs/results.md and docs/images/ updated"
+fi
+
+echo
+cat "$out/section.md"
+echo
+echo "speed_error: table $out/results.md, plot $out/speed_error.png, side by side $out/scene<N>.png ($labels| reference)"
