@@ -6,7 +6,8 @@
 // Bindings: 0 FrameConstants, 1 radiance, 2 albedo, 3 normal, 4 depth, 5 motion,
 //   6 colour history, 7 aux history (single copies: read here, rewritten by
 //   svgf_variance and the feedback a-trous iteration after this pass),
-//   8 illumination (scratch), 9 guide (scratch), 10 temporal (scratch)
+//   8 illumination (scratch), 9 guide (scratch), 10 temporal (scratch),
+//   11 emission (bound to albedo and ignored unless spec constant 8)
 // Colour history: vec4(demodulated rgb, length), fp32. Aux history: uvec4(m1, m2,
 //   depth (0 = no history here) as fp32 bits, octahedral snorm16x2 normal).
 // Illumination: vec4(temporal demodulated rgb, 0) (the variance pass fills .w).
@@ -18,7 +19,10 @@
 // Specialization: 0 workgroup size, 1..5 radiance/albedo/normal/depth/motion are fp16,
 //   6 demodulate by albedo (false: the specular chain of split mode, albedo = 1),
 //   7 write the guide (false: a later chain of split mode, which reads the one
-//   the first chain wrote; binding 1 is then its signal: diffuse or specular)
+//   the first chain wrote; binding 1 is then its signal: diffuse or specular),
+//   8 subtract emission (binding 11) from the signal: radiance mode with an
+//   emission channel (radiance includes what the primary hit emits, which
+//   svgf_remodulate adds back unfiltered), 9 emission is fp16
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
@@ -33,6 +37,8 @@ layout(constant_id = 4) const bool DEPTH_HALF = false;
 layout(constant_id = 5) const bool MOTION_HALF = false;
 layout(constant_id = 6) const bool DEMODULATE = true;
 layout(constant_id = 7) const bool WRITE_GUIDE = true;
+layout(constant_id = 8) const bool SUBTRACT_EMISSION = false;
+layout(constant_id = 9) const bool EMISSION_HALF = false;
 
 layout(std430, set = 0, binding = 1) readonly buffer RadiancePlane { uint data[]; } radiance;
 layout(std430, set = 0, binding = 2) readonly buffer AlbedoPlane { uint data[]; } albedo;
@@ -44,6 +50,7 @@ layout(std430, set = 0, binding = 7) readonly buffer PrevAux { uvec4 data[]; } p
 layout(std430, set = 0, binding = 8) writeonly buffer Illumination { vec4 data[]; } illum;
 layout(std430, set = 0, binding = 9) writeonly buffer Guide { uvec4 data[]; } guide;
 layout(std430, set = 0, binding = 10) writeonly buffer Temporal { vec4 data[]; } temporal;
+layout(std430, set = 0, binding = 11) readonly buffer EmissionPlane { uint data[]; } emission;
 
 #include "svgf.glsl"
 
@@ -78,6 +85,7 @@ void main() {
   ivec2 pos = ivec2(p % size.x, p / size.x);
 
   vec3 c = dn_svgf_sanitize(DN_LOAD3(radiance, RADIANCE_HALF, p));
+  if (SUBTRACT_EMISSION) c = max(c - dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
   vec3 a = DEMODULATE ? dn_svgf_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p)) : vec3(1.0);
   vec3 d = c / a;
   float l = dn_luminance(d);

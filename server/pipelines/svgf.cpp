@@ -103,13 +103,19 @@ GraphSpec build(const SessionConfig& config) {
   auto chain = [&](ChannelId channel, const std::string& signal, const std::string& colour, const std::string& aux,
                    std::string current, std::string other, bool demodulate, bool write_guide,
                    const std::string& suffix) {
+    // Radiance includes emission; diffuse and specular do not (docs/protocol.md).
+    const bool subtract_emission = emission && channel == ChannelId::Radiance;
     PassSpec reproject;
     reproject.name = "svgf_reproject" + suffix;
     reproject.shader = "svgf_reproject";
     reproject.bindings = {{signal}, {"albedo"}, {"normal"},       {"depth"},      {"motion"},
-                          {colour}, {aux},      {current},        {"svgf_guide"}, {"svgf_temporal"}};
+                          {colour}, {aux},      {current},        {"svgf_guide"}, {"svgf_temporal"},
+                          {subtract_emission ? "emission" : "albedo"}};
     reproject.spec_constants = {{1, is_half(channel_format(config, channel))}, {2, albedo_half}, {3, normal_half},
                                 {4, depth_half}, {5, motion_half}};
+    if (subtract_emission)
+      reproject.spec_constants.insert(reproject.spec_constants.end(),
+                                      {{8, 1u}, {9, is_half(channel_format(config, ChannelId::Emission))}});
     if (!demodulate) reproject.spec_constants.push_back({6, 0u});
     if (!write_guide) reproject.spec_constants.push_back({7, 0u});
     reproject.pixels_per_invocation = 1;

@@ -293,25 +293,24 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   return cur;
   };
 
+  // Emission, sanitized like radiance; it is added back after filtering.
+  const std::vector<double> e = f.emission.empty() ? std::vector<double>(3 * n, 0.0) : sanitize(f.emission);
   std::vector<double> cur, spec;
   if (split) {
     cur = filter(chains_[0], sanitize(f.diffuse), a);
     spec = filter(chains_[1], sanitize(f.specular), std::vector<double>(3 * n, 1.0));
   } else {
-    cur = filter(chains_[0], sanitize(f.radiance), a);
+    // Radiance includes what the primary hit emits: filter radiance - emission (>= 0).
+    std::vector<double> c = sanitize(f.radiance);
+    for (int i = 0; i < 3 * n; ++i) c[i] = std::max(c[i] - e[i], 0.0);
+    cur = filter(chains_[0], c, a);
   }
 
   // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) {
-      double e = 0.0;
-      if (!f.emission.empty()) {
-        const double v = f.emission[3 * i + k];
-        e = (std::isfinite(v) && v > 0.0 && v <= 1e12) ? v : 0.0;
-      }
-      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] : 0.0) + e;
-    }
+    for (int k = 0; k < 3; ++k)
+      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] : 0.0) + e[3 * i + k];
 
   remodulated_ = out;
   // Pass 5 (taa_alpha > 0): previous final output at p + mv (bilinear over

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <random>
 
 #include "frames.hpp"
 #include "gpu_test_env.hpp"
@@ -223,6 +224,101 @@ TEST_F(SvgfTest, BadRadianceNeverReachesOutputOrHistoryAndPixelsRecover) {
   for (int i = 0; i < 3 * n; ++i) EXPECT_NEAR(out[i], value, 0.01 * value) << i;
 }
 
+// A bright square in front of an all-black backdrop jumps away: the region it
+// uncovers has only black history and black neighbours (zero moments, zero
+// variance), so it must come out exactly black, not a ghost of the square and
+// not 0/0.
+TEST_F(SvgfTest, AllBlackDisoccludedRegionStaysBlack) {
+  const int w = 64, h = 40, n = w * h;
+  Flat scene(w, h, 8.0f);
+  auto square = [&](int x0) {
+    std::vector<float> radiance(3 * n, 0.0f);
+    for (int i = 0; i < n; ++i) {
+      const int x = i % w, y = i / w;
+      const bool in = x >= x0 && x < x0 + 12 && y >= 14 && y < 26;
+      scene.depth[i] = in ? 2.0f : 8.0f;
+      for (int k = 0; k < 3; ++k) radiance[3 * i + k] = in ? 10.0f : 0.0f;
+    }
+    return radiance;
+  };
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (int t = 0; t < 6; ++t) run(*pipe, scene.frame(square(4)));
+  for (int t = 0; t < 3; ++t) {
+    const auto out = run(*pipe, scene.frame(square(48)));  // static camera: zero motion
+    for (int i = 0; i < n; ++i) {
+      const int x = i % w, y = i / w;
+      for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(out[3 * i + k]));
+      if (x >= 4 && x < 16 && y >= 14 && y < 26)
+        for (int k = 0; k < 3; ++k) ASSERT_EQ(out[3 * i + k], 0.0f) << "frame " << t << " pixel " << x << "," << y;
+    }
+  }
+}
+
+// A dark surface that, as at well under one sample per pixel, gets a sample
+// in one pixel of 16 (value 16 L, mean L) and exact zeros elsewhere, in front
+// of a lit noisy wall: finite, non-negative (zero moments and zero variance
+// are the common case there), and the region's mean output tends to L as the
+// sparse samples accumulate (not to 0, not to the lit level). The depth edge
+// keeps the wall out; on one surface SVGF's luminance edge-stopping (10 sigma
+// by default) would let the lit side bleed in over the a-trous footprint.
+TEST_F(SvgfTest, SparseDarkRegionConvergesToItsMean) {
+  const int w = 64, h = 48, n = w * h;
+  const float lit = 2.0f, dark = 0.05f;
+  Flat scene(w, h);
+  auto inside = [&](int i) { return i % w >= 16 && i % w < 48 && i / w >= 12 && i / w < 36; };
+  for (int i = 0; i < n; ++i)
+    if (inside(i)) scene.depth[i] = 1.5f;
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> noise(0.5f, 1.5f);
+  std::uniform_int_distribution<int> pick(0, 15);
+  std::vector<float> radiance(3 * n), out;
+  double region_mean = 0.0;
+  for (int t = 0; t < 40; ++t) {
+    for (int i = 0; i < n; ++i) {
+      const float v = inside(i) ? (pick(rng) == 0 ? 16.0f * dark : 0.0f) : lit * noise(rng);
+      for (int k = 0; k < 3; ++k) radiance[3 * i + k] = v;
+    }
+    out = run(*pipe, scene.frame(radiance));
+    for (float v : out) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << v;
+  }
+  // The mean over the region away from its border (the lit side bleeds in over a pixel or two).
+  int count = 0;
+  for (int i = 0; i < n; ++i)
+    if (i % w >= 20 && i % w < 44 && i / w >= 16 && i / w < 32) {
+      region_mean += out[3 * i];
+      ++count;
+    }
+  region_mean /= count;
+  std::printf("[ info     ] sparse dark region: mean output %.4f (mean input %.4f, lit %.1f)\n", region_mean, dark, lit);
+  EXPECT_NEAR(region_mean, dark, 0.25 * dark);
+}
+
+// Radiance includes what the primary hit emits; with the emission channel
+// declared, an emitter's pixels must come out at their radiance, not at
+// radiance + emission (the emitted part is added back once, unfiltered).
+TEST_F(SvgfTest, EmitterIsNotCountedTwice) {
+  const int w = 48, h = 32, n = w * h;
+  Flat scene(w, h);
+  std::vector<float> radiance(3 * n), emission(3 * n, 0.0f);
+  for (int i = 0; i < n; ++i) {
+    const bool light = i % w >= 16 && i % w < 32 && i / w >= 8 && i / w < 24;
+    for (int k = 0; k < 3; ++k) {
+      emission[3 * i + k] = light ? 7.0f + k : 0.0f;
+      radiance[3 * i + k] = light ? 7.0f + k : 0.5f;
+      if (light) scene.albedo[3 * i + k] = 0.0f;
+    }
+    if (light) scene.depth[i] = 2.0f;  // a lamp in front of a wall
+  }
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
+  for (int t = 0; t < 4; ++t) {
+    test::HostFrame f = scene.frame(radiance);
+    f.add(ChannelId::Emission, Format::F32, emission);
+    const auto out = run(*pipe, f);
+    for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(out[i], radiance[i], 1e-5 * radiance[i]) << "frame " << t << " " << i;
+  }
+}
+
 // Zero, tiny, negative and non-finite albedo: not demodulated (factor 1), output finite.
 TEST_F(SvgfTest, ZeroAlbedoGivesFiniteOutput) {
   const int w = 32, h = 24, n = w * h;
@@ -370,7 +466,7 @@ TEST_F(SvgfTest, SplitMatchesCpuReferenceOverFrames) {
   }
 }
 
-// Split mode with specular = 0 is radiance mode with radiance = diffuse.
+// Split mode with specular = 0 is radiance mode with radiance = diffuse + emission.
 TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
   const int w = 80, h = 56;
   auto radiance_pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
@@ -380,7 +476,10 @@ TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
   for (int t = 0; t < 6; ++t) {
     SCOPED_TRACE(testing::Message() << "frame " << t);
     const SvgfScene s = scene.frame(t);
-    const auto want = run(*radiance_pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
+    SvgfScene with_emission = s;  // radiance = diffuse + specular (0) + emission
+    for (size_t i = 0; i < s.radiance.size(); ++i) with_emission.radiance[i] = s.radiance[i] + s.emission[i];
+    const auto want =
+        run(*radiance_pipe, host_frame(with_emission, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
     const auto got =
         run(*split_pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true, &zero));
     ASSERT_EQ(got.size(), want.size());
