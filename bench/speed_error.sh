@@ -61,18 +61,20 @@ for _ in $(seq 1 300); do [ -S "$socket" ] && break; sleep 0.1; done
 server_url="unix://$socket"
 device=$("$dn" ping --server "$server_url" --count 1 | sed -n '1s/.* on //p')
 
-# Rows: "label pipeline [NAME=VALUE ...]". The baselines first, then every
-# other pipeline the server offers (new ones are picked up without changes).
+# Rows: "label pipeline [NAME=VALUE | channels=LIST ...]". The baselines
+# first, then every other pipeline the server offers (new ones are picked up
+# without changes), then svgf on the split lighting (diffuse + specular).
 rows=("noisy passthrough" "accumulate accumulate" "atrous svgf max_history=1")
 for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" { print $2 }'); do
   case "$p" in passthrough | accumulate) ;; *) rows+=("$p $p") ;; esac
 done
+rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emission")
 
 # Column NAME of a `dn denoise --summary` file.
 column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 
 results="$out/results.tsv"
-printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\te2e_ms\tbytes_per_pixel\n' > "$results"
+printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\n' > "$results"
 last=$(printf '%04d' $((frames - 1)))
 for s in $scenes; do
   dir="$out/scene$s"
@@ -85,7 +87,9 @@ for s in $scenes; do
   for row in "${rows[@]}"; do
     read -r label pipeline params <<< "$row"
     param_args=()
-    for p in $params; do param_args+=(--param "$p"); done
+    for p in $params; do
+      case "$p" in channels=*) param_args+=(--channels "${p#channels=}") ;; *) param_args+=(--param "$p") ;; esac
+    done
     echo "speed_error: scene $s: $label"
     "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
       --input "$dir/input/frame_%04d.exr" --start 0 --end $((frames - 1)) \
@@ -96,7 +100,8 @@ for s in $scenes; do
     m="$dir/$label/moving.tsv"
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" "$(column "$m" relmse)" \
       "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" "$(column "$m" device_ms)" \
-      "$(column "$m" e2e_ms)" "$(column "$m" device_bytes_per_pixel)" >> "$results"
+      "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" \
+      "$(column "$m" device_bytes_per_pixel)" >> "$results"
     panels+=("$dir/$label/frame_$last.exr")
   done
   # Detail areas (fractions of the frame) per scene.
