@@ -16,6 +16,7 @@
 #include "dn/protocol/codec.hpp"
 #include "server/log.hpp"
 #include "server/net/auth.hpp"
+#include "server/pipelines/fb_lut.hpp"
 
 namespace dn::server {
 namespace {
@@ -81,6 +82,15 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
     : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
   std::random_device rd;
   session_ids_.seed((uint64_t{rd()} << 32) ^ rd());
+
+  // The F_beta table (svgf-fb): computed once per device before any session
+  // can ask for it, then shared read-only (a second Server on the same
+  // context reuses it and reports the first computation's time).
+  const pipelines::FbLut& fb = pipelines::fb_lut(device_);
+  log::info("fb_lut", {{"size", std::to_string(pipelines::kFbLutSize) + "x" + std::to_string(pipelines::kFbLutSize)},
+                       {"samples", pipelines::kFbLutSamples},
+                       {"compute_ms", fb.compute_ms()},
+                       {"device", device_name_}});
 
   std::vector<net::Endpoint> endpoints;
   for (const std::string& url : options_.listen) {
@@ -629,6 +639,7 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
   uint64_t device_bytes = 0;  // held by open sessions; a closed one's is freed once its last frame leaves the device
   for (auto& [id, s] : sessions_) device_bytes += s->device_bytes();
   add("device_bytes", static_cast<double>(device_bytes));
+  add("fb_lut_ms", pipelines::fb_lut(device_).compute_ms());  // computed at start-up: a lookup here
   for (const auto& [id, s] : sessions_) {  // lets a watcher find a session to ATTACH to
     if (st.values.size() >= 200) break;
     add("session." + std::to_string(id) + ".frames", static_cast<double>(s->frames_processed));

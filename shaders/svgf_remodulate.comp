@@ -14,10 +14,13 @@
 //   6 depth, 7 motion, 8 TAA history (previous final output, 3 fp32 per pixel),
 //   9 TAA current: vec4(current rgb, 1 if the history is usable here else 0),
 //   10 TAA previous: vec4(reprojected previous final output, 0)
-//   (6..10 are bound to stand-ins and ignored without TAA)
+//   (6..10 are bound to stand-ins and ignored without TAA),
+//   11 specular factor (svgf-fb: F_beta, 3 fp32 per pixel, guarded like
+//   albedo; bound to albedo and ignored otherwise)
 // Specialization: 0 workgroup size, 1 albedo is fp16, 2 emission is fp16,
 //   3 the session has emission, 4 output is fp16, 5 split mode (add binding 5),
-//   6 TAA (write bindings 9 and 10 instead of Output), 7 depth is fp16, 8 motion is fp16
+//   6 TAA (write bindings 9 and 10 instead of Output), 7 depth is fp16, 8 motion is fp16,
+//   9 multiply the specular illumination by binding 11 (svgf-fb)
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
@@ -32,6 +35,7 @@ layout(constant_id = 5) const bool HAS_SPECULAR = false;
 layout(constant_id = 6) const bool TAA = false;
 layout(constant_id = 7) const bool DEPTH_HALF = false;
 layout(constant_id = 8) const bool MOTION_HALF = false;
+layout(constant_id = 9) const bool SPECULAR_FACTOR = false;
 
 layout(std430, set = 0, binding = 1) readonly buffer Illumination { vec4 data[]; } illum;
 layout(std430, set = 0, binding = 2) readonly buffer AlbedoPlane { uint data[]; } albedo;
@@ -43,12 +47,14 @@ layout(std430, set = 0, binding = 7) readonly buffer MotionPlane { uint data[]; 
 layout(std430, set = 0, binding = 8) readonly buffer TaaHistory { float data[]; } taa_history;
 layout(std430, set = 0, binding = 9) writeonly buffer TaaCurrent { vec4 data[]; } taa_current;
 layout(std430, set = 0, binding = 10) writeonly buffer TaaPrevious { vec4 data[]; } taa_previous;
+layout(std430, set = 0, binding = 11) readonly buffer SpecularFactor { uint data[]; } specular_factor;
 
 #include "svgf_guards.glsl"
 
 vec3 remodulate(uint p) {
   vec3 c = illum.data[p].rgb * dn_svgf_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
-  if (HAS_SPECULAR) c += specular.data[p].rgb;
+  if (HAS_SPECULAR)
+    c += specular.data[p].rgb * (SPECULAR_FACTOR ? dn_svgf_albedo(DN_LOAD3(specular_factor, false, p)) : vec3(1.0));
   if (HAS_EMISSION) c += dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;
 }

@@ -229,6 +229,7 @@ void Context::create_device() {
 Context::~Context() {
   if (device_) {
     vkDeviceWaitIdle(device_);  // result ignored: nothing useful to do on loss at teardown
+    shared_.clear();  // shared resources (buffers, kernels) before the cache and the device
     kernels_.reset();
     vkDestroyDevice(device_, nullptr);
   }

@@ -13,9 +13,12 @@
 #include <atomic>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <typeindex>
+#include <unordered_map>
 #include <vector>
 
 #include "gpu/devices.hpp"
@@ -84,6 +87,20 @@ class Context {
 
   KernelCache& kernels() { return *kernels_; }
 
+  // Per-context shared resources, one object per type T (e.g. the F_beta
+  // table, pipelines::fb_lut): the first call makes it with `make`, later
+  // calls return the same object. Thread-safe: concurrent first callers wait
+  // for the one construction (a recursive mutex, so `make` may itself ask for
+  // another type); if `make` throws, nothing is stored and the next call
+  // tries again. Destroyed before the device (and the kernel cache).
+  template <class T>
+  T& shared(const std::function<std::unique_ptr<T>()>& make) {
+    std::lock_guard lock(shared_mutex_);
+    std::shared_ptr<void>& slot = shared_[std::type_index(typeid(T))];
+    if (!slot) slot = std::shared_ptr<T>(make());
+    return *static_cast<T*>(slot.get());
+  }
+
   struct ValidationState {
     std::atomic<uint64_t> count{0};
     bool print = true;
@@ -111,6 +128,8 @@ class Context {
   std::atomic<bool> lost_{false};
   bool force_staging_ = false;
   std::unique_ptr<KernelCache> kernels_;
+  std::recursive_mutex shared_mutex_;
+  std::unordered_map<std::type_index, std::shared_ptr<void>> shared_;
 };
 
 }  // namespace dn::gpu

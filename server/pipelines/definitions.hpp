@@ -23,6 +23,7 @@ struct PipelineDefinition {
 PipelineDefinition passthrough_definition();
 PipelineDefinition accumulate_definition();
 PipelineDefinition svgf_definition();
+PipelineDefinition svgf_fb_definition();
 
 // All definitions in a stable order; find_definition returns nullptr if unknown.
 const std::vector<PipelineDefinition>& definitions();

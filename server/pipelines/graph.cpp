@@ -2,11 +2,16 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
+#include <glm/glm.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
 #include "dn/shaders/shaders.hpp"
 #include "gpu/error.hpp"
+#include "pipelines/fb_lut.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -20,6 +25,18 @@ double ms_since(Clock::time_point t0) {
 const char* channel_name(protocol::ChannelId id) {
   const auto* c = protocol::find_channel(id);
   return c ? c->name.data() : "?";
+}
+
+// (projection * view)^-1; the identity when it is singular or not finite
+// (a client that sends no real camera), so no pass ever reads NaN from it.
+void inverse_view_projection(const protocol::FrameInfo& info, float out[16]) {
+  const glm::mat4 vp = glm::make_mat4(info.projection.data()) * glm::make_mat4(info.view.data());
+  glm::mat4 inv = glm::inverse(vp);
+  bool finite = std::isfinite(glm::determinant(vp)) && glm::determinant(vp) != 0.0f;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) finite = finite && std::isfinite(inv[c][r]);
+  if (!finite) inv = glm::mat4(1.0f);
+  std::memcpy(out, glm::value_ptr(inv), 16 * sizeof(float));
 }
 
 }  // namespace
@@ -94,6 +111,18 @@ void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
   buffers.push_back(std::move(b));
 }
 
+void GraphSpec::add_shared(std::string name) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Shared;  // bytes 0: the context holds it for every session
+  buffers.push_back(std::move(b));
+}
+
+const gpu::Buffer& shared_buffer(gpu::Context& context, const std::string& name) {
+  if (name == "fb_lut") return fb_lut(context).buffer();
+  throw std::logic_error("pipeline graph: unknown shared buffer " + name);
+}
+
 GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
   for (auto& n : nodes_)
     if (n.spec->name == name) return n;
@@ -102,6 +131,7 @@ GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
 
 const gpu::Buffer& GraphPipeline::bound(const BindingRef& ref, uint32_t parity) {
   Node& n = node(ref.buffer);
+  if (n.shared) return *n.shared;
   uint32_t copy = 0;
   if (n.spec->role == BufferRole::History) copy = ref.slot == Slot::Current ? parity : parity ^ 1u;
   return n.copies[copy];
@@ -114,7 +144,7 @@ void GraphPipeline::set_capture(bool on) {
     if (!on) continue;
     for (const auto& ref : pass.spec->bindings) {
       const BufferSpec* b = spec_.find(ref.buffer);
-      if (b->role == BufferRole::Input) continue;
+      if (b->role == BufferRole::Input || b->role == BufferRole::Shared) continue;
       pass.captures.push_back({ref.buffer, ref.slot,
                                gpu::Buffer(context_, b->bytes, gpu::BufferKind::StorageDownload,
                                            pass.spec->name + ":" + ref.buffer)});
@@ -165,6 +195,10 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
     for (const auto& b : spec_.buffers) {
       Node& n = nodes_.emplace_back();
       n.spec = &b;
+      if (b.role == BufferRole::Shared) {
+        n.shared = &shared_buffer(context, b.name);
+        continue;
+      }
       gpu::BufferKind kind = gpu::BufferKind::Storage;
       if (b.role == BufferRole::Input) kind = gpu::BufferKind::StorageUpload;
       if (b.role == BufferRole::Output) kind = gpu::BufferKind::StorageDownload;
@@ -283,6 +317,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
       throw std::invalid_argument("unknown motion convention");
   }
   std::copy(spec_.parameters.begin(), spec_.parameters.end(), constants.params);
+  inverse_view_projection(frame.info, constants.inverse_view_projection);
   uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);
 

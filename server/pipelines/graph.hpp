@@ -39,13 +39,16 @@ struct FrameConstants {
   uint32_t size[4];    // width, height, pixel count, flags
   float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
   float params[kMaxParameters];
+  float inverse_view_projection[16];  // (projection * view)^-1 of the frame, column-major: clip -> world
 };
-static_assert(sizeof(FrameConstants) == 96);
+static_assert(sizeof(FrameConstants) == 160);
 
 inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
 inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass
 
-enum class BufferRole { Input, Output, History, Scratch, Persistent };
+// Shared: a read-only device buffer the context holds for every session
+// (shared_buffer() below); bound, never allocated or counted per session.
+enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared };
 enum class Slot { Current, Previous };
 
 struct BufferSpec {
@@ -90,7 +93,11 @@ struct GraphSpec {
   void add_output(const SessionConfig& config);
   void add_history(std::string name, uint64_t bytes_per_pixel);
   void add_persistent(std::string name, uint64_t bytes_per_pixel);
+  void add_shared(std::string name);
 };
+
+// The context-wide buffer a Shared binding names ("fb_lut": the F_beta table).
+const gpu::Buffer& shared_buffer(gpu::Context& context, const std::string& name);
 
 uint64_t round_up4(uint64_t bytes);
 // The declared format of a channel (F32 if it is not declared).
@@ -121,7 +128,8 @@ class GraphPipeline final : public Pipeline {
  private:
   struct Node {
     const BufferSpec* spec = nullptr;
-    gpu::Buffer copies[2];  // History: [parity]; otherwise copies[0] only
+    gpu::Buffer copies[2];               // History: [parity]; otherwise copies[0] only
+    const gpu::Buffer* shared = nullptr;  // Shared: the context's buffer
   };
   struct Capture {
     std::string buffer;

@@ -20,10 +20,21 @@ const std::vector<ParameterDef>& parameter_table() {
   return table;
 }
 
+namespace {
+
+// The parameters.def groups a pipeline takes: svgf-fb is svgf (same shaders,
+// same slots) plus its own rows.
+bool takes(std::string_view pipeline, std::string_view group) {
+  if (pipeline == "svgf-fb") return group == "svgf" || group == "svgf_fb";
+  return group == pipeline;
+}
+
+}  // namespace
+
 std::vector<ParameterInfo> parameters_of(std::string_view pipeline) {
   std::vector<ParameterInfo> out;
   for (const auto& row : parameter_table())
-    if (row.pipeline == pipeline) out.push_back(row.info);
+    if (takes(pipeline, row.pipeline)) out.push_back(row.info);
   return out;
 }
 
@@ -31,7 +42,7 @@ std::array<float, kMaxParameters> resolve_parameters(std::string_view pipeline,
                                                      const std::vector<protocol::Parameter>& values) {
   std::array<float, kMaxParameters> out{};
   for (const auto& row : parameter_table()) {
-    if (row.pipeline != pipeline) continue;
+    if (!takes(pipeline, row.pipeline)) continue;
     double v = row.info.default_value;
     for (const auto& p : values)
       if (p.name == row.info.name) v = p.value;

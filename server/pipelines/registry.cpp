@@ -35,7 +35,7 @@ ConfigError error(protocol::ErrorCode code, std::string field, std::string messa
 
 const std::vector<PipelineDefinition>& definitions() {
   static const std::vector<PipelineDefinition> all = {passthrough_definition(), accumulate_definition(),
-                                                       svgf_definition()};
+                                                       svgf_definition(), svgf_fb_definition()};
   return all;
 }
 

@@ -32,6 +32,8 @@ constexpr uint64_t kIlluminationBytes = 16;
 // temporal vec4(m1, m2, length, luminance), written by svgf_reproject.
 constexpr uint64_t kGuideBytes = 16;
 constexpr uint64_t kTemporalBytes = 16;
+// svgf-fb scratch, per pixel: F_beta rgb fp32 (svgf_fb_factor).
+constexpr uint64_t kFbFactorBytes = 12;
 // a-trous register block: one invocation filters kAtrousBlock^2 pixels.
 constexpr uint32_t kAtrousBlock = 4;
 // svgf_variance register block: kVarianceBlock^2 pixels per invocation.
@@ -41,6 +43,7 @@ constexpr uint32_t kVarianceBlock = 2;
 constexpr uint32_t kIterationsSlot = 3;
 constexpr uint32_t kFeedbackSlot = 4;
 constexpr uint32_t kTaaAlphaSlot = 8;
+constexpr uint32_t kSpecularDemodulatedSlot = 9;  // svgf-fb
 
 bool has_channel(const SessionConfig& config, ChannelId id) {
   for (const auto& c : config.channels)
@@ -53,6 +56,8 @@ GraphSpec build(const SessionConfig& config) {
   const bool emission = has_channel(config, ChannelId::Emission);
   // Split mode (validate() guarantees Diffuse and Specular together, without Radiance).
   const bool split = has_channel(config, ChannelId::Diffuse);
+  // svgf-fb: split mode with the specular signal demodulated by F_beta (always split).
+  const bool fb = config.pipeline == "svgf-fb";
   if (split) {
     g.add_input(config, ChannelId::Diffuse, "diffuse");
     g.add_input(config, ChannelId::Specular, "specular");
@@ -64,6 +69,11 @@ GraphSpec build(const SessionConfig& config) {
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   if (emission) g.add_input(config, ChannelId::Emission, "emission");
+  if (fb) {
+    g.add_input(config, ChannelId::SpecularF0, "specular_f0");
+    g.add_input(config, ChannelId::Roughness, "roughness");
+    g.add_shared("fb_lut");
+  }
   g.add_persistent("svgf_colour", kColourHistoryBytes);
   g.add_persistent("svgf_aux", kAuxHistoryBytes);
   if (split) {
@@ -90,6 +100,13 @@ GraphSpec build(const SessionConfig& config) {
     b.bytes = round_up4(pixels * bytes);
     g.buffers.push_back(std::move(b));
   }
+  if (fb) {
+    BufferSpec b;
+    b.name = "svgf_fb";
+    b.role = BufferRole::Scratch;
+    b.bytes = round_up4(pixels * kFbFactorBytes);
+    g.buffers.push_back(std::move(b));
+  }
   g.add_output(config);
 
   const uint32_t albedo_half = is_half(channel_format(config, ChannelId::Albedo));
@@ -100,18 +117,22 @@ GraphSpec build(const SessionConfig& config) {
   // One reproject / variance / a-trous chain over `signal`; returns the
   // buffer holding its final illumination. The first chain writes the guide
   // (spec constant 7), the others only read what it wrote.
+  // demodulator: the plane the signal is divided by ("albedo", or svgf-fb's
+  // "svgf_fb"), "" for none.
   auto chain = [&](ChannelId channel, const std::string& signal, const std::string& colour, const std::string& aux,
-                   std::string current, std::string other, bool demodulate, bool write_guide,
+                   std::string current, std::string other, const std::string& demodulator, bool write_guide,
                    const std::string& suffix) {
+    const bool demodulate = !demodulator.empty();
+    const uint32_t demodulator_half = demodulator == "albedo" ? albedo_half : 0u;
     // Radiance includes emission; diffuse and specular do not (docs/protocol.md).
     const bool subtract_emission = emission && channel == ChannelId::Radiance;
     PassSpec reproject;
     reproject.name = "svgf_reproject" + suffix;
     reproject.shader = "svgf_reproject";
-    reproject.bindings = {{signal}, {"albedo"}, {"normal"},       {"depth"},      {"motion"},
+    reproject.bindings = {{signal}, {demodulate ? demodulator : "albedo"}, {"normal"}, {"depth"}, {"motion"},
                           {colour}, {aux},      {current},        {"svgf_guide"}, {"svgf_temporal"},
                           {subtract_emission ? "emission" : "albedo"}};
-    reproject.spec_constants = {{1, is_half(channel_format(config, channel))}, {2, albedo_half}, {3, normal_half},
+    reproject.spec_constants = {{1, is_half(channel_format(config, channel))}, {2, demodulator_half}, {3, normal_half},
                                 {4, depth_half}, {5, motion_half}};
     if (subtract_emission)
       reproject.spec_constants.insert(reproject.spec_constants.end(),
@@ -145,16 +166,30 @@ GraphSpec build(const SessionConfig& config) {
     return current;
   };
 
+  if (fb) {
+    PassSpec factor;
+    factor.name = factor.shader = "svgf_fb_factor";
+    factor.bindings = {{"specular_f0"}, {"roughness"}, {"normal"}, {"depth"}, {"fb_lut"}, {"svgf_fb"}};
+    factor.spec_constants = {{1, is_half(channel_format(config, ChannelId::SpecularF0))},
+                             {2, is_half(channel_format(config, ChannelId::Roughness))},
+                             {3, normal_half},
+                             {4, depth_half}};
+    factor.pixels_per_invocation = 1;
+    g.passes.push_back(std::move(factor));
+  }
+
   std::string diffuse_result, specular_result;
   if (split) {
     diffuse_result = chain(ChannelId::Diffuse, "diffuse", "svgf_colour", "svgf_aux", "svgf_illum_a", "svgf_illum_b",
-                           true, true, "_diffuse");
+                           "albedo", true, "_diffuse");
     const std::string spare = diffuse_result == "svgf_illum_a" ? "svgf_illum_b" : "svgf_illum_a";
+    // svgf-fb divides by F_beta unless the client sent L_W already.
+    const bool divide_by_fb = fb && g.parameters[kSpecularDemodulatedSlot] == 0.0f;
     specular_result = chain(ChannelId::Specular, "specular", "svgf_spec_colour", "svgf_spec_aux", "svgf_illum_c",
-                            spare, false, false, "_specular");
+                            spare, divide_by_fb ? "svgf_fb" : "", false, "_specular");
   } else {
     diffuse_result = chain(ChannelId::Radiance, "radiance", "svgf_colour", "svgf_aux", "svgf_illum_a",
-                           "svgf_illum_b", true, true, "");
+                           "svgf_illum_b", "albedo", true, "");
   }
 
   // With TAA, svgf_remodulate writes the current colour to svgf_temporal and
@@ -172,12 +207,14 @@ GraphSpec build(const SessionConfig& config) {
                          {"motion"},
                          {taa ? "svgf_taa" : "albedo"},
                          {"svgf_temporal"},
-                         {"svgf_guide"}};
+                         {"svgf_guide"},
+                         {fb ? "svgf_fb" : "albedo"}};
   remodulate.spec_constants = {{1, albedo_half},
                                {2, emission ? is_half(channel_format(config, ChannelId::Emission)) : 0u},
                                {3, emission ? 1u : 0u},
                                {4, is_half(config.output_format)},
-                               {5, split ? 1u : 0u}};
+                               {5, split ? 1u : 0u},
+                               {9, fb ? 1u : 0u}};
   if (taa) remodulate.spec_constants.insert(remodulate.spec_constants.end(), {{6, 1u}, {7, depth_half}, {8, motion_half}});
   g.passes.push_back(std::move(remodulate));
 
@@ -240,6 +277,24 @@ PipelineDefinition svgf_definition() {
   d.description.parameters = parameters_of("svgf");
   d.build = build;
   d.check_channels = check_channels;
+  return d;
+}
+
+PipelineDefinition svgf_fb_definition() {
+  PipelineDefinition d;
+  d.description.name = "svgf-fb";
+  d.description.summary =
+      "svgf on split lighting with BRDF pre-integration demodulation (paper 000): diffuse divided by albedo, "
+      "specular by F_beta = F0 * A + B from a GGX table computed on the device at start-up; both filtered as "
+      "svgf and remodulated. Parameter specular_demodulated = 1 takes L_W (Eq. 11) in the specular channel.";
+  d.description.required_channels =
+      protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular) |
+      protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
+      protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
+      protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Emission);
+  d.description.parameters = parameters_of("svgf-fb");
+  d.build = build;
   return d;
 }
 

@@ -1,6 +1,6 @@
 // Per-frame constants (uniform buffer, set 0 binding 0 in every pass) and the
 // invocation index of the linear dispatch. Mirrors dn::pipelines::FrameConstants
-// in server/pipelines/graph.hpp (std140, 96 bytes).
+// in server/pipelines/graph.hpp (std140, 160 bytes).
 #ifndef DN_FRAME_GLSL
 #define DN_FRAME_GLSL
 
@@ -15,6 +15,7 @@ layout(std140, set = 0, binding = 0) uniform FrameConstants {
   uvec4 size;       // x: width, y: height, z: pixel count, w: flags (DN_FLAG_*)
   vec4 motion;      // xy: scale that turns the client's motion vectors into pixels to the previous frame
   vec4 params[4];   // tunables, indexed by DN_P_* constants
+  mat4 inverse_view_projection;  // (projection * view)^-1: clip space -> world (identity without a camera)
 } frame;
 
 #define DN_PARAM_VALUE(index) (frame.params[(index) >> 2][(index) & 3u])

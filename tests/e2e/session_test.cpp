@@ -125,6 +125,17 @@ TEST(Session, Fp16InputsAndOutput) {
   EXPECT_EQ(h, protocol::float_to_half(0.333f));
 }
 
+// The F_beta table is computed at start-up and its time reported, before any session.
+TEST(Session, StatsReportTheFbLutComputeTime) {
+  ServerProcess server;
+  RawClient c(server.tcp_url());
+  c.hello();
+  const auto st = stats(c);
+  ASSERT_TRUE(st.count("fb_lut_ms"));
+  EXPECT_GT(st.at("fb_lut_ms"), 0.0);
+  EXPECT_LT(st.at("fb_lut_ms"), 60000.0);
+}
+
 TEST(Session, CloseFreesDeviceMemoryAndWaitsForFrames) {
   ServerProcess server;
   RawClient c(server.tcp_url());

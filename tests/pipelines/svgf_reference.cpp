@@ -295,10 +295,17 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
 
   // Emission, sanitized like radiance; it is added back after filtering.
   const std::vector<double> e = f.emission.empty() ? std::vector<double>(3 * n, 0.0) : sanitize(f.emission);
+  // The specular factor (svgf-fb's F_beta), guarded like albedo.
+  std::vector<double> sf(3 * n, 1.0);
+  if (!f.specular_factor.empty())
+    for (int i = 0; i < 3 * n; ++i) {
+      const double v = f.specular_factor[i];
+      sf[i] = (std::isfinite(v) && v >= static_cast<double>(1e-3f)) ? v : 1.0;
+    }
   std::vector<double> cur, spec;
   if (split) {
     cur = filter(chains_[0], sanitize(f.diffuse), a);
-    spec = filter(chains_[1], sanitize(f.specular), std::vector<double>(3 * n, 1.0));
+    spec = filter(chains_[1], sanitize(f.specular), f.specular_demodulated ? std::vector<double>(3 * n, 1.0) : sf);
   } else {
     // Radiance includes what the primary hit emits: filter radiance - emission (>= 0).
     std::vector<double> c = sanitize(f.radiance);
@@ -310,7 +317,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k)
-      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] : 0.0) + e[3 * i + k];
+      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] * sf[3 * i + k] : 0.0) + e[3 * i + k];
 
   remodulated_ = out;
   // Pass 5 (taa_alpha > 0): previous final output at p + mv (bilinear over

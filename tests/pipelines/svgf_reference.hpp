@@ -26,9 +26,15 @@ struct SvgfParams {
 // own chain of the same passes (diffuse demodulated by albedo, specular with
 // albedo 1) with its own history, and the output is diffuse x albedo +
 // specular + emission.
+// svgf-fb: specular_factor holds F_beta per pixel (3 per pixel; empty = 1),
+// guarded like albedo; the specular chain is divided by it unless
+// specular_demodulated (the signal is L_W already), and its result is
+// multiplied by it at remodulation.
 struct SvgfFrame {
   std::vector<double> radiance, albedo, normal, depth, motion, emission;
   std::vector<double> diffuse, specular;
+  std::vector<double> specular_factor;
+  bool specular_demodulated = false;
   bool reset = false;
 };
 

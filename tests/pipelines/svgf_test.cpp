@@ -248,8 +248,9 @@ TEST_F(SvgfTest, AllBlackDisoccludedRegionStaysBlack) {
     for (int i = 0; i < n; ++i) {
       const int x = i % w, y = i / w;
       for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(out[3 * i + k]));
-      if (x >= 4 && x < 16 && y >= 14 && y < 26)
+      if (x >= 4 && x < 16 && y >= 14 && y < 26) {
         for (int k = 0; k < 3; ++k) ASSERT_EQ(out[3 * i + k], 0.0f) << "frame " << t << " pixel " << x << "," << y;
+      }
     }
   }
 }
@@ -386,10 +387,10 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12+12+4+8, history 16+16 (one copy), scratch 4*16 (2 illumination, guide, temporal),
-  // output 12 = 156 B/px, + 96 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + 96);
+  // output 12 = 156 B/px, + 160 B of constants.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + 160);
   // fp16 planes: 6+6+6+2+4 + 32 + 64 + 6 = 126 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + 96);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + 160);
 }
 
 TEST(SvgfValidate, ChannelsAndParameters) {
@@ -512,11 +513,11 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16), scratch 5*16 (3 illumination,
-  // guide, temporal), output 12 = 216 B/px, + 96 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + 96);
+  // guide, temporal), output 12 = 216 B/px, + 160 B of constants.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + 160);
   // fp16 planes: 6+6+6+6+2+4 + 64 + 80 + 6 = 180 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 180 + 96);
+            64u * 48 * 180 + 160);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -620,9 +621,9 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
   }
   // 156 B/px without TAA + 12 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 168 + 96);
+            64u * 48 * 168 + 160);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 138 + 96);
+            64u * 48 * 138 + 160);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

@@ -28,9 +28,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateAndSvgf) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfAndSvgfFb) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 3u);
+  ASSERT_EQ(all.size(), 4u);
   EXPECT_EQ(all[2].name, "svgf");
   EXPECT_EQ(all[2].required_channels, protocol::channel_bit(ChannelId::Albedo) |
                                           protocol::channel_bit(ChannelId::Normal) |
@@ -44,6 +44,19 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateAndSvgf) {
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
                                                   "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha"}));
+  // svgf-fb: split lighting with F0 and roughness; svgf's parameters plus its own.
+  EXPECT_EQ(all[3].name, "svgf-fb");
+  EXPECT_EQ(all[3].required_channels,
+            protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular) |
+                protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
+                protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
+                protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
+  EXPECT_EQ(all[3].optional_channels, protocol::channel_bit(ChannelId::Emission));
+  std::vector<std::string> fb_names;
+  for (const auto& p : all[3].parameters) fb_names.push_back(p.name);
+  std::vector<std::string> want_fb = svgf_names;
+  want_fb.push_back("specular_demodulated");
+  EXPECT_EQ(fb_names, want_fb);
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
   EXPECT_TRUE(all[0].parameters.empty());
@@ -176,14 +189,14 @@ TEST_F(DeviceBytesTest, EstimateEqualsAllocatedBytes) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // accumulate, fp32 everywhere: inputs 12+12+4+8, history 2*(16+16), output 12 = 112 B/px, + 96 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48)), 64u * 48 * 112 + 96);
+  // accumulate, fp32 everywhere: inputs 12+12+4+8, history 2*(16+16), output 12 = 112 B/px, + 160 B of constants.
+  EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48)), 64u * 48 * 112 + 160);
   // fp16 planes: 6+6+2+4 + 64 + 6 = 88 B/px; odd counts round each plane up to 4 bytes.
   EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 88 + 96);
+            64u * 48 * 88 + 160);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 test::make_config("passthrough", 3, 1, {{ChannelId::Radiance, Format::F16}}, Format::F16)),
-            2u * 20 + 96);
+            2u * 20 + 160);
 }
 
 TEST_F(DeviceBytesTest, CreateRejectsConfigurationsValidateRejects) {

@@ -1,0 +1,72 @@
+#include "pipelines/fb_lut.hpp"
+
+#include <chrono>
+
+#include "dn/shaders/shaders.hpp"
+#include "gpu/commands.hpp"
+#include "gpu/compute.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+constexpr uint32_t kWorkgroupSize = 64;
+constexpr uint32_t kTexels = kFbLutSize * kFbLutSize;
+constexpr uint64_t kTableBytes = uint64_t{kTexels} * 2 * sizeof(float);
+static_assert(kTexels % kWorkgroupSize == 0, "one invocation per texel, whole workgroups");
+
+}  // namespace
+
+FbLut::FbLut(gpu::Context& ctx)
+    : ctx_(ctx), table_(ctx, kTableBytes, gpu::BufferKind::Storage, "fb_lut") {
+  gpu::KernelDesc desc;
+  desc.name = "fb_lut";
+  desc.spirv = shaders::get("fb_lut");
+  desc.storage_buffers = 1;
+  desc.spec_constants = {{0, kWorkgroupSize}, {1, kFbLutSamples}};
+  auto kernel = ctx.kernels().get(desc);
+
+  // Binding 0 of every kernel layout is a uniform buffer; fb_lut.comp reads none.
+  gpu::Buffer uniform(ctx, 16, gpu::BufferKind::Uniform, "fb_lut:constants");
+  const uint32_t zeros[4] = {};
+  uniform.write({reinterpret_cast<const uint8_t*>(zeros), sizeof zeros});
+  gpu::DescriptorPool pool(ctx, 1, 1);
+  const VkBuffer storage[] = {table_.handle()};
+  VkDescriptorSet set = pool.allocate(*kernel, uniform.handle(), storage);
+  gpu::CommandStream stream(ctx);
+
+  const auto start = std::chrono::steady_clock::now();
+  VkCommandBuffer cmd = stream.begin();
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, kernel->pipeline());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, kernel->layout(), 0, 1, &set, 0, nullptr);
+  vkCmdDispatch(cmd, kTexels / kWorkgroupSize, 1, 1);
+  // Every later reader (passes in later submissions on this queue, read()'s copy).
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                      VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT);
+  stream.submit_and_wait();
+  compute_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<float> FbLut::read() const {
+  gpu::Buffer download(ctx_, kTableBytes, gpu::BufferKind::StorageDownload, "fb_lut:download");
+  gpu::CommandStream stream(ctx_);
+  VkCommandBuffer cmd = stream.begin();
+  const VkBufferCopy region{0, 0, kTableBytes};
+  vkCmdCopyBuffer(cmd, table_.handle(), download.handle(), 1, &region);
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT,
+                      VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT);
+  download.record_download(cmd, kTableBytes);
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                      VK_ACCESS_HOST_READ_BIT);
+  stream.submit_and_wait();
+  std::vector<float> values(size_t{kTexels} * 2);
+  download.read({reinterpret_cast<uint8_t*>(values.data()), kTableBytes});
+  return values;
+}
+
+const FbLut& fb_lut(gpu::Context& ctx) {
+  return ctx.shared<FbLut>([&ctx] { return std::make_unique<FbLut>(ctx); });
+}
+
+}  // namespace dn::pipelines

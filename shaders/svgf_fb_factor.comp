@@ -1,0 +1,67 @@
+#version 450
+// svgf_fb_factor (svgf-fb, first pass): the specular demodulation factor of
+// each pixel, F_beta = F0 * A + B with (A, B) the pre-integrated GGX table
+// (paper 000 Eq. 7/8, fb_lut.glsl) looked up bilinearly at the pixel's
+// (cos theta_o, alpha) (docs/pipelines.md, "svgf-fb").
+// cos theta_o = dot(n, -view ray) with the ray through the pixel centre from
+// FrameConstants.inverse_view_projection (unjittered: a sub-pixel shift
+// changes cos theta_o by far less than the table's resolution). Sanitized
+// inputs: a non-finite F0 component counts as 0, a non-finite roughness as 1,
+// both clamped to [0, 1]; a zero or non-finite normal, or a back-facing one,
+// reads cos theta_o = 0. Background pixels get 1 (nothing to demodulate).
+// The factor is guarded like albedo (svgf_guards.glsl) where it is used.
+//
+// Bindings: 0 FrameConstants, 1 specular_f0, 2 roughness, 3 normal, 4 depth,
+//   5 the F_beta table (shared, read-only), 6 factor (scratch, 3 fp32 per pixel)
+// Specialization: 0 workgroup size, 1..4 specular_f0/roughness/normal/depth are fp16
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+#include "plane.glsl"
+#include "sanitize.glsl"
+
+layout(constant_id = 1) const bool F0_HALF = false;
+layout(constant_id = 2) const bool ROUGHNESS_HALF = false;
+layout(constant_id = 3) const bool NORMAL_HALF = false;
+layout(constant_id = 4) const bool DEPTH_HALF = false;
+
+layout(std430, set = 0, binding = 1) readonly buffer F0Plane { uint data[]; } specular_f0;
+layout(std430, set = 0, binding = 2) readonly buffer RoughnessPlane { uint data[]; } roughness;
+layout(std430, set = 0, binding = 3) readonly buffer NormalPlane { uint data[]; } normal;
+layout(std430, set = 0, binding = 4) readonly buffer DepthPlane { uint data[]; } depth;
+layout(std430, set = 0, binding = 5) readonly buffer FbLut { vec2 data[]; } fb_lut;
+layout(std430, set = 0, binding = 6) writeonly buffer Factor { float data[]; } factor;
+
+#include "fb_lut.glsl"
+
+float unit_or(float v, float fallback) { return dn_is_finite(v) ? clamp(v, 0.0, 1.0) : fallback; }
+
+// Unit direction from the camera through the centre of pixel p (world space).
+vec3 view_ray(uint p) {
+  vec2 size = vec2(frame.size.xy);
+  vec2 pixel = vec2(float(p % frame.size.x), float(p / frame.size.x)) + 0.5;
+  vec2 ndc = vec2(2.0 * pixel.x / size.x - 1.0, 1.0 - 2.0 * pixel.y / size.y);  // pixel rows go down
+  vec4 near = frame.inverse_view_projection * vec4(ndc, -1.0, 1.0);
+  vec4 far = frame.inverse_view_projection * vec4(ndc, 1.0, 1.0);
+  vec3 d = far.xyz / far.w - near.xyz / near.w;
+  float len = length(d);
+  return (dn_is_finite(len) && len > 0.0) ? d / len : vec3(0.0, 0.0, -1.0);
+}
+
+void main() {
+  uint p = dn_invocation_index();
+  if (p >= frame.size.z) return;
+  vec3 f = vec3(1.0);
+  if (dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) {
+    vec3 n = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
+    float n2 = dot(n, n);
+    float cos_o = n2 > 0.0 ? clamp(-dot(n, view_ray(p)) * inversesqrt(n2), 0.0, 1.0) : 0.0;
+    float alpha = unit_or(DN_LOAD1(roughness, ROUGHNESS_HALF, p), 1.0);
+    vec3 f0 = DN_LOAD3(specular_f0, F0_HALF, p);
+    f0 = vec3(unit_or(f0.x, 0.0), unit_or(f0.y, 0.0), unit_or(f0.z, 0.0));
+    vec2 ab = dn_fb_lut(cos_o, alpha);
+    f = f0 * ab.x + ab.y;
+  }
+  factor.data[3u * p] = f.x;
+  factor.data[3u * p + 1u] = f.y;
+  factor.data[3u * p + 2u] = f.z;
+}
