@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-scenes="1 2 3 4"
+scenes="1 2 3 4 5"
 frames=12        # moving-camera frames per scene
 still=16         # still-camera frames per scene (the second half is measured)
 size=320x180
@@ -73,6 +73,12 @@ rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emi
 # Column NAME of a `dn denoise --summary` file.
 column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 
+# The roughness values of each scene's roughness-mapped surfaces (dnrender
+# scenes.cpp): error over those pixels only goes to region.tsv.
+region_roughness() { case "$1" in 1) echo 0.04,0.35 ;; 5) echo 0.03,0.4 ;; esac; }
+region="$out/region.tsv"
+printf 'scene\tmethod\trmse\trelmse\tssim\tpixels\n' > "$region"
+
 results="$out/results.tsv"
 printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\n' > "$results"
 last=$(printf '%04d' $((frames - 1)))
@@ -103,13 +109,19 @@ for s in $scenes; do
       "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" \
       "$(column "$m" device_bytes_per_pixel)" >> "$results"
     panels+=("$dir/$label/frame_$last.exr")
+    if [ -n "$(region_roughness "$s")" ]; then
+      "$bin/bench/region_metrics" --output "$dir/$label/frame_%04d.exr" --reference "$dir/input/ref_%04d.exr" \
+        --input "$dir/input/frame_%04d.exr" --frames "$frames" --roughness "$(region_roughness "$s")" |
+        awk -F'\t' -v s="$s" -v m="$label" 'NR == 2 { print s "\t" m "\t" $0 }' >> "$region"
+    fi
   done
   # Detail areas (fractions of the frame) per scene.
   case "$s" in
     1) crops=(--crop 0.30,0.62,0.25,0.25 --crop 0.55,0.35,0.2,0.2) ;;
     2) crops=(--crop 0.05,0.3,0.3,0.3 --crop 0.55,0.5,0.3,0.3) ;;
     3) crops=(--crop 0.1,0.5,0.3,0.3 --crop 0.5,0.3,0.3,0.3) ;;
-    *) crops=(--crop 0.35,0.55,0.3,0.3 --crop 0.6,0.3,0.25,0.25) ;;
+    4) crops=(--crop 0.35,0.55,0.3,0.3 --crop 0.6,0.3,0.25,0.25) ;;
+    *) crops=(--crop 0.3,0.2,0.25,0.3 --crop 0.35,0.7,0.3,0.3) ;;
   esac
   "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panels[@]}" "$dir/input/ref_$last.exr"
 done
@@ -149,6 +161,14 @@ cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
   echo "Command: \`bench/speed_error.sh --scenes \"$scenes\" --frames $frames --still $still --size $size --ref-spp $ref_spp\`."
   echo
   cat "$out/results.md"
+  if [ "$(wc -l < "$region")" -gt 1 ]; then
+    echo
+    echo "Over the roughness-mapped surfaces only (pixels whose roughness is one of the map's values: scene 1 floor, scene 5 floor and back panel):"
+    echo
+    echo "| scene | method | RMSE | relMSE | SSIM | pixels/frame |"
+    echo "|---|---|---|---|---|---|"
+    awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.0f |\n", $1, $2, $3, $4, $5, $6 }' "$region"
+  fi
   echo
   echo "![speed against error](images/speed_error.png)"
   for s in $scenes; do

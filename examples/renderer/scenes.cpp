@@ -122,6 +122,29 @@ std::unique_ptr<Scene> fireflies() {
   return s;
 }
 
+// BRDF-map detail (paper 000): a coated floor and a metal back panel whose
+// roughness alternates between 0.03 and 0.4 in 1/6 m checks and stripes,
+// with a large area light near the panel that both reflect, so a filter that
+// blurs the specular signal visibly loses the pattern.
+std::unique_ptr<Scene> roughness_map() {
+  auto s = std::make_unique<Scene>();
+  Material floor = coated({0.12f, 0.12f, 0.13f}, 0.03f);  // dark, so its coat reflections show
+  floor.roughness_map = Pattern::Checker;
+  floor.alpha2 = 0.4f;
+  floor.map_scale = 6.0f;
+  const int fl = s->add_material(floor);
+  Material panel = metal({0.95f, 0.8f, 0.6f}, 0.03f);
+  panel.roughness_map = Pattern::Stripes;
+  panel.alpha2 = 0.4f;
+  panel.map_scale = 6.0f;
+  const int back = s->add_material(panel);
+  const int wall = s->add_material(diffuse(vec3(0.5f)));
+  add_room(*s, {-4, 0, -4}, {4, 4, 4}, fl, wall, wall, wall, back, wall);
+  s->add_quad({-2.0f, 3.98f, -3.9f}, {4, 0, 0}, {0, 0, 2}, s->add_material(emitter(vec3(8.0f))));
+  s->add_sphere({0.0f, 0.7f, -1.5f}, 0.7f, s->add_material(diffuse({0.6f, 0.3f, 0.2f})));
+  return s;
+}
+
 struct Pose {
   vec3 eye, target;
   float fov_degrees;
@@ -148,6 +171,8 @@ Pose pose(int scene_id, int frame) {
       return {{-2.3f, 1.4f, 2.2f}, {2.0f, 0.7f, -0.5f + 1.5f * std::sin(0.04f * f)}, 60.0f};
     case 4:
       return {{-2.5f + 0.03f * back_and_forth(frame, 150), 1.5f, 2.6f}, {0.0f, 0.6f, 0.0f}, 55.0f};
+    case 5:
+      return {{-1.0f + 0.02f * back_and_forth(frame, 100), 1.2f, 3.0f}, {0.0f, 1.0f, -4.0f}, 60.0f};
   }
   throw std::invalid_argument("scene id must be 1.." + std::to_string(kSceneCount));
 }
@@ -161,6 +186,7 @@ std::unique_ptr<Scene> build_scene(int scene_id) {
     case 2: s = pillars(); break;
     case 3: s = gap(); break;
     case 4: s = fireflies(); break;
+    case 5: s = roughness_map(); break;
     default: throw std::invalid_argument("scene id must be 1.." + std::to_string(kSceneCount));
   }
   s->commit();
@@ -168,7 +194,7 @@ std::unique_ptr<Scene> build_scene(int scene_id) {
 }
 
 std::string scene_name(int scene_id) {
-  static const char* names[] = {"room", "pillars", "gap", "fireflies"};
+  static const char* names[] = {"room", "pillars", "gap", "fireflies", "roughness"};
   if (scene_id < 1 || scene_id > kSceneCount) throw std::invalid_argument("unknown scene");
   return names[scene_id - 1];
 }

@@ -10,12 +10,13 @@
 
 namespace dn::render {
 
-inline constexpr int kSceneCount = 4;
+inline constexpr int kSceneCount = 5;
 
 // 1 room: roughness-mapped glossy floor, mirror and glossy metal spheres, diffuse objects, soft shadows
 // 2 pillars: a sideways flythrough past pillars that keep occluding a dim, indirectly lit wall
 // 3 gap: a dark room lit mostly indirectly through a slit in one wall
 // 4 fireflies: a small, very bright sphere light over glossy surfaces
+// 5 roughness: fine roughness checks and stripes on a glossy floor and a metal panel (BRDF-map detail)
 std::unique_ptr<Scene> build_scene(int scene_id);
 std::string scene_name(int scene_id);
 // Unjittered camera of frame `frame` (frame - 1 gives the previous camera, also for frame 0).

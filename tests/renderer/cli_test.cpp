@@ -35,7 +35,7 @@ TEST(RendererCli, ParsesEveryOption) {
 
 TEST(RendererCli, RejectsBadArguments) {
   for (const std::vector<std::string>& bad :
-       std::vector<std::vector<std::string>>{{"--scene", "5"},
+       std::vector<std::vector<std::string>>{{"--scene", "6"},
                                              {"--scene", "x"},
                                              {"--spp", "0"},
                                              {"--spp", "-1"},

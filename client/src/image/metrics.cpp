@@ -147,6 +147,16 @@ double ssim(const float* x, const float* y, int width, int height) {
     vx /= double(n), vy /= double(n), cxy /= double(n);
     return ((2 * mx * my + C1) * (2 * cxy + C2)) / ((mx * mx + my * my + C1) * (vx + vy + C2));
   }
+  const auto map = ssim_map(x, y, width, height);
+  double sum = 0.0;
+  for (double v : map) sum += v;
+  return sum / double(map.size());
+}
+
+std::vector<double> ssim_map(const float* x, const float* y, int width, int height) {
+  constexpr double C1 = 0.01 * 0.01, C2 = 0.03 * 0.03;
+  if (width < 11 || height < 11) return {};
+  const size_t n = size_t(width) * size_t(height);
   const auto k = gaussian_kernel(11, 1.5);
   std::vector<double> X(n), Y(n), XX(n), YY(n), XY(n);
   for (size_t i = 0; i < n; ++i) {
@@ -156,12 +166,12 @@ double ssim(const float* x, const float* y, int width, int height) {
   const auto mx = blur_valid(X, width, height, k), my = blur_valid(Y, width, height, k);
   const auto sxx = blur_valid(XX, width, height, k), syy = blur_valid(YY, width, height, k),
              sxy = blur_valid(XY, width, height, k);
-  double sum = 0.0;
+  std::vector<double> map(mx.size());
   for (size_t i = 0; i < mx.size(); ++i) {
     const double vx = sxx[i] - mx[i] * mx[i], vy = syy[i] - my[i] * my[i], cxy = sxy[i] - mx[i] * my[i];
-    sum += ((2 * mx[i] * my[i] + C1) * (2 * cxy + C2)) / ((mx[i] * mx[i] + my[i] * my[i] + C1) * (vx + vy + C2));
+    map[i] = ((2 * mx[i] * my[i] + C1) * (2 * cxy + C2)) / ((mx[i] * mx[i] + my[i] * my[i] + C1) * (vx + vy + C2));
   }
-  return sum / double(mx.size());
+  return map;
 }
 
 double ssim_tonemapped(const float* rgb, const float* ref_rgb, int width, int height, Tonemap t, float exposure) {

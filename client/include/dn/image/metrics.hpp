@@ -44,6 +44,10 @@ double relative_mse(const float* a, const float* ref, size_t count, double eps =
 
 // Single-channel SSIM, values expected in [0, 1].
 double ssim(const float* x, const float* y, int width, int height);
+// The local SSIM of every window position of ssim() ('valid': (width - 10) x
+// (height - 10), entry (i, j) is the window centred on pixel (i + 5, j + 5));
+// empty for images smaller than the window.
+std::vector<double> ssim_map(const float* x, const float* y, int width, int height);
 double ssim_tonemapped(const float* rgb, const float* ref_rgb, int width, int height, Tonemap t = Tonemap::Aces,
                        float exposure = 1.0f);
 
