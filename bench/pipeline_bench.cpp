@@ -198,6 +198,20 @@ HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed) {
       motion[2 * i + 1] = kPanY + 0.25f * (2.0f * uniform01(rng) - 1.0f);
     }
   }
+  // Split lighting (svgf-fb): 70 % diffuse and 30 % specular of the same
+  // noisy samples, the F0 of a dielectric, roughness varying over [0.05, 0.65].
+  if (want(ChannelId::Diffuse) || want(ChannelId::Specular)) {
+    std::vector<float> diffuse(3 * n), specular(3 * n), f0(3 * n, 0.04f), roughness(n);
+    for (size_t i = 0; i < 3 * n; ++i) {
+      diffuse[i] = 0.7f * radiance[i];
+      specular[i] = 0.3f * radiance[i];
+    }
+    for (size_t i = 0; i < n; ++i) roughness[i] = 0.35f + 0.3f * std::sin(0.05f * float(i % w) + 0.03f * float(i / w));
+    p.values[ChannelId::Diffuse] = std::move(diffuse);
+    p.values[ChannelId::Specular] = std::move(specular);
+    if (want(ChannelId::SpecularF0)) p.values[ChannelId::SpecularF0] = std::move(f0);
+    if (want(ChannelId::Roughness)) p.values[ChannelId::Roughness] = std::move(roughness);
+  }
   if (want(ChannelId::Radiance)) p.values[ChannelId::Radiance] = std::move(radiance);
   if (want(ChannelId::Albedo)) p.values[ChannelId::Albedo] = std::move(albedo);
   if (want(ChannelId::Normal)) p.values[ChannelId::Normal] = std::move(normal);
@@ -257,10 +271,10 @@ EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t) {
   return f;
 }
 
-// The channels a session of `desc` declares: the required ones, plus the
-// optional ones the synthetic scene can supply without changing what the
-// pipeline models (none at present: split lighting and emission would add
-// passes, so they are left out and the rows stay comparable).
+// The channels a session of `desc` declares: the required ones (svgf-fb
+// requires split lighting, F0 and roughness), plus radiance where it is only
+// optional (svgf); optional split lighting and emission would add passes, so
+// they are left out and the svgf row stays comparable.
 std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format) {
   std::vector<dn::protocol::ChannelDecl> out;
   for (const auto& c : dn::protocol::kChannels)

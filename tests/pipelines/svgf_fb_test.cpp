@@ -10,6 +10,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "camera.hpp"
 #include "gpu_test_env.hpp"
 #include "pipelines/fb_lut.hpp"
 #include "pipelines/graph.hpp"
@@ -90,8 +91,8 @@ class RenderedFrames {
 };
 
 // Host F_beta per pixel, written from the rules in docs/pipelines.md
-// ("svgf-fb"): cos theta_o from the camera in double precision, the table
-// read back from the device, bilinear between texel centres.
+// ("svgf-fb"): cos theta_o from the renderer's camera rays, the table read
+// back from the device, bilinear between texel centres.
 class HostFactor {
  public:
   explicit HostFactor(gpu::Context& ctx) : table_(pipelines::fb_lut(ctx).read()) {}
@@ -113,16 +114,15 @@ class HostFactor {
   }
 
   std::vector<double> factor(const FbFrame& f) const {
-    const glm::dmat4 inv = glm::inverse(glm::dmat4(f.projection) * glm::dmat4(f.view));
+    // The view ray of the example renderer's own camera code, not a copy of the shader's unprojection.
+    const render::CameraRays rays(render::Camera{f.view, f.projection, glm::vec2(0.0f)}, f.w, f.h);
     std::vector<double> out(3 * f.w * f.h, 1.0);
     for (int y = 0; y < f.h; ++y)
       for (int x = 0; x < f.w; ++x) {
         const int i = y * f.w + x;
         const double z = f.depth[i];
         if (!(std::isfinite(z) && z > 0.0)) continue;
-        const glm::dvec2 ndc(2.0 * (x + 0.5) / f.w - 1.0, 1.0 - 2.0 * (y + 0.5) / f.h);
-        const glm::dvec4 near = inv * glm::dvec4(ndc, -1.0, 1.0), far = inv * glm::dvec4(ndc, 1.0, 1.0);
-        const glm::dvec3 ray = glm::normalize(glm::dvec3(far) / far.w - glm::dvec3(near) / near.w);
+        const glm::dvec3 ray(rays.direction(x + 0.5f, y + 0.5f));
         glm::dvec3 n(f.normal[3 * i], f.normal[3 * i + 1], f.normal[3 * i + 2]);
         const double len = glm::length(n);
         const double cos_o = len > 0.0 ? std::clamp(-glm::dot(n, ray) / len, 0.0, 1.0) : 0.0;
