@@ -162,13 +162,20 @@ int run_cli(const CliOptions& o) {
 
   if (!o.out.empty()) std::filesystem::create_directories(o.out);
   std::unique_ptr<FrameStreamer> streamer;
+  RenderSettings settings = o.render;
+  if (!o.server.empty()) {
+    StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
+    streamer = std::make_unique<FrameStreamer>(so);
+    // Without --out nothing but the session sees the frame: render only what the pipeline takes.
+    if (o.out.empty()) settings.channels = streamer->channels_needed();
+  }
   std::vector<double> ms, mrays, rays_per_pixel;
   FrameBuffers fb;
   for (int f = o.first; f < o.first + o.frames; ++f) {
     const int path_frame = o.hold_camera.value_or(f);
-    const Camera camera = frame_camera(o.scene, path_frame, o.render);
-    const Camera previous = o.hold_camera ? camera : frame_camera(o.scene, f - 1, o.render);
-    render_frame_into(*scene, camera, previous, f, o.render, fb);
+    const Camera camera = frame_camera(o.scene, path_frame, settings);
+    const Camera previous = o.hold_camera ? camera : frame_camera(o.scene, f - 1, settings);
+    render_frame_into(*scene, camera, previous, f, settings, fb);
     ms.push_back(fb.seconds * 1e3);
     mrays.push_back(static_cast<double>(fb.rays) / fb.seconds * 1e-6);
     rays_per_pixel.push_back(static_cast<double>(fb.rays) / (double(fb.width) * fb.height));
@@ -186,18 +193,14 @@ int run_cli(const CliOptions& o) {
         image::write_png_rgb8(frame_file(o.out, "frame_%04d.png", f), fb.width, fb.height, bytes.data());
       }
     }
-    if (!o.server.empty()) {
-      if (!streamer) {
-        StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
-        streamer = std::make_unique<FrameStreamer>(so, fb);
-        if (!o.quiet) {
-          std::string names;
-          for (const auto& n : streamer->channel_names()) names += " " + n;
-          std::fprintf(stderr, "dnrender: streaming to %s, pipeline %s, channels:%s\n", o.server.c_str(),
-                       o.pipeline.c_str(), names.c_str());
-        }
-      }
+    if (streamer) {
       streamer->submit(f, fb, camera, previous, f == o.first);
+      if (!o.quiet && f == o.first) {
+        std::string names;
+        for (const auto& n : streamer->channel_names()) names += " " + n;
+        std::fprintf(stderr, "dnrender: streaming to %s, pipeline %s, channels:%s\n", o.server.c_str(),
+                     o.pipeline.c_str(), names.c_str());
+      }
     }
   }
   if (streamer) streamer->finish();

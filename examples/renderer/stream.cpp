@@ -35,16 +35,35 @@ const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
 
 }  // namespace
 
+ChannelSet channels_for(uint64_t takes, bool send_split) {
+  auto takes_any = [&](std::initializer_list<ChannelId> ids) {
+    for (ChannelId id : ids)
+      if (takes & protocol::channel_bit(id)) return true;
+    return false;
+  };
+  ChannelSet set;
+  const bool split = takes_any({ChannelId::Diffuse}) && takes_any({ChannelId::Specular}) &&
+                     (send_split || !takes_any({ChannelId::Radiance}));
+  set.split = split || takes_any({ChannelId::Emission});  // emission comes with the split
+  set.gbuffer = takes_any({ChannelId::Albedo, ChannelId::SpecularF0, ChannelId::Roughness, ChannelId::Normal,
+                           ChannelId::Depth, ChannelId::Position});
+  set.motion = takes_any({ChannelId::Motion});
+  set.sample_count = takes_any({ChannelId::SampleCount});
+  set.statistics = set.specular_hit = false;
+  return set;
+}
+
 struct FrameStreamer::State {
   client::Connection connection;
+  protocol::PipelineInfo pipeline;
   std::optional<client::Session> session;
   std::vector<ChannelId> channels;
 };
 
-FrameStreamer::FrameStreamer(const StreamOptions& options, const FrameBuffers& sample) : options_(options) {
+FrameStreamer::FrameStreamer(const StreamOptions& options) : options_(options) {
   client::ConnectOptions copts;
   copts.client_name = "dnrender";
-  state_ = std::make_unique<State>(State{client::Connection::connect(options.url, copts), std::nullopt, {}});
+  state_ = std::make_unique<State>(State{client::Connection::connect(options.url, copts), {}, std::nullopt, {}});
   const protocol::PipelineInfo* info = state_->connection.find_pipeline(options.pipeline);
   if (!info) {
     std::string names;
@@ -52,6 +71,16 @@ FrameStreamer::FrameStreamer(const StreamOptions& options, const FrameBuffers& s
     throw std::runtime_error("server " + state_->connection.endpoint() + " has no pipeline '" + options.pipeline +
                              "' (it offers: " + names + ")");
   }
+  state_->pipeline = *info;
+}
+
+ChannelSet FrameStreamer::channels_needed() const {
+  return channels_for(state_->pipeline.required_channels | state_->pipeline.optional_channels, options_.send_split);
+}
+
+void FrameStreamer::open(const FrameBuffers& sample) {
+  const StreamOptions& options = options_;
+  const protocol::PipelineInfo* info = &state_->pipeline;
   const uint64_t takes = info->required_channels | info->optional_channels;
   auto has = [&](ChannelId id) { const auto* p = plane_of(sample, id); return p && !p->empty(); };
   auto bit = [](ChannelId id) { return protocol::channel_bit(id); };
@@ -94,6 +123,7 @@ void FrameStreamer::submit(int frame, const FrameBuffers& fb, const Camera& came
   in.info.prev_jitter = {previous.jitter.x, previous.jitter.y};
   in.no_output = options_.out_dir.empty();
   if (reset) in.reset();
+  if (!state_->session) open(fb);
   for (ChannelId id : state_->channels) in.add(id, std::span<const float>(*plane_of(fb, id)));
   state_->session->submit(in);
   write_ready(false);
@@ -118,6 +148,7 @@ void FrameStreamer::write_ready(bool block) {
 }
 
 void FrameStreamer::finish() {
+  if (!state_->session) return;
   write_ready(true);
   state_->session->close();
 }

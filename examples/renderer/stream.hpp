@@ -23,17 +23,27 @@ struct StreamOptions {
   bool quiet = false;
 };
 
+// What to render for a pipeline that takes the channel mask `takes`
+// (required | optional): split lighting and emission only when they will be
+// sent, G-buffers and motion only when the pipeline reads some of them.
+// Statistics and specular-hit extras have no protocol channel: never needed.
+ChannelSet channels_for(uint64_t takes, bool send_split);
+
 class FrameStreamer {
  public:
-  // Connects and opens the session; the channels sent are the pipeline's
-  // required and optional ones that `sample` (a rendered frame) has.
-  FrameStreamer(const StreamOptions& options, const FrameBuffers& sample);
+  // Connects and looks the pipeline up; the session opens with the first
+  // frame, declaring the pipeline's required and optional channels that the
+  // frame has.
+  explicit FrameStreamer(const StreamOptions& options);
   ~FrameStreamer();
+  // The channels worth rendering for this pipeline (channels_for).
+  ChannelSet channels_needed() const;
   void submit(int frame, const FrameBuffers& fb, const Camera& camera, const Camera& previous, bool reset);
   void finish();  // waits for every outstanding result
-  const std::vector<std::string>& channel_names() const { return channel_names_; }
+  const std::vector<std::string>& channel_names() const { return channel_names_; }  // after the first submit()
 
  private:
+  void open(const FrameBuffers& sample);  // the session, with the channels `sample` has
   void write_ready(bool block);
   struct State;
   std::unique_ptr<State> state_;

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "cli.hpp"
+#include "dn/protocol/channels.hpp"
+#include "stream.hpp"
 
 namespace dn::render {
 namespace {
@@ -51,6 +53,39 @@ TEST(RendererCli, RejectsBadArguments) {
   } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("--scene"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace dn::render
+
+namespace dn::render {
+namespace {
+
+uint64_t mask(std::initializer_list<protocol::ChannelId> ids) {
+  uint64_t m = 0;
+  for (auto id : ids) m |= protocol::channel_bit(id);
+  return m;
+}
+
+// Streaming renders only what the pipeline takes.
+TEST(RendererStream, ChannelsForAPipeline) {
+  using protocol::ChannelId;
+  const ChannelSet radiance_only = channels_for(mask({ChannelId::Radiance}), false);
+  EXPECT_FALSE(radiance_only.split || radiance_only.gbuffer || radiance_only.motion || radiance_only.sample_count);
+  const ChannelSet accumulate =
+      channels_for(mask({ChannelId::Radiance, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion}), false);
+  EXPECT_TRUE(accumulate.gbuffer && accumulate.motion);
+  EXPECT_FALSE(accumulate.split || accumulate.sample_count);
+  const ChannelSet fb = channels_for(mask({ChannelId::Diffuse, ChannelId::Specular, ChannelId::Albedo,
+                                           ChannelId::SpecularF0, ChannelId::Roughness, ChannelId::Normal,
+                                           ChannelId::Depth, ChannelId::Motion, ChannelId::Emission}),
+                                     false);
+  EXPECT_TRUE(fb.split && fb.gbuffer && fb.motion);
+  EXPECT_FALSE(fb.statistics || fb.specular_hit || fb.sample_count);
+  // Radiance or split: split only when asked to send it (or for emission).
+  const ChannelSet either = channels_for(mask({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular}), false);
+  EXPECT_FALSE(either.split);
+  EXPECT_TRUE(channels_for(mask({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular}), true).split);
 }
 
 }  // namespace
