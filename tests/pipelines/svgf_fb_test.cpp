@@ -154,11 +154,8 @@ test::SvgfFrame reference_input(const FbFrame& f, bool reset, const std::vector<
   return r;
 }
 
-std::vector<float> as_floats(const std::vector<uint8_t>& bytes) {
-  std::vector<float> f(bytes.size() / sizeof(float));
-  std::memcpy(f.data(), bytes.data(), f.size() * sizeof(float));
-  return f;
-}
+// Captured buffers hold fp32 words.
+std::vector<float> as_floats(const std::vector<uint8_t>& bytes) { return test::decode_output(bytes, Format::F32); }
 
 TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) {
   const int w = 96, h = 54;

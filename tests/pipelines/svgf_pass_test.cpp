@@ -24,11 +24,8 @@ class SvgfPassTest : public test::GpuTest {};
 
 constexpr double kTolerance = 1e-3;  // relative RMS, as for the final output
 
-std::vector<float> as_floats(const std::vector<uint8_t>& bytes) {
-  std::vector<float> f(bytes.size() / sizeof(float));
-  std::memcpy(f.data(), bytes.data(), f.size() * sizeof(float));
-  return f;
-}
+// Captured buffers hold fp32 words.
+std::vector<float> as_floats(const std::vector<uint8_t>& bytes) { return test::decode_output(bytes, Format::F32); }
 
 // Components [first, first + count) of each `stride`-float pixel.
 std::vector<float> components(const std::vector<float>& v, size_t pixels, int stride, int first, int count) {
