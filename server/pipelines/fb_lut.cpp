@@ -5,11 +5,11 @@
 #include "dn/shaders/shaders.hpp"
 #include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
+#include "pipelines/graph.hpp"  // kWorkgroupSize
 
 namespace dn::pipelines {
 namespace {
 
-constexpr uint32_t kWorkgroupSize = 64;
 constexpr uint32_t kTexels = kFbLutSize * kFbLutSize;
 constexpr uint64_t kTableBytes = uint64_t{kTexels} * 2 * sizeof(float);
 static_assert(kTexels % kWorkgroupSize == 0, "one invocation per texel, whole workgroups");
