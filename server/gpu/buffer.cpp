@@ -4,6 +4,7 @@
 #include <cstring>
 #include <utility>
 
+#include "gpu/commands.hpp"
 #include "gpu/context.hpp"
 #include "gpu/error.hpp"
 
@@ -205,6 +206,18 @@ void Buffer::record_download(VkCommandBuffer cmd, uint64_t bytes) const {
   if (!staged() || bytes == 0) return;
   VkBufferCopy region{0, 0, bytes};
   vkCmdCopyBuffer(cmd, buffer_, staging_, 1, &region);
+}
+
+void Buffer::record_readback(VkCommandBuffer cmd, uint64_t bytes, VkPipelineStageFlags stage,
+                             VkAccessFlags access) const {
+  if (!staged()) {
+    memory_barrier(cmd, stage, access, VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    return;
+  }
+  memory_barrier(cmd, stage, access, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
+  record_download(cmd, bytes);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                 VK_ACCESS_HOST_READ_BIT);
 }
 
 }  // namespace dn::gpu

@@ -55,6 +55,10 @@ class Buffer {
   void record_upload(VkCommandBuffer cmd, uint64_t bytes) const;
   // Records the device -> staging copy of [0, bytes) (no-op when not staged).
   void record_download(VkCommandBuffer cmd, uint64_t bytes) const;
+  // Everything between work that wrote [0, bytes) (in `stage` with `access`)
+  // and read() after the submission completes: the barrier, the staging copy
+  // when staged, and the barrier to host reads.
+  void record_readback(VkCommandBuffer cmd, uint64_t bytes, VkPipelineStageFlags stage, VkAccessFlags access) const;
   // Copies bytes from offset of the host-visible memory. Download buffers only;
   // call after the work (and record_download) has completed.
   void read(std::span<uint8_t> bytes, uint64_t offset = 0) const;

@@ -53,12 +53,7 @@ std::vector<float> FbLut::read() const {
   VkCommandBuffer cmd = stream.begin();
   const VkBufferCopy region{0, 0, kTableBytes};
   vkCmdCopyBuffer(cmd, table_.handle(), download.handle(), 1, &region);
-  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                      VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT,
-                      VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT);
-  download.record_download(cmd, kTableBytes);
-  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
-                      VK_ACCESS_HOST_READ_BIT);
+  download.record_readback(cmd, kTableBytes, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
   stream.submit_and_wait();
   std::vector<float> values(size_t{kTexels} * 2);
   download.read({reinterpret_cast<uint8_t*>(values.data()), kTableBytes});

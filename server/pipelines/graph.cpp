@@ -360,17 +360,8 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
 
   const uint64_t out_bytes = out_node ? out_node->spec->plane_bytes : 0;
   if (want_output && out_node) {
-    gpu::Buffer& out = out_node->copies[0];
-    if (out.staged()) {
-      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
-      out.record_download(cmd, out_bytes);
-      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
-    } else {
-      gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
-    }
+    out_node->copies[0].record_readback(cmd, out_bytes, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                        VK_ACCESS_SHADER_WRITE_BIT);
   }
   timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
 
