@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "server/cache_dir.hpp"
 #include "server/gpu/context.hpp"
 #include "server/gpu/devices.hpp"
 #include "server/log.hpp"
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
     dn::gpu::ContextOptions device_options;
     device_options.device = options.device;
     device_options.validation = options.validation;
+    device_options.pipeline_cache_dir = dn::server::resolve_cache_dir(options);
     dn::gpu::Context device(device_options);
     dn::server::Server server(options, device, device.name());
     server.run(/*handle_signals=*/true);

@@ -102,6 +102,18 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.heartbeat_s); }},
       {"--shutdown-grace", "SECONDS", "on SIGTERM, time allowed to finish frames in flight (default 30)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.shutdown_grace_s); }},
+      {"--cache-dir", "DIR",
+       "keep compiled pipelines in DIR across runs (default $XDG_CACHE_HOME/dnserver or ~/.cache/dnserver; "
+       "created 0700, must belong to this user and not be writable by others)",
+       [](ServerOptions& o, std::string_view v) {
+         o.cache_dir = v;
+         o.cache_dir_given = true;
+         return !v.empty() && v[0] == '/';
+       }},
+      {"--no-disk-cache", nullptr, "keep compiled pipelines in memory only",
+       [](ServerOptions& o, std::string_view) { o.disk_cache = false; return true; }},
+      {"--no-warm-up", nullptr, "do not compile the default pipelines at start (each compiles on first use)",
+       [](ServerOptions& o, std::string_view) { o.warm_up = false; return true; }},
       {"--log-level", "LEVEL", "debug, info, warn or error (default info)",
        [](ServerOptions& o, std::string_view v) {
          o.log_level = v;

@@ -30,6 +30,10 @@ struct ServerOptions {
   double heartbeat_s = 30.0;             // nothing received for this long: send PING
   double shutdown_grace_s = 30.0;        // SIGTERM: time allowed to finish frames in flight
   std::string log_level = "info";
+  std::string cache_dir;                 // on-disk pipeline cache; default: the user's cache dir (server/cache_dir.hpp)
+  bool cache_dir_given = false;          // --cache-dir was explicit: an unusable directory is an error, not a warning
+  bool disk_cache = true;                // --no-disk-cache: compiled pipelines are kept in memory only
+  bool warm_up = true;                   // --no-warm-up: compile the default pipelines on first use instead of at start
 };
 
 struct ParseOutcome {

@@ -14,7 +14,10 @@
 #include <stdexcept>
 
 #include "dn/protocol/codec.hpp"
+#include "gpu/pipeline_cache.hpp"
+#include "server/handshake.hpp"
 #include "server/log.hpp"
+#include "server/stats.hpp"
 #include "server/net/auth.hpp"
 #include "server/pipelines/fb_lut.hpp"
 
@@ -117,10 +120,31 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
     }
     loop_.wake();
   });
+  builder_ = std::make_unique<PipelineBuilder>(device_, [this](BuiltPipeline&& built) {
+    {
+      std::lock_guard lock(completions_mutex_);
+      built_.push_back(std::move(built));
+    }
+    loop_.wake();
+  });
+  if (options_.warm_up) {
+    builder_->warm_up([this](const WarmUpReport& report) {
+      {
+        std::lock_guard lock(completions_mutex_);
+        warm_up_ = report;
+      }
+      log::info("warm_up", {{"sessions", report.configs},
+                            {"kernels", report.kernels},
+                            {"ms", report.ms},
+                            {"cache_bytes", report.cache_bytes},
+                            {"error", report.error}});
+    });
+  }
   loop_.set_wake_handler([this] { drain_completions(); });
 }
 
 Server::~Server() {
+  if (builder_) builder_->stop();
   if (scheduler_) scheduler_->stop();
   for (auto& l : listeners_) net::close_listener(l);
   if (signal_fd_ >= 0) ::close(signal_fd_);
@@ -170,8 +194,10 @@ void Server::run(bool handle_signals) {
     if (shutting_down_ && shutdown_complete()) break;
   }
   for (auto it = connections_.begin(); it != connections_.end();) close_connection((it++)->first, "shutdown");
+  builder_->stop();
   scheduler_->stop();
-  log::info("stopped", {{"frames", frames_processed_}});
+  save_pipeline_cache();
+  log::info("stopped", {{"frames", counters_.frames_processed}});
 }
 
 void Server::begin_shutdown() {
@@ -191,6 +217,7 @@ bool Server::shutdown_complete() const {
     log::warn("shutdown.deadline", {{"grace_s", options_.shutdown_grace_s}});
     return true;
   }
+  if (sessions_being_built_ > 0) return false;
   for (const auto& [id, s] : sessions_)
     if (s->in_flight > 0) return false;
   for (const auto& [id, c] : connections_)
@@ -210,7 +237,7 @@ void Server::accept_from(net::Listener& listener) {
       return;
     }
     uint64_t id = next_connection_id_++;
-    ++connections_accepted_;
+    ++counters_.connections_accepted;
     // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
     auto conn = std::make_unique<net::Connection>(fd, id, is_unix, peer_name(addr, is_unix), kControlMessageBytes);
     tune_socket(fd, is_unix);
@@ -271,7 +298,7 @@ void Server::on_connection_event(uint64_t id, uint32_t events) {
 }
 
 bool Server::has_work(const net::Connection& c) const {
-  if (c.has_pending_output()) return true;
+  if (c.has_pending_output() || c.sessions_being_built > 0) return true;
   for (uint64_t sid : c.owned_sessions) {
     auto it = sessions_.find(sid);
     if (it != sessions_.end() && it->second->in_flight > 0) return true;
@@ -378,17 +405,7 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
   }
   if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", true);
   c.authenticated = true;
-  protocol::Welcome w;
-  w.server_version = "dnserver 0.1.0";
-  w.device_name = device_name_;
-  w.limits.max_message_bytes = options_.max_message_bytes;
-  w.limits.max_session_bytes = options_.max_session_bytes;
-  w.limits.max_sessions = options_.max_sessions;
-  w.limits.max_width = options_.max_width;
-  w.limits.max_height = options_.max_height;
-  w.limits.max_frames_in_flight = options_.max_frames_in_flight;
-  for (const auto& p : pipelines::available_pipelines())
-    w.pipelines.push_back(protocol::PipelineInfo{p.name, p.required_channels, p.optional_channels});
+  protocol::Welcome w = make_welcome(options_, device_name_, h.version_minor);
   log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
   send(c, w, h.request_id);
 }
@@ -400,9 +417,10 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                       "resolution " + std::to_string(m.width) + "x" + std::to_string(m.height) + " exceeds the server's " +
                           std::to_string(options_.max_width) + "x" + std::to_string(options_.max_height),
                       false);
-  if (sessions_.size() >= options_.max_sessions)
+  if (sessions_.size() + sessions_being_built_ >= options_.max_sessions)
     return send_error(c, h.request_id, ErrorCode::LimitExceeded, "sessions",
-                      "server already has " + std::to_string(sessions_.size()) + " sessions (--max-sessions " +
+                      "server already has " + std::to_string(sessions_.size() + sessions_being_built_) +
+                          " sessions (--max-sessions " +
                           std::to_string(options_.max_sessions) + ")",
                       false);
 
@@ -423,30 +441,53 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                           std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)",
                       false);
 
-  std::unique_ptr<pipelines::Pipeline> pipeline;
-  try {
-    pipeline = pipelines::create(device_, config);
-  } catch (const std::exception& e) {
-    log::error("session.create_failed", {{"conn", c.id()}, {"pipeline", m.pipeline}, {"reason", e.what()}});
-    return send_error(c, h.request_id, ErrorCode::DeviceError, "OPEN_SESSION",
-                      std::string("could not create the pipeline on the device: ") + e.what(), false);
+  // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
+  ++c.sessions_being_built;
+  ++sessions_being_built_;
+  builder_->submit(BuildRequest{c.id(), h.request_id, std::move(config)});
+}
+
+void Server::on_pipeline_built(BuiltPipeline&& built) {
+  --sessions_being_built_;
+  counters_.add_build(built);
+  net::Connection* c = find_connection(built.request.connection_id);
+  if (c) --c->sessions_being_built;
+  const pipelines::SessionConfig& config = built.request.config;
+  const uint64_t request_id = built.request.request_id;
+  if (!c) {
+    log::info("session.dropped", {{"conn", built.request.connection_id}, {"reason", "connection closed while building"}});
+    return;  // the pipeline (and its device memory) goes with `built`
+  }
+  if (!built.pipeline) {
+    log::error("session.create_failed", {{"conn", c->id()}, {"pipeline", config.pipeline}, {"reason", built.error}});
+    send_error(*c, request_id, ErrorCode::DeviceError, "OPEN_SESSION",
+               "could not create the pipeline on the device: " + built.error, false);
+    return update_interest(*c);
+  }
+  if (shutting_down_) {
+    send_error(*c, request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+    return update_interest(*c);
   }
 
   uint64_t id;
   do id = session_ids_(); while (id == 0 || sessions_.count(id));
-  auto session = std::make_shared<Session>(id, c.id(), std::move(config), std::move(pipeline));
+  auto session = std::make_shared<Session>(id, c->id(), config, std::move(built.pipeline));
   sessions_[id] = session;
-  c.owned_sessions.push_back(id);
-  refresh_message_limit(c);  // before the next header is read: this session's frames may follow at once
-  ++sessions_opened_;
-  log::info("session.open", {{"conn", c.id()},
+  c->owned_sessions.push_back(id);
+  refresh_message_limit(*c);  // before the next header is read: this session's frames may follow at once
+  ++counters_.sessions_opened;
+  log::info("session.open", {{"conn", c->id()},
                              {"session", id},
-                             {"pipeline", m.pipeline},
-                             {"width", m.width},
-                             {"height", m.height},
-                             {"device_bytes", session->device_bytes()}});
-  protocol::Session reply{id, m.width, m.height, m.pipeline, m.output_format, session->device_bytes(), false, m.channels};
-  send(c, reply, h.request_id);
+                             {"pipeline", config.pipeline},
+                             {"width", config.width},
+                             {"height", config.height},
+                             {"device_bytes", session->device_bytes()},
+                             {"build_ms", built.build_ms},
+                             {"compile_ms", built.compile_ms}});
+  send(*c, protocol::Session{id, config.width, config.height, config.pipeline, config.output_format,
+                             session->device_bytes(), false, config.channels},
+       request_id);
+  update_interest(*c);
 }
 
 void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
@@ -528,8 +569,8 @@ void Server::close_connection(uint64_t id, const char* reason) {
   std::unique_ptr<net::Connection> c = std::move(it->second);
   connections_.erase(it);
   loop_.remove(c->fd());
-  bytes_in_closed_ += c->bytes_in;
-  bytes_out_closed_ += c->bytes_out;
+  counters_.bytes_in_closed += c->bytes_in;
+  counters_.bytes_out_closed += c->bytes_out;
   for (uint64_t sid : std::vector<uint64_t>(c->owned_sessions)) {
     auto s = sessions_.find(sid);
     if (s != sessions_.end()) finish_session(s->second, false);
@@ -543,10 +584,13 @@ void Server::close_connection(uint64_t id, const char* reason) {
 
 void Server::drain_completions() {
   std::vector<FrameDone> batch;
+  std::vector<BuiltPipeline> built;
   {
     std::lock_guard lock(completions_mutex_);
     batch.swap(completions_);
+    built.swap(built_);
   }
+  for (BuiltPipeline& b : built) on_pipeline_built(std::move(b));
   for (FrameDone& d : batch) on_frame_done(std::move(d));
 }
 
@@ -556,16 +600,12 @@ void Server::on_frame_done(FrameDone&& done) {
   std::shared_ptr<Session> s = it->second;
   if (s->in_flight > 0) --s->in_flight;
   if (done.failed) {
-    ++frames_failed_;
+    ++counters_.frames_failed;
     log::error("frame.failed", {{"session", s->id()}, {"frame", done.frame_index}});
   } else {
-    ++frames_processed_;
+    ++counters_.frames_processed;
     ++s->frames_processed;
-    for (const auto& t : done.timings) {
-      auto& sum = pass_timings_[t.name];
-      sum.total_ms += t.milliseconds;
-      ++sum.count;
-    }
+    counters_.add_frame_timings(done.timings);
   }
   if (net::Connection* owner = find_connection(s->owner())) {
     owner->queue(done.owner_message);
@@ -617,38 +657,33 @@ void Server::check_timers() {
 }
 
 void Server::on_stats(net::Connection& c, const protocol::Header& h) {
-  protocol::Stats st;
-  auto add = [&](std::string name, double v) { st.values.push_back({std::move(name), v}); };
-  uint64_t bytes_in = bytes_in_closed_, bytes_out = bytes_out_closed_;
+  LiveState live;
+  live.connections = connections_.size();
   for (auto& [id, conn] : connections_) {
-    bytes_in += conn->bytes_in;
-    bytes_out += conn->bytes_out;
+    live.bytes_in_open += conn->bytes_in;
+    live.bytes_out_open += conn->bytes_out;
   }
-  uint32_t in_flight = 0;
-  for (auto& [id, s] : sessions_) in_flight += s->in_flight;
-  add("uptime_s", seconds_since(started_, Clock::now()));
-  add("connections", static_cast<double>(connections_.size()));
-  add("connections_accepted", static_cast<double>(connections_accepted_));
-  add("sessions", static_cast<double>(sessions_.size()));
-  add("sessions_opened", static_cast<double>(sessions_opened_));
-  add("frames_processed", static_cast<double>(frames_processed_));
-  add("frames_failed", static_cast<double>(frames_failed_));
-  add("frames_in_flight", static_cast<double>(in_flight));
-  add("bytes_in", static_cast<double>(bytes_in));
-  add("bytes_out", static_cast<double>(bytes_out));
-  uint64_t device_bytes = 0;  // held by open sessions; a closed one's is freed once its last frame leaves the device
-  for (auto& [id, s] : sessions_) device_bytes += s->device_bytes();
-  add("device_bytes", static_cast<double>(device_bytes));
-  add("fb_lut_ms", pipelines::fb_lut(device_).compute_ms());  // computed at start-up: a lookup here
-  for (const auto& [id, s] : sessions_) {  // lets a watcher find a session to ATTACH to
-    if (st.values.size() >= 200) break;
-    add("session." + std::to_string(id) + ".frames", static_cast<double>(s->frames_processed));
+  live.sessions = sessions_.size();
+  live.sessions_being_built = sessions_being_built_;
+  for (auto& [id, s] : sessions_) {
+    live.frames_in_flight += s->in_flight;
+    live.device_bytes += s->device_bytes();  // a closed one's is freed once its last frame leaves the device
+    live.session_frames.emplace_back(id, s->frames_processed);
   }
-  for (const auto& [name, sum] : pass_timings_) {
-    if (st.values.size() >= 250) break;
-    add("pass." + name + ".mean_ms", sum.count ? sum.total_ms / static_cast<double>(sum.count) : 0.0);
+  {
+    std::lock_guard lock(completions_mutex_);
+    live.warm_up = warm_up_;
   }
-  send(c, st, h.request_id);
+  send(c, make_stats(counters_, live, device_), h.request_id);
+}
+
+void Server::save_pipeline_cache() {
+  try {
+    const uint64_t bytes = device_.pipeline_cache().save();
+    if (bytes) log::info("pipeline_cache.saved", {{"path", device_.pipeline_cache().path()}, {"bytes", bytes}});
+  } catch (const std::exception& e) {
+    log::warn("pipeline_cache.save_failed", {{"reason", e.what()}});
+  }
 }
 
 }  // namespace dn::server

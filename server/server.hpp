@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 #include <unordered_map>
@@ -16,8 +17,10 @@
 #include "server/net/event_loop.hpp"
 #include "server/net/listener.hpp"
 #include "server/options.hpp"
+#include "server/session/pipeline_builder.hpp"
 #include "server/session/scheduler.hpp"
 #include "server/session/session.hpp"
+#include "server/stats.hpp"
 
 namespace dn::gpu {
 class Context;
@@ -63,6 +66,8 @@ class Server {
   void finish_session(const std::shared_ptr<Session>& s, bool notify);
   void drain_completions();
   void on_frame_done(FrameDone&& done);
+  void on_pipeline_built(BuiltPipeline&& built);
+  void save_pipeline_cache();
   void check_timers();
   void begin_shutdown();
   bool shutdown_complete() const;
@@ -80,27 +85,19 @@ class Server {
   std::mt19937_64 session_ids_;
 
   std::unique_ptr<Scheduler> scheduler_;
-  std::mutex completions_mutex_;
+  std::unique_ptr<PipelineBuilder> builder_;
+  uint32_t sessions_being_built_ = 0;
+  std::mutex completions_mutex_;  // guards completions_, built_ and warm_up_ (written by other threads)
   std::vector<FrameDone> completions_;
+  std::vector<BuiltPipeline> built_;
+  std::optional<WarmUpReport> warm_up_;
 
   std::atomic<bool> stop_requested_{false};
   bool shutting_down_ = false;
   std::chrono::steady_clock::time_point shutdown_deadline_{};
   int signal_fd_ = -1;
 
-  // Counters for STATS.
-  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
-  uint64_t frames_processed_ = 0;
-  uint64_t frames_failed_ = 0;
-  uint64_t sessions_opened_ = 0;
-  uint64_t connections_accepted_ = 0;
-  uint64_t bytes_in_closed_ = 0;   // from connections already closed
-  uint64_t bytes_out_closed_ = 0;
-  struct TimingSum {
-    double total_ms = 0;
-    uint64_t count = 0;
-  };
-  std::map<std::string, TimingSum> pass_timings_;
+  ServerCounters counters_;
 };
 
 }  // namespace dn::server

@@ -1,11 +1,14 @@
 #include "gpu/compute.hpp"
 
+#include <algorithm>
+#include <chrono>
+
 #include "gpu/context.hpp"
 #include "gpu/error.hpp"
 
 namespace dn::gpu {
 
-Kernel::Kernel(VkDevice device, const KernelDesc& desc)
+Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
     : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers) {
   if (desc.spirv.empty()) throw Error("kernel " + name_ + ": no SPIR-V (shader not embedded?)");
   VkShaderModule module = VK_NULL_HANDLE;
@@ -51,7 +54,7 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc)
     info.stage.pName = "main";
     info.stage.pSpecializationInfo = entries.empty() ? nullptr : &spec;
     info.layout = layout_;
-    check(vkCreateComputePipelines(device_, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_),
+    check(vkCreateComputePipelines(device_, cache, 1, &info, nullptr, &pipeline_),
           "vkCreateComputePipelines");
     vkDestroyShaderModule(device_, module, nullptr);
   } catch (...) {
@@ -72,14 +75,50 @@ void Kernel::destroy() noexcept {
   set_layout_ = VK_NULL_HANDLE;
 }
 
+namespace {
+thread_local double compile_ms_this_thread = 0.0;
+}  // namespace
+
+double KernelCache::compile_ms_of_this_thread() { return compile_ms_this_thread; }
+
 std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
   Key key{desc.spirv.data(), desc.spirv.size(), desc.storage_buffers, desc.spec_constants};
-  std::lock_guard lock(mutex_);
-  auto it = kernels_.find(key);
-  if (it != kernels_.end()) return it->second;
-  auto kernel = std::make_shared<const Kernel>(device_, desc);
-  kernels_.emplace(std::move(key), kernel);
+  std::promise<std::shared_ptr<const Kernel>> promise;
+  std::shared_future<std::shared_ptr<const Kernel>> compiled_elsewhere;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = kernels_.find(key);
+    if (it != kernels_.end())
+      compiled_elsewhere = it->second;
+    else
+      kernels_.emplace(key, promise.get_future().share());
+  }
+  if (compiled_elsewhere.valid()) return compiled_elsewhere.get();  // waits if it is still compiling
+  const auto start = std::chrono::steady_clock::now();
+  std::shared_ptr<const Kernel> kernel;
+  try {
+    kernel = std::make_shared<const Kernel>(device_, desc, pipeline_cache_);
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    kernels_.erase(key);  // the next caller tries again
+    promise.set_exception(std::current_exception());
+    throw;
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  compile_ms_this_thread += ms;
+  {
+    std::lock_guard lock(mutex_);
+    ++stats_.kernels;
+    stats_.total_ms += ms;
+    stats_.slowest_ms = std::max(stats_.slowest_ms, ms);
+  }
+  promise.set_value(kernel);
   return kernel;
+}
+
+CompileStats KernelCache::stats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
 }
 
 size_t KernelCache::size() const {

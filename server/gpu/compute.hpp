@@ -9,6 +9,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <future>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -36,7 +37,8 @@ struct KernelDesc {
 
 class Kernel {
  public:
-  Kernel(VkDevice device, const KernelDesc& desc);
+  // cache: a VkPipelineCache the driver may reuse compiled code from (or VK_NULL_HANDLE).
+  Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache = VK_NULL_HANDLE);
   ~Kernel();
   Kernel(const Kernel&) = delete;
   Kernel& operator=(const Kernel&) = delete;
@@ -57,18 +59,33 @@ class Kernel {
   VkPipeline pipeline_ = VK_NULL_HANDLE;
 };
 
+// What compiling has cost so far (for STATS and the benchmarks).
+struct CompileStats {
+  uint64_t kernels = 0;      // pipelines created
+  double total_ms = 0.0;     // wall time spent in vkCreateComputePipelines and friends
+  double slowest_ms = 0.0;   // the slowest single kernel
+};
+
 class KernelCache {
  public:
-  explicit KernelCache(VkDevice device) : device_(device) {}
-  // Thread-safe. Compiles on first use.
+  explicit KernelCache(VkDevice device, VkPipelineCache pipeline_cache = VK_NULL_HANDLE)
+      : device_(device), pipeline_cache_(pipeline_cache) {}
+  // Thread-safe. Compiles on first use, outside the cache's lock: threads
+  // compiling different kernels run in parallel, and a thread asking for a
+  // kernel another thread is compiling waits for that one kernel only.
   std::shared_ptr<const Kernel> get(const KernelDesc& desc);
   size_t size() const;
+  CompileStats stats() const;
+  // Milliseconds the calling thread has spent compiling (in any cache).
+  static double compile_ms_of_this_thread();
 
  private:
   using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>>;
   VkDevice device_;
+  VkPipelineCache pipeline_cache_;
   mutable std::mutex mutex_;
-  std::map<Key, std::shared_ptr<const Kernel>> kernels_;
+  std::map<Key, std::shared_future<std::shared_ptr<const Kernel>>> kernels_;
+  CompileStats stats_;
 };
 
 // Descriptor sets of one pipeline instance: a pool sized for `sets` sets of

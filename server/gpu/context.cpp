@@ -6,6 +6,7 @@
 
 #include "gpu/compute.hpp"
 #include "gpu/error.hpp"
+#include "gpu/pipeline_cache.hpp"
 
 namespace dn::gpu {
 namespace {
@@ -121,8 +122,11 @@ Context::Context(const ContextOptions& options)
     physical_ = devices[chosen];
     info_ = infos[chosen];
     create_device();
-    kernels_ = std::make_unique<KernelCache>(device_);
+    pipeline_cache_ = std::make_unique<PipelineCache>(device_, properties_, options.pipeline_cache_dir);
+    kernels_ = std::make_unique<KernelCache>(device_, pipeline_cache_->handle());
   } catch (...) {
+    kernels_.reset();
+    pipeline_cache_.reset();
     if (device_) vkDestroyDevice(device_, nullptr);
     if (messenger_) {
       auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
@@ -231,6 +235,7 @@ Context::~Context() {
     vkDeviceWaitIdle(device_);  // result ignored: nothing useful to do on loss at teardown
     shared_.clear();  // shared resources (buffers, kernels) before the cache and the device
     kernels_.reset();
+    pipeline_cache_.reset();
     vkDestroyDevice(device_, nullptr);
   }
   if (messenger_) {

@@ -27,6 +27,7 @@
 namespace dn::gpu {
 
 class KernelCache;
+class PipelineCache;
 
 struct ContextOptions {
   // Device selector (see select_device): empty, an index, or a name substring.
@@ -42,6 +43,9 @@ struct ContextOptions {
   // Testing: reach upload/download buffers through staging buffers even where
   // device memory is host-visible (exercises the discrete-GPU path on lavapipe).
   bool force_staging = false;
+  // Directory of the on-disk VkPipelineCache (gpu/pipeline_cache.hpp); empty:
+  // compiled pipelines are cached in memory only.
+  std::string pipeline_cache_dir;
 };
 
 class Context {
@@ -86,6 +90,7 @@ class Context {
   void mark_lost() { lost_.store(true); }
 
   KernelCache& kernels() { return *kernels_; }
+  PipelineCache& pipeline_cache() { return *pipeline_cache_; }
 
   // Per-context shared resources, one object per type T (e.g. the F_beta
   // table, pipelines::fb_lut): the first call makes it with `make`, later
@@ -127,6 +132,7 @@ class Context {
   std::mutex submit_mutex_;
   std::atomic<bool> lost_{false};
   bool force_staging_ = false;
+  std::unique_ptr<PipelineCache> pipeline_cache_;
   std::unique_ptr<KernelCache> kernels_;
   std::recursive_mutex shared_mutex_;
   std::unordered_map<std::type_index, std::shared_ptr<void>> shared_;

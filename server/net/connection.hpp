@@ -58,6 +58,7 @@ class Connection {
   uint64_t bytes_in = 0;
   uint64_t bytes_out = 0;
   std::vector<uint64_t> owned_sessions;
+  uint32_t sessions_being_built = 0;  // OPEN_SESSION accepted, pipeline still being built off the loop
   std::vector<uint64_t> watched_sessions;
 
  private:

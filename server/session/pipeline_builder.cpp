@@ -1,0 +1,125 @@
+#include "server/session/pipeline_builder.hpp"
+
+#include <chrono>
+
+#include "gpu/compute.hpp"
+#include "gpu/context.hpp"
+#include "gpu/pipeline_cache.hpp"
+
+namespace dn::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+PipelineBuilder::PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built)
+    : context_(context), on_built_(std::move(on_built)), thread_([this] { loop(); }) {}
+
+PipelineBuilder::~PipelineBuilder() { stop(); }
+
+void PipelineBuilder::stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    jobs_.clear();
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  if (warm_thread_.joinable()) warm_thread_.join();
+}
+
+void PipelineBuilder::loop() {
+  for (;;) {
+    std::function<void()> job;
+    {
+      std::unique_lock lock(mutex_);
+      cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+      if (stopping_) return;
+      job = std::move(jobs_.front());
+      jobs_.pop_front();
+    }
+    job();
+  }
+}
+
+void PipelineBuilder::submit(BuildRequest&& request) {
+  auto job = [this, request = std::move(request)]() mutable {
+    BuiltPipeline out;
+    const auto start = Clock::now();
+    const double compiled_before = gpu::KernelCache::compile_ms_of_this_thread();
+    try {
+      out.pipeline = pipelines::create(context_, request.config);
+    } catch (const std::exception& e) {
+      out.error = e.what();
+    }
+    out.build_ms = ms_since(start);
+    out.compile_ms = gpu::KernelCache::compile_ms_of_this_thread() - compiled_before;
+    out.request = std::move(request);
+    on_built_(std::move(out));
+  };
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;
+    jobs_.push_back(std::move(job));
+  }
+  cv_.notify_one();
+}
+
+void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) {
+  if (warm_thread_.joinable()) return;
+  warm_thread_ = std::thread([this, on_done = std::move(on_done)] {
+    WarmUpReport report;
+    const auto start = Clock::now();
+    const uint64_t kernels_before = context_.kernels().stats().kernels;
+    for (const auto& config : warm_up_configs()) {
+      {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return;
+      }
+      try {
+        pipelines::create(context_, config);  // built and dropped: its kernels stay in the cache
+        ++report.configs;
+      } catch (const std::exception& e) {
+        if (report.error.empty()) report.error = config.pipeline + ": " + e.what();
+      }
+    }
+    report.kernels = context_.kernels().stats().kernels - kernels_before;
+    try {
+      if (report.kernels > 0) report.cache_bytes = context_.pipeline_cache().save();
+    } catch (const std::exception& e) {
+      if (report.error.empty()) report.error = e.what();
+    }
+    report.ms = ms_since(start);
+    on_done(report);
+  });
+}
+
+std::vector<pipelines::SessionConfig> PipelineBuilder::warm_up_configs() {
+  using protocol::ChannelId;
+  std::vector<pipelines::SessionConfig> out;
+  for (const protocol::Format format : {protocol::Format::F32, protocol::Format::F16}) {
+    for (const auto& p : pipelines::available_pipelines()) {
+      pipelines::SessionConfig config;
+      config.width = 64;  // kernels do not depend on the resolution
+      config.height = 64;
+      config.pipeline = p.name;
+      config.output_format = format;
+      uint64_t mask = p.required_channels;
+      // Pipelines that take radiance or a split form: the radiance form, unless the split one is required.
+      const uint64_t radiance = protocol::channel_bit(ChannelId::Radiance);
+      const uint64_t split = protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular);
+      if ((p.optional_channels & radiance) && !(mask & split)) mask |= radiance;
+      for (const auto& c : protocol::kChannels)
+        if (mask & protocol::channel_bit(c.id)) config.channels.push_back({c.id, format});
+      if (!pipelines::validate(config)) out.push_back(std::move(config));
+    }
+  }
+  return out;
+}
+
+}  // namespace dn::server

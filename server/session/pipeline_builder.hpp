@@ -1,0 +1,81 @@
+// Builds sessions' pipelines off the event loop. Compiling kernels (seconds on
+// a cold lavapipe cache) and allocating device memory happen on this thread,
+// one request at a time in arrival order, so a client opening a session never
+// delays another connection's frames. Results go back through a callback that
+// must only hand them to the event loop.
+//
+// At start it can warm up, on a thread of its own so requests never queue
+// behind it: build each default pipeline once (fp32 and fp16 planes, default
+// parameters) so the first real session finds its kernels compiled, then save
+// the on-disk pipeline cache. A request needing a kernel the warm-up is
+// compiling waits for that kernel only (gpu::KernelCache).
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/pipelines/pipeline.hpp"
+
+namespace dn::gpu {
+class Context;
+}
+
+namespace dn::server {
+
+struct BuildRequest {
+  uint64_t connection_id = 0;
+  uint64_t request_id = 0;
+  pipelines::SessionConfig config;
+};
+
+struct BuiltPipeline {
+  BuildRequest request;
+  std::unique_ptr<pipelines::Pipeline> pipeline;  // null when building failed
+  std::string error;                              // why, when it failed
+  double build_ms = 0.0;                          // compile + allocate, wall clock
+  double compile_ms = 0.0;                        // of which compiling kernels
+};
+
+struct WarmUpReport {
+  uint32_t configs = 0;         // sessions built and dropped
+  uint64_t kernels = 0;         // kernels compiled
+  double ms = 0.0;              // wall clock of the whole warm-up
+  uint64_t cache_bytes = 0;     // pipeline cache written to disk (0: none)
+  std::string error;            // the first failure, if any
+};
+
+class PipelineBuilder {
+ public:
+  PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built);
+  ~PipelineBuilder();
+
+  // Starts the warm-up (once); on_done runs on the warm-up thread when it finishes.
+  void warm_up(std::function<void(const WarmUpReport&)> on_done);
+  void submit(BuildRequest&& request);
+  // Finishes the build in progress, drops the rest, joins the thread.
+  void stop();
+
+  // The sessions the warm-up builds: every offered pipeline with its default
+  // parameters and its least channel set, all planes fp32, then all fp16.
+  static std::vector<pipelines::SessionConfig> warm_up_configs();
+
+ private:
+  void loop();
+
+  gpu::Context& context_;
+  std::function<void(BuiltPipeline&&)> on_built_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> jobs_;
+  bool stopping_ = false;
+  std::thread thread_;
+  std::thread warm_thread_;
+};
+
+}  // namespace dn::server

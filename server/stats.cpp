@@ -1,0 +1,74 @@
+#include "server/stats.hpp"
+
+#include <algorithm>
+
+#include "gpu/compute.hpp"
+#include "gpu/context.hpp"
+#include "gpu/pipeline_cache.hpp"
+#include "server/pipelines/fb_lut.hpp"
+
+namespace dn::server {
+
+void ServerCounters::add_frame_timings(const std::vector<protocol::PassTiming>& timings) {
+  for (const auto& t : timings) {
+    auto& sum = pass_timings[t.name];
+    sum.total_ms += t.milliseconds;
+    ++sum.count;
+  }
+}
+
+void ServerCounters::add_build(const BuiltPipeline& built) {
+  ++builds.count;
+  builds.total_ms += built.build_ms;
+  builds.max_ms = std::max(builds.max_ms, built.build_ms);
+  builds.last_ms = built.build_ms;
+  builds.compile_ms += built.compile_ms;
+}
+
+protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live, gpu::Context& device) {
+  protocol::Stats st;
+  auto add = [&](std::string name, double v) { st.values.push_back({std::move(name), v}); };
+  auto n = [](uint64_t v) { return static_cast<double>(v); };
+  add("uptime_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - counters.started).count());
+  add("connections", n(live.connections));
+  add("connections_accepted", n(counters.connections_accepted));
+  add("sessions", n(live.sessions));
+  add("sessions_opened", n(counters.sessions_opened));
+  add("sessions_being_built", n(live.sessions_being_built));
+  add("frames_processed", n(counters.frames_processed));
+  add("frames_failed", n(counters.frames_failed));
+  add("frames_in_flight", n(live.frames_in_flight));
+  add("bytes_in", n(counters.bytes_in_closed + live.bytes_in_open));
+  add("bytes_out", n(counters.bytes_out_closed + live.bytes_out_open));
+  add("device_bytes", n(live.device_bytes));  // held by open sessions
+  add("fb_lut_ms", pipelines::fb_lut(device).compute_ms());  // computed at start-up: a lookup here
+
+  // Compiling: every kernel this device compiled, and the OPEN_SESSION builds.
+  const gpu::CompileStats compiled = device.kernels().stats();
+  add("kernels_compiled", n(compiled.kernels));
+  add("kernel_compile_ms", compiled.total_ms);
+  add("kernel_compile_max_ms", compiled.slowest_ms);
+  add("pipeline_cache_loaded_bytes", n(device.pipeline_cache().loaded_bytes()));
+  add("session_builds", n(counters.builds.count));
+  add("session_build_mean_ms", counters.builds.count ? counters.builds.total_ms / n(counters.builds.count) : 0.0);
+  add("session_build_max_ms", counters.builds.max_ms);
+  add("session_build_last_ms", counters.builds.last_ms);
+  add("session_build_compile_ms", counters.builds.compile_ms);
+  add("warm_up_done", live.warm_up ? 1.0 : 0.0);
+  if (live.warm_up) {
+    add("warm_up_ms", live.warm_up->ms);
+    add("warm_up_kernels", n(live.warm_up->kernels));
+  }
+
+  for (const auto& [id, frames] : live.session_frames) {  // lets a watcher find a session to ATTACH to
+    if (st.values.size() >= 200) break;
+    add("session." + std::to_string(id) + ".frames", n(frames));
+  }
+  for (const auto& [name, sum] : counters.pass_timings) {
+    if (st.values.size() >= 250) break;
+    add("pass." + name + ".mean_ms", sum.count ? sum.total_ms / n(sum.count) : 0.0);
+  }
+  return st;
+}
+
+}  // namespace dn::server

@@ -1,0 +1,61 @@
+// The server's counters and the STATS reply built from them
+// (docs/server.md lists every value).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dn/protocol/messages.hpp"
+#include "server/session/pipeline_builder.hpp"
+
+namespace dn::gpu {
+class Context;
+}
+
+namespace dn::server {
+
+struct ServerCounters {
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+  uint64_t frames_processed = 0;
+  uint64_t frames_failed = 0;
+  uint64_t sessions_opened = 0;
+  uint64_t connections_accepted = 0;
+  uint64_t bytes_in_closed = 0;  // from connections already closed
+  uint64_t bytes_out_closed = 0;
+
+  struct TimingSum {
+    double total_ms = 0;
+    uint64_t count = 0;
+  };
+  std::map<std::string, TimingSum> pass_timings;
+
+  // OPEN_SESSION builds (successful or not), off the event loop.
+  struct Builds {
+    uint64_t count = 0;
+    double total_ms = 0, max_ms = 0, last_ms = 0;
+    double compile_ms = 0;  // of total_ms, compiling kernels
+  } builds;
+
+  void add_frame_timings(const std::vector<protocol::PassTiming>& timings);
+  void add_build(const BuiltPipeline& built);
+};
+
+// What STATS reports besides the counters: the live state, gathered by the server.
+struct LiveState {
+  uint64_t connections = 0;
+  uint64_t bytes_in_open = 0, bytes_out_open = 0;  // of open connections
+  uint64_t sessions = 0;
+  uint64_t sessions_being_built = 0;
+  uint64_t frames_in_flight = 0;
+  uint64_t device_bytes = 0;
+  std::vector<std::pair<uint64_t, uint64_t>> session_frames;  // (session id, frames processed)
+  std::optional<WarmUpReport> warm_up;                         // once it finished
+};
+
+protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live, gpu::Context& device);
+
+}  // namespace dn::server
