@@ -10,7 +10,7 @@ namespace {
 
 using wire::Field;
 
-constexpr uint32_t kDefinedCapabilities = 0;  // HELLO.capabilities bits known to protocol 1.0
+constexpr uint32_t kDefinedCapabilities = 0;  // HELLO.capabilities bits known to protocol 1.1 (none)
 using wire::Reader;
 
 bool read_format(Reader& r, Format& out, const Field& f) {
@@ -28,6 +28,14 @@ bool read_channel_id(Reader& r, ChannelId& out, const Field& f) {
   if (!find_channel(static_cast<ChannelId>(v)))
     return r.fail(ErrorCode::Malformed, f, f.str() + " is " + std::to_string(v) + ", which is not a known channel id");
   out = static_cast<ChannelId>(v);
+  return true;
+}
+
+bool read_bool(Reader& r, bool& out, const Field& f) {
+  uint8_t v;
+  if (!r.u8(v, f)) return false;
+  if (v > 1) return r.fail(ErrorCode::Malformed, f, f.str() + " is " + std::to_string(v) + "; must be 0 or 1");
+  out = v == 1;
   return true;
 }
 
@@ -134,17 +142,52 @@ bool decode(Ctx& c, Hello& m) {
   Reader& r = c.r;
   const Field cap = c.f("capabilities");
   if (!r.u32(m.capabilities, cap)) return false;
-  // Capability bits are defined by later minor versions; a 1.0 sender sets
+  // Capability bits are defined by later minor versions; 1.0 and 1.1 define
   // none. Bits from a newer minor are not understood here and are dropped, so
-  // the decoded message is always a valid 1.0 message.
+  // the decoded message is always valid at this version.
   if (m.capabilities & ~kDefinedCapabilities) {
     if (!c.newer_minor())
       return r.fail(ErrorCode::ReservedFlags, cap,
-                    cap.str() + " is " + std::to_string(m.capabilities) + "; no capability is defined in protocol 1.0");
+                    cap.str() + " is " + std::to_string(m.capabilities) + "; no capability is defined in protocol 1.1");
     m.capabilities &= kDefinedCapabilities;
   }
   return r.str(m.client_name, c.f("client_name"), wire::kMaxNameBytes) &&
          r.str(m.auth_token, c.f("auth_token"), wire::kMaxTokenBytes);
+}
+
+// One pipeline's parameter table (WELCOME 1.1): unique names, min <= default <= max.
+bool read_parameter_infos(Reader& r, std::vector<ParameterInfo>& out, std::string_view type, long pipeline) {
+  const std::string base = "pipeline_parameters[" + std::to_string(pipeline) + "]";
+  uint16_t n;
+  if (!r.count(n, Field{type, base}, wire::kMaxParameters, wire::kParameterInfoMinBytes)) return false;
+  out.clear();
+  out.reserve(n);
+  for (uint16_t i = 0; i < n; ++i) {
+    ParameterInfo q;
+    const Field name_field{type, base, i, ".name"};
+    const Field default_field{type, base, i, ".default_value"};
+    const Field max_field{type, base, i, ".max_value"};
+    if (!r.str(q.name, name_field, wire::kMaxNameBytes)) return false;
+    for (const auto& prev : out)
+      if (prev.name == q.name)
+        return r.fail(ErrorCode::Malformed, name_field, name_field.str() + " \"" + q.name + "\" appears a second time");
+    if (!r.f64(q.default_value, default_field) || !r.f64(q.min_value, Field{type, base, i, ".min_value"}) ||
+        !r.f64(q.max_value, max_field))
+      return false;
+    if (q.max_value < q.min_value)
+      return r.fail(ErrorCode::Malformed, max_field,
+                    max_field.str() + " " + std::to_string(q.max_value) + " is below min_value " +
+                        std::to_string(q.min_value));
+    if (q.default_value < q.min_value || q.default_value > q.max_value)
+      return r.fail(ErrorCode::Malformed, default_field,
+                    default_field.str() + " " + std::to_string(q.default_value) + " is outside [" +
+                        std::to_string(q.min_value) + ", " + std::to_string(q.max_value) + "]");
+    if (!read_bool(r, q.integer, Field{type, base, i, ".integer"}) ||
+        !r.str(q.description, Field{type, base, i, ".description"}, wire::kMaxDescriptionBytes))
+      return false;
+    out.push_back(std::move(q));
+  }
+  return true;
 }
 
 bool decode(Ctx& c, Welcome& m) {
@@ -171,6 +214,19 @@ bool decode(Ctx& c, Welcome& m) {
       return false;
     m.pipelines.push_back(std::move(p));
   }
+  // 1.1 appends the parameter tables. A 1.1 server omits them only for a 1.0
+  // client, which would skip them anyway, so a 1.1 header means they are here.
+  m.has_parameters = c.h.version_minor >= 1;
+  if (!m.has_parameters) return true;
+  const Field tables{type, "pipeline_parameters"};
+  uint16_t tn;
+  if (!r.count(tn, tables, wire::kMaxPipelines, 2)) return false;
+  if (tn != n)
+    return r.fail(ErrorCode::Malformed, tables,
+                  tables.str() + " count " + std::to_string(tn) + " differs from the " + std::to_string(n) +
+                      " pipelines");
+  for (uint16_t i = 0; i < n; ++i)
+    if (!read_parameter_infos(r, m.pipelines[i].parameters, type, i)) return false;
   return true;
 }
 
@@ -205,11 +261,7 @@ bool decode(Ctx& c, Session& m) {
       !r.str(m.pipeline, c.f("pipeline"), wire::kMaxNameBytes) ||
       !read_format(r, m.output_format, c.f("output_format")))
     return false;
-  uint8_t ro;
-  const Field ro_field = c.f("read_only");
-  if (!r.u8(ro, ro_field)) return false;
-  if (ro > 1) return r.fail(ErrorCode::Malformed, ro_field, ro_field.str() + " is " + std::to_string(ro) + "; must be 0 or 1");
-  m.read_only = ro == 1;
+  if (!read_bool(r, m.read_only, c.f("read_only"))) return false;
   return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels");
 }
 

@@ -135,6 +135,20 @@ struct Put {
       s.u64(p.required_channels);
       s.u64(p.optional_channels);
     }
+    if (!m.has_parameters) return;  // the 1.0 payload, for a 1.0 client
+    // 1.1: appended after every 1.0 field, one list per pipeline, same order.
+    count(s, m.pipelines.size());
+    for (const auto& p : m.pipelines) {
+      count(s, p.parameters.size());
+      for (const auto& q : p.parameters) {
+        s.str(q.name);
+        s.f64(q.default_value);
+        s.f64(q.min_value);
+        s.f64(q.max_value);
+        s.u8(q.integer ? 1 : 0);
+        s.str(q.description);
+      }
+    }
   }
   void operator()(const Error& m) {
     s.u32(static_cast<uint32_t>(m.code));
@@ -207,6 +221,23 @@ struct Put {
   }
 };
 
+// The minor version whose fields the payload holds: the header always says
+// kVersionMinor (the sender's own), but a WELCOME for a 1.0 client stops
+// after the 1.0 fields (docs/protocol.md §10), so it is checked as 1.0.
+uint8_t payload_minor(const Message& message) {
+  if (const auto* w = std::get_if<Welcome>(&message); w && !w->has_parameters) return 0;
+  return kVersionMinor;
+}
+
+void check_welcome_parameters(const Message& message) {
+  const auto* w = std::get_if<Welcome>(&message);
+  if (!w || w->has_parameters) return;
+  for (size_t i = 0; i < w->pipelines.size(); ++i)
+    if (!w->pipelines[i].parameters.empty())
+      throw std::invalid_argument("dn::protocol::encode: WELCOME.pipelines[" + std::to_string(i) +
+                                  "] has parameters but has_parameters is false, so they would not be sent");
+}
+
 }  // namespace
 
 void encode(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& out) {
@@ -217,12 +248,20 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
     throw std::invalid_argument(std::string("dn::protocol::encode: header.flags NO_OUTPUT is only defined for FRAME, not ") +
                                 to_string(type));
 
+  check_welcome_parameters(message);
+
   Counter counter;
   std::visit(Put<Counter>{counter}, message);
   const uint64_t payload_size = counter.size();
   if (payload_size > std::numeric_limits<uint32_t>::max())
     throw std::length_error("dn::protocol::encode: payload of " + std::to_string(payload_size) +
                             " bytes does not fit the u32 payload_length");
+  // A header over its type's fixed limit is refused before its payload is read
+  // (a WELCOME 1.1 with long parameter tables can get there).
+  const uint64_t type_limit = max_payload_bytes(type, std::numeric_limits<uint64_t>::max());
+  if (payload_size > type_limit)
+    throw std::invalid_argument("dn::protocol::encode: header.payload_length " + std::to_string(payload_size) +
+                                " exceeds the " + std::to_string(type_limit) + "-byte limit for " + to_string(type));
 
   Header h;
   h.type = type;
@@ -242,7 +281,9 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
   // sender and is reported here rather than by the peer.
   Message check;
   const std::span<const uint8_t> payload(out.data() + start + kHeaderSize, payload_size);
-  if (auto err = decode_payload(h, payload, check)) {
+  Header as_read = h;
+  as_read.version_minor = payload_minor(message);
+  if (auto err = decode_payload(as_read, payload, check)) {
     out.resize(start);
     throw std::invalid_argument("dn::protocol::encode: " + err->field + ": " + err->message);
   }

@@ -19,8 +19,9 @@ inline constexpr size_t kMaxNameBytes = 64;       // pipeline, parameter, timing
 inline constexpr size_t kMaxTextBytes = 1024;     // ERROR.field, ERROR.message
 inline constexpr size_t kMaxTokenBytes = 256;     // HELLO.auth_token
 inline constexpr size_t kMaxVersionBytes = 256;   // WELCOME.server_version, WELCOME.device_name
+inline constexpr size_t kMaxDescriptionBytes = 512;  // WELCOME.pipeline_parameters[i][j].description (1.1)
 inline constexpr size_t kMaxPipelines = 64;
-inline constexpr size_t kMaxParameters = 64;
+inline constexpr size_t kMaxParameters = 64;      // OPEN_SESSION.parameters, WELCOME.pipeline_parameters[i]
 inline constexpr size_t kMaxChannels = 32;
 inline constexpr size_t kMaxPlanes = 32;
 inline constexpr size_t kMaxTimings = 64;
@@ -28,6 +29,8 @@ inline constexpr size_t kMaxStats = 256;
 
 inline constexpr size_t kFrameInfoBytes = 296;   // fixed part of FRAME before the plane list
 inline constexpr size_t kPlaneHeaderBytes = 12;  // u8 id, u8 format, u16 reserved, u64 byte_length
+// WELCOME 1.1 parameter entry without its strings' bytes: name length, 3 x f64, bool, description length.
+inline constexpr size_t kParameterInfoMinBytes = 2 + 3 * 8 + 1 + 2;
 
 // ---- little-endian stores/loads (no alignment assumptions) ---------------
 inline void store_u16(uint8_t* p, uint16_t v) {

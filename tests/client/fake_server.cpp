@@ -33,6 +33,19 @@ Welcome test_welcome(uint32_t max_in_flight, uint64_t max_message_bytes) {
   return w;
 }
 
+Welcome test_welcome_with_parameters() {
+  Welcome w = test_welcome();
+  w.has_parameters = true;
+  w.pipelines[0].parameters = {
+      {"alpha_colour", 0.05, 0.0, 1.0, false, "Floor of the temporal blend weight of the colour."},
+      {"atrous_iterations", 4.0, 0.0, 8.0, true, "Number of a-trous iterations."}};
+  PipelineInfo passthrough;
+  passthrough.name = "passthrough";
+  passthrough.required_channels = channel_bit(ChannelId::Radiance);
+  w.pipelines.push_back(passthrough);
+  return w;
+}
+
 std::optional<Received> Peer::recv(int timeout_ms) {
   for (;;) {
     std::span<uint8_t> buf = reader_.writable();
@@ -101,8 +114,24 @@ Hello Peer::handshake(const std::optional<std::string>& token, uint32_t max_in_f
     send(Error{ErrorCode::Unauthenticated, "HELLO.auth_token", "bad token"}, m->header.request_id);
     return *hello;
   }
-  send(test_welcome(max_in_flight, max_message_bytes), m->header.request_id);
+  send_welcome(test_welcome(max_in_flight, max_message_bytes), m->header.request_id);
   return *hello;
+}
+
+Hello Peer::handshake_with(const Welcome& welcome) {
+  auto m = recv();
+  if (!m || !std::holds_alternative<Hello>(m->message)) {
+    ADD_FAILURE() << "fake server: no HELLO";
+    return {};
+  }
+  send_welcome(welcome, m->header.request_id);
+  return std::get<Hello>(m->message);
+}
+
+void Peer::send_welcome(const Welcome& welcome, uint64_t request_id) {
+  std::vector<uint8_t> bytes = encode(welcome, request_id);
+  if (!welcome.has_parameters) bytes[5] = 0;  // header version_minor: a 1.0 server
+  send_raw(bytes);
 }
 
 void Peer::close() {

@@ -31,10 +31,16 @@ class Peer {
   void send_raw(const std::vector<uint8_t>& bytes);
   // Reads and discards exactly n bytes (for "close in the middle of a message").
   bool read_raw(size_t n, int timeout_ms = 5000);
-  // Waits for HELLO, checks the token when `token` is set, answers WELCOME.
-  // Returns the HELLO.
+  // Waits for HELLO, checks the token when `token` is set, answers WELCOME
+  // (test_welcome: a protocol 1.0 server, no parameter tables). Returns the HELLO.
   protocol::Hello handshake(const std::optional<std::string>& token = std::nullopt, uint32_t max_in_flight = 4,
                             uint64_t max_message_bytes = 64ull << 20);
+  // Waits for HELLO and answers `welcome`. Returns the HELLO.
+  protocol::Hello handshake_with(const protocol::Welcome& welcome);
+  // A WELCOME with parameter tables is sent as a 1.1 server sends it; one
+  // without, as a 1.0 server (header minor 0), since a 1.1 client requires
+  // the tables under a 1.1 header.
+  void send_welcome(const protocol::Welcome& welcome, uint64_t request_id);
   void close();
   bool eof() const { return eof_; }
 
@@ -45,6 +51,9 @@ class Peer {
 };
 
 protocol::Welcome test_welcome(uint32_t max_in_flight = 4, uint64_t max_message_bytes = 64ull << 20);
+// test_welcome() from a 1.1 server: svgf takes alpha_colour (0.05 in [0, 1])
+// and atrous_iterations (integer, 4 in [0, 8]); passthrough takes nothing.
+protocol::Welcome test_welcome_with_parameters();
 
 class FakeServer {
  public:

@@ -1,6 +1,7 @@
 // The fuzz seed corpus (tests/fuzz/corpus): one valid message of every type
 // as a stream, the same as bare payloads (first byte = type - 1, see
-// tests/fuzz/protocol_fuzz.cpp), and one multi-message stream. The files are
+// tests/fuzz/protocol_fuzz.cpp), one multi-message stream, and a WELCOME
+// from a 1.0 server (no parameter tables). The files are
 // committed; this test checks they are still what the encoder writes and
 // rewrites them when DN_WRITE_FUZZ_CORPUS=1 is set.
 #include <gtest/gtest.h>
@@ -29,6 +30,14 @@ std::vector<Message> seed_messages(const std::vector<uint8_t>& pixels) {
   const std::span<const uint8_t> px(pixels);
   Welcome welcome{"dnserver 0.1.0", "llvmpipe (LLVM 15.0.6, 256 bits)", {64u << 20, 1u << 30, 8, 4096, 4096, 4}, {}};
   welcome.pipelines = {{"svgf", 0x1C9, 0x200}, {"svgf-fb", 0x1F9, 0x200}};
+  welcome.has_parameters = true;
+  const std::vector<ParameterInfo> svgf_parameters = {
+      {"alpha_colour", 0.05, 0.0, 1.0, false, "Floor of the temporal blend weight of the demodulated colour."},
+      {"atrous_iterations", 4.0, 0.0, 8.0, true, "Number of a-trous iterations (steps 1, 2, 4, ...)."}};
+  welcome.pipelines[0].parameters = svgf_parameters;
+  welcome.pipelines[1].parameters = svgf_parameters;
+  welcome.pipelines[1].parameters.push_back(
+      {"specular_demodulated", 0.0, 0.0, 1.0, true, "1: the specular channel is already divided by F_beta."});
   Frame frame;
   frame.info.session_id = 1;
   frame.info.frame_index = 17;
@@ -80,6 +89,13 @@ std::vector<std::pair<std::string, std::vector<uint8_t>>> seeds() {
     stream.insert(stream.end(), bytes.begin(), bytes.end());
   }
   out.emplace_back("stream.msg", stream);
+  // A 1.0 server's WELCOME: header minor 0, the payload ends after the pipelines.
+  Welcome old = std::get<Welcome>(seed_messages(pixels)[1]);
+  old.has_parameters = false;
+  for (auto& p : old.pipelines) p.parameters.clear();
+  std::vector<uint8_t> old_bytes = encode(old, 1, 0);
+  old_bytes[5] = 0;
+  out.emplace_back("welcome_1_0.msg", old_bytes);
   return out;
 }
 

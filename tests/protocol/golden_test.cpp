@@ -7,11 +7,11 @@
 namespace dn::protocol::test {
 namespace {
 
-// HELLO, request_id 7, client_name "cli", auth_token "tk".
-std::vector<uint8_t> golden_hello() {
+// HELLO, request_id 7, client_name "cli", auth_token "tk"; header version 1.minor.
+std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, 0x00})              // version 1.0
+      .raw({0x01, minor})             // version 1.0 or 1.1
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -24,9 +24,9 @@ std::vector<uint8_t> golden_hello() {
 }
 
 // FRAME with NO_OUTPUT, request_id 0x1122334455667788, one 2-pixel F16 depth plane.
-std::vector<uint8_t> golden_frame() {
+std::vector<uint8_t> golden_frame(int minor) {
   return Bytes{}
-      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, 0x00})  // magic, version 1.0
+      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
       .raw({0x06, 0x00})                          // type 6 = FRAME
       .raw({0x01, 0x00, 0x00, 0x00})              // flags NO_OUTPUT
       .raw({0x3A, 0x01, 0x00, 0x00})              // payload_length 314
@@ -63,9 +63,9 @@ std::vector<uint8_t> golden_frame() {
 }
 
 // OPEN_SESSION 1920x1080 "svgf", F16 output, alpha = 0.2, radiance F32 + depth F16.
-std::vector<uint8_t> golden_open_session() {
+std::vector<uint8_t> golden_open_session(int minor) {
   return Bytes{}
-      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, 0x00, 0x04, 0x00})  // magic, 1.0, type 4
+      .raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor, 0x04, 0x00})  // magic, 1.minor, type 4
       .raw({0, 0, 0, 0})                                      // flags
       .raw({0x27, 0, 0, 0})                                   // payload_length 39
       .raw({0x01, 0, 0, 0, 0, 0, 0, 0})                       // request_id 1
@@ -84,7 +84,7 @@ std::vector<uint8_t> golden_open_session() {
 }
 
 TEST(Golden, HelloDecodes) {
-  const auto bytes = golden_hello();
+  const auto bytes = golden_hello(0);  // a 1.0 client's HELLO still decodes
   ASSERT_EQ(bytes.size(), 24u + 13u);
   Header h;
   ASSERT_FALSE(decode_header(bytes, kMaxMessage, h));
@@ -105,11 +105,23 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello());
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(1));  // the sender's own version: 1.1
+}
+
+TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
+  for (int minor : {0, 1}) {
+    Decoded d;
+    std::vector<uint8_t> storage;
+    const auto bytes = golden_hello(minor);
+    auto err = decode_message(bytes, kMaxMessage, d, storage);
+    ASSERT_FALSE(err) << minor << ": " << err->field << ": " << err->message;
+    EXPECT_EQ(d.header.version_minor, minor);
+    EXPECT_EQ(diff(Hello{0, "cli", "tk"}, d.message), "");
+  }
 }
 
 TEST(Golden, FrameDecodes) {
-  const auto bytes = golden_frame();
+  const auto bytes = golden_frame(0);
   ASSERT_EQ(bytes.size(), 24u + 314u);
   Header h;
   ASSERT_FALSE(decode_header(bytes, kMaxMessage, h));
@@ -161,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame());
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(1));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session();
+  const auto bytes = golden_open_session(1);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;
@@ -180,6 +192,10 @@ TEST(Golden, OpenSessionBothWays) {
   auto err = decode_message(bytes, kMaxMessage, d, storage);
   ASSERT_FALSE(err) << err->field << ": " << err->message;
   EXPECT_EQ(d.header.request_id, 1u);
+  EXPECT_EQ(diff(o, d.message), "");
+  // The same payload from a 1.0 client.
+  const auto old = golden_open_session(0);
+  ASSERT_FALSE(decode_message(old, kMaxMessage, d, storage));
   EXPECT_EQ(diff(o, d.message), "");
 }
 

@@ -228,15 +228,17 @@ TEST(PayloadRules, TrailingBytesNamedWithCount) {
 }
 
 TEST(PayloadRules, NewerMinorVersionMayAppendFields) {
-  // A HELLO with 3 appended bytes: trailing at minor 0, the 1.1 fields at minor 1.
+  // A HELLO with 3 appended bytes: trailing at minors 0 and 1, the 1.2 fields at minor 2.
   auto hello = encode(Hello{0, "x", ""});
   hello.insert(hello.end(), {9, 9, 9});
   put_u32(hello, 12, static_cast<uint32_t>(hello.size() - P));
   EXPECT_EQ(expect_error(hello).message, "HELLO: 3 trailing bytes");
-  hello[5] = 1;  // minor 1
+  hello[5] = 0;  // minor 0
+  EXPECT_EQ(expect_error(hello).message, "HELLO: 3 trailing bytes");
+  hello[5] = 2;  // minor 2
   expect_ok(hello);
   // A newer minor may also set capability bits this version does not know;
-  // they are dropped, so the decoded HELLO is a valid 1.0 message.
+  // they are dropped, so the decoded HELLO is a valid 1.1 message.
   put_u32(hello, P, 0x10);
   {
     Decoded d;
@@ -246,10 +248,12 @@ TEST(PayloadRules, NewerMinorVersionMayAppendFields) {
     EXPECT_EQ(std::get<Hello>(d.message).client_name, "x");
     EXPECT_NO_THROW(encode(d.message));
   }
-  hello[5] = 0;
-  auto e = expect_error(hello);
-  EXPECT_EQ(e.code, ErrorCode::ReservedFlags);
-  EXPECT_EQ(e.field, "HELLO.capabilities");
+  for (int minor : {0, 1}) {
+    hello[5] = static_cast<uint8_t>(minor);
+    auto e = expect_error(hello);
+    EXPECT_EQ(e.code, ErrorCode::ReservedFlags);
+    EXPECT_EQ(e.field, "HELLO.capabilities");
+  }
 }
 
 TEST(PayloadRules, SessionReadOnlyIsBool) {

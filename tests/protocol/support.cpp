@@ -1,6 +1,7 @@
 #include "support.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -139,6 +140,20 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       m.limits = {random_u64(rng), random_u64(rng), random_u32(rng), random_u32(rng), random_u32(rng), random_u32(rng)};
       size_t n = list_size(64);
       for (size_t i = 0; i < n; ++i) m.pipelines.push_back({random_string(rng, 64), random_u64(rng), random_u64(rng)});
+      // The current minor's full message: parameter tables (1.1), kept within
+      // the 65536-byte WELCOME limit that the list limits alone could exceed.
+      m.has_parameters = true;
+      size_t bytes = 2 + 256 + 2 + 256 + 32 + 2 + n * (2 + 64 + 16) + 2 + n * 2;
+      for (auto& p : m.pipelines) {
+        for (auto& name : unique_names(rng, list_size(64))) {
+          std::array<double, 3> v{random_double(rng), random_double(rng), random_double(rng)};
+          std::sort(v.begin(), v.end());
+          ParameterInfo q{name, v[1], v[0], v[2], uniform<int>(rng, 0, 1) == 1, random_string(rng, 512)};
+          bytes += 2 + q.name.size() + 25 + 2 + q.description.size();
+          if (bytes > 65536) break;
+          p.parameters.push_back(std::move(q));
+        }
+      }
       o.message = m;
       break;
     }
@@ -282,7 +297,18 @@ struct Differ {
       eq("pipelines[].name", a.pipelines[i].name, b.pipelines[i].name);
       eq("pipelines[].required_channels", a.pipelines[i].required_channels, b.pipelines[i].required_channels);
       eq("pipelines[].optional_channels", a.pipelines[i].optional_channels, b.pipelines[i].optional_channels);
+      eq("pipelines[].parameters.size", a.pipelines[i].parameters.size(), b.pipelines[i].parameters.size());
+      for (size_t j = 0; j < a.pipelines[i].parameters.size() && !done; ++j) {
+        const ParameterInfo &x = a.pipelines[i].parameters[j], &y = b.pipelines[i].parameters[j];
+        eq("pipelines[].parameters[].name", x.name, y.name);
+        bits("pipelines[].parameters[].default_value", x.default_value, y.default_value);
+        bits("pipelines[].parameters[].min_value", x.min_value, y.min_value);
+        bits("pipelines[].parameters[].max_value", x.max_value, y.max_value);
+        eq("pipelines[].parameters[].integer", x.integer, y.integer);
+        eq("pipelines[].parameters[].description", x.description, y.description);
+      }
     }
+    eq("has_parameters", a.has_parameters, b.has_parameters);
   }
   void operator()(const Error& a, const Error& b) {
     eq("code", a.code, b.code);

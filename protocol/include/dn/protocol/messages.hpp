@@ -1,4 +1,4 @@
-// Protocol v1 messages: plain structs, one per message type.
+// Protocol v1 messages (minor version 1.1): plain structs, one per message type.
 // docs/protocol.md is the normative description of every byte; this header
 // mirrors it. Nothing here knows about sockets or Vulkan.
 #pragma once
@@ -17,7 +17,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 0;
+inline constexpr uint8_t kVersionMinor = 1;  // 1.1: parameter metadata in WELCOME
 inline constexpr size_t kHeaderSize = 24;
 
 enum class MessageType : uint16_t {
@@ -83,10 +83,23 @@ struct Hello {
   std::string auth_token;  // empty when the server needs none
 };
 
+// One tunable of a pipeline, as WELCOME 1.1 announces it (pipeline_parameters).
+struct ParameterInfo {
+  std::string name;
+  double default_value = 0.0;
+  double min_value = 0.0;  // inclusive range
+  double max_value = 0.0;
+  bool integer = false;    // the value must be integral
+  std::string description;  // one line, at most 512 bytes
+};
+
 struct PipelineInfo {
   std::string name;
   uint64_t required_channels = 0;  // bit i = ChannelId i
   uint64_t optional_channels = 0;
+  // Every parameter the pipeline takes; meaningful only when
+  // Welcome::has_parameters (a 1.0 server announces none).
+  std::vector<ParameterInfo> parameters;
 };
 
 struct Limits {
@@ -103,6 +116,10 @@ struct Welcome {
   std::string device_name;
   Limits limits;
   std::vector<PipelineInfo> pipelines;
+  // 1.1: the payload carries pipeline_parameters, i.e. pipelines[i].parameters
+  // are complete. Decoded as true exactly when the header's minor is >= 1; a
+  // server sets it only for a client whose HELLO had minor >= 1.
+  bool has_parameters = false;
 };
 
 struct Error {
