@@ -1,39 +1,27 @@
 // Internal: the socket, the framing reader and the receive demultiplexer
 // shared by a Connection and its Sessions and Watchers. Not installed.
+//
+// The members are defined by job: connection_state.cpp (lifetime and
+// failures), connect.cpp (socket connect + HELLO/WELCOME), send.cpp,
+// receive.cpp (reading, waiting for replies), heartbeat.cpp (answering the
+// server's PING); routing is demux.cpp and watch_queues.cpp.
 #pragma once
 
-#include <chrono>
 #include <cstdint>
-#include <deque>
-#include <memory>
 #include <optional>
 #include <span>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
-#include "dn/client/connection.hpp"
+#include "demux.hpp"
 #include "dn/client/endpoint.hpp"
 #include "dn/client/error.hpp"
+#include "dn/client/options.hpp"
 #include "dn/protocol/codec.hpp"
+#include "incoming.hpp"
+#include "watch_queues.hpp"
 
 namespace dn::client::detail {
-
-using Clock = std::chrono::steady_clock;
-
-// One decoded message. Plane views inside `message` point into *payload.
-struct Incoming {
-  protocol::Header header{};
-  std::shared_ptr<std::vector<uint8_t>> payload;
-  protocol::Message message;
-  Clock::time_point received{};
-};
-
-// Messages for a watcher: RESULT copies, or the end of the stream.
-struct WatchQueue {
-  uint64_t session_id = 0;
-  std::deque<Incoming> items;
-};
 
 class ConnectionState {
  public:
@@ -67,15 +55,15 @@ class ConnectionState {
   Incoming wait_reply(uint64_t request_id, std::optional<Milliseconds> timeout = std::nullopt);
   // Reply to request_id if it has arrived (after reading what is available).
   std::optional<Incoming> take_reply_if_ready(uint64_t request_id);
-  bool reply_ready(uint64_t request_id) const;
+  bool reply_ready(uint64_t request_id) const { return demux_.reply_ready(request_id); }
   // The reply will never be collected: drop it when (or if) it arrives.
-  void forget(uint64_t request_id);
+  void forget(uint64_t request_id) { demux_.forget(request_id); }
 
   // Watchers: messages with request_id == attach_request_id, and RESULTs of
   // session_id that answer no pending request, go to the watch queue.
-  void add_watch(uint64_t attach_request_id, uint64_t session_id);
-  void remove_watch(uint64_t attach_request_id);
-  WatchQueue* watch(uint64_t attach_request_id);
+  void add_watch(uint64_t attach_request_id, uint64_t session_id) { demux_.watches().add(attach_request_id, session_id); }
+  void remove_watch(uint64_t attach_request_id) { demux_.watches().remove(attach_request_id); }
+  WatchQueue* watch(uint64_t attach_request_id) { return demux_.watches().find(attach_request_id); }
   // Reads what is available without blocking, or waits up to `timeout` for
   // something to read (nullopt: io_timeout). Returns false on timeout.
   bool pump(std::optional<Milliseconds> timeout);
@@ -88,6 +76,8 @@ class ConnectionState {
   void connect_socket(Clock::time_point deadline, int buffer_bytes);
   void read_available();  // non-blocking: recv until EAGAIN, dispatching every complete message
   void dispatch(Incoming&& in);
+  // The server's heartbeat PING (request_id 0) is answered here and goes no further.
+  bool take_heartbeat(const Incoming& in);
   // Answers the server's heartbeat PING; never in the middle of another message.
   void send_pong_if_due();
   void wait_fd(short events, Clock::time_point deadline, bool has_deadline, const char* what);
@@ -113,18 +103,10 @@ class ConnectionState {
   std::optional<uint64_t> pong_due_;  // payload of a heartbeat PING not yet answered
   bool sending_ = false;              // a message is partly written: nothing else may be
 
-  // request_id -> reply (empty until it arrives). Keys present = awaited.
-  struct Pending {
-    protocol::MessageType sent = protocol::MessageType::Ping;
-    std::optional<Incoming> reply;
-  };
-  std::unordered_map<uint64_t, Pending> pending_;
-  std::string waiting_for(uint64_t request_id) const;
-  std::unordered_map<uint64_t, WatchQueue> watches_;  // by ATTACH request id
+  Demultiplexer demux_;
 
   bool broken_ = false;
   std::optional<Error> failure_;
-  std::optional<protocol::Error> last_unsolicited_error_;  // e.g. a framing ERROR before the server hangs up
   std::vector<uint8_t> send_buffer_;
 };
 

@@ -9,12 +9,12 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
-#include <optional>
 #include <string>
 #include <string_view>
-#include <vector>
 
 #include "dn/client/error.hpp"
+#include "dn/client/options.hpp"
+#include "dn/client/session_desc.hpp"
 #include "dn/protocol/messages.hpp"
 
 namespace dn::client {
@@ -24,48 +24,6 @@ class ConnectionState;
 }
 class Session;
 class Watcher;
-
-using Milliseconds = std::chrono::milliseconds;
-
-struct ConnectOptions {
-  std::string client_name = "dn-client";
-  // The token sent in HELLO, in order of precedence: auth_token if set; the
-  // first line of token_file if non-empty; $DN_TOKEN; the first line of the
-  // file named by $DN_TOKEN_FILE; otherwise empty (a server without auth).
-  std::optional<std::string> auth_token;
-  std::string token_file;
-  Milliseconds connect_timeout{10000};  // socket connect + HELLO/WELCOME
-  Milliseconds io_timeout{120000};      // longest wait for one reply or one send to progress; 0 = forever
-  uint64_t max_message_bytes = 0;       // largest message accepted from the server; 0 = 4 GiB
-  int socket_buffer_bytes = 8 << 20;    // SO_SNDBUF / SO_RCVBUF request; 0 keeps the OS default
-};
-
-// The token ConnectOptions resolves to (see above). Throws Error (Usage) when
-// a named token file cannot be read.
-std::string resolve_auth_token(const ConnectOptions& options);
-
-// What OPEN_SESSION asks for.
-struct SessionDesc {
-  uint32_t width = 0;
-  uint32_t height = 0;
-  std::string pipeline;
-  protocol::Format output_format = protocol::Format::F32;
-  std::vector<protocol::Parameter> parameters;
-  std::vector<protocol::ChannelDecl> channels;
-  // Frames a Session keeps in flight before submit() blocks. 0: the server's
-  // WELCOME limits.max_frames_in_flight (3 when the server reports 0). Values
-  // above the server's limit are clamped to it.
-  uint32_t max_in_flight = 0;
-
-  SessionDesc& channel(protocol::ChannelId id, protocol::Format format = protocol::Format::F32) {
-    channels.push_back({id, format});
-    return *this;
-  }
-  SessionDesc& parameter(std::string name, double value) {
-    parameters.push_back({std::move(name), value});
-    return *this;
-  }
-};
 
 class Connection {
  public:
@@ -79,6 +37,8 @@ class Connection {
   Connection& operator=(Connection&&) noexcept;
   ~Connection();
 
+  // Server version, device, limits, pipelines; with a 1.1 server
+  // (welcome().has_parameters) every pipeline's parameter table.
   const protocol::Welcome& welcome() const;
   const std::string& endpoint() const;  // canonical URL, as used in error messages
   const protocol::PipelineInfo* find_pipeline(std::string_view name) const;  // from WELCOME; nullptr if absent
