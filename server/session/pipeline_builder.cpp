@@ -1,6 +1,9 @@
 #include "server/session/pipeline_builder.hpp"
 
+#include <unistd.h>
+
 #include <chrono>
+#include <cstdlib>
 
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
@@ -47,8 +50,22 @@ void PipelineBuilder::loop() {
   }
 }
 
+// Test hook: with DN_TEST_HOLD_BUILDS=PATH every build waits until PATH
+// exists, so an end-to-end test can show that other connections are served
+// while a session is being built without relying on how long a build takes.
+void PipelineBuilder::hold_for_test() {
+  const char* path = std::getenv("DN_TEST_HOLD_BUILDS");
+  if (!path || !*path) return;
+  for (;;) {
+    if (::access(path, F_OK) == 0) return;
+    std::unique_lock lock(mutex_);
+    if (cv_.wait_for(lock, std::chrono::milliseconds(20), [this] { return stopping_; })) return;
+  }
+}
+
 void PipelineBuilder::submit(BuildRequest&& request) {
   auto job = [this, request = std::move(request)]() mutable {
+    hold_for_test();
     BuiltPipeline out;
     const auto start = Clock::now();
     const double compiled_before = gpu::KernelCache::compile_ms_of_this_thread();

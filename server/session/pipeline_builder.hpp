@@ -67,6 +67,7 @@ class PipelineBuilder {
 
  private:
   void loop();
+  void hold_for_test();
 
   gpu::Context& context_;
   std::function<void(BuiltPipeline&&)> on_built_;
