@@ -7,6 +7,7 @@
 
 #include "connection_state.hpp"
 #include "dn/client/endpoint.hpp"
+#include "dn/client/parameters.hpp"
 #include "dn/client/session.hpp"
 #include "dn/client/watcher.hpp"
 
@@ -97,6 +98,9 @@ Session Connection::open_session(const SessionDesc& desc) {
     throw Error::usage(protocol::ErrorCode::InvalidParameter, "OPEN_SESSION.width",
                        "session size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
                            " is empty");
+  // With the server's parameter tables (protocol 1.1) a misspelt name or a
+  // value out of range fails here, naming the valid names and the range.
+  check_parameters(state_->welcome(), desc);
   protocol::OpenSession open;
   open.width = desc.width;
   open.height = desc.height;

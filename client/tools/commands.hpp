@@ -11,6 +11,7 @@ int run_denoise(const std::vector<std::string>& args);
 int run_watch(const std::vector<std::string>& args);
 int run_stats(const std::vector<std::string>& args);
 int run_ping(const std::vector<std::string>& args);
+int run_pipelines(const std::vector<std::string>& args);
 
 // --server, or $DN_SERVER; UsageError when neither is set.
 std::string server_url(const std::string& option_value);

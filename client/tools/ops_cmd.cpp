@@ -1,10 +1,11 @@
-// dn ping / dn stats: small operational checks.
+// dn ping / dn stats / dn pipelines: small operational checks.
 #include <cstdio>
 #include <cstdlib>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "dn/client/client.hpp"
+#include "server_info.hpp"
 
 namespace dn::cli {
 
@@ -13,26 +14,6 @@ std::string server_url(const std::string& option_value) {
   if (const char* env = std::getenv("DN_SERVER"); env && *env) return env;
   throw UsageError("missing --server URL (or set DN_SERVER), e.g. --server unix:///tmp/dnserver.sock");
 }
-
-namespace {
-
-std::string channel_set(uint64_t mask) {
-  std::string out;
-  for (const auto& c : protocol::kChannels)
-    if (mask & protocol::channel_bit(c.id)) out += (out.empty() ? "" : ",") + std::string(c.name);
-  return out.empty() ? "-" : out;
-}
-
-client::Connection connect_for(const Args& args, const char* name) {
-  client::ConnectOptions o;
-  o.client_name = name;
-  if (auto tf = args.get("token-file")) o.token_file = *tf;
-  const double t = args.get_double("timeout", 10.0);
-  o.connect_timeout = o.io_timeout = std::chrono::milliseconds(static_cast<long long>(t * 1000.0));
-  return client::Connection::connect(server_url(args.get_or("server", "")), o);
-}
-
-}  // namespace
 
 int run_ping(const std::vector<std::string>& argv) {
   Args args("ping", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
@@ -52,9 +33,11 @@ int run_ping(const std::vector<std::string>& argv) {
   std::printf("limits: max message %llu bytes, %llu bytes per session, %u sessions, %ux%u, %u frames in flight\n",
               (unsigned long long)w.limits.max_message_bytes, (unsigned long long)w.limits.max_session_bytes,
               w.limits.max_sessions, w.limits.max_width, w.limits.max_height, w.limits.max_frames_in_flight);
-  for (const auto& p : w.pipelines)
+  for (const auto& p : w.pipelines) {
     std::printf("pipeline %-12s requires %s; optional %s\n", p.name.c_str(), channel_set(p.required_channels).c_str(),
                 channel_set(p.optional_channels).c_str());
+    std::printf("  parameters: %s\n", parameter_names(w, p).c_str());
+  }
   double best = 1e300, sum = 0;
   for (long long i = 0; i < count; ++i) {
     const double ms = conn.ping().count();
@@ -81,6 +64,27 @@ int run_stats(const std::vector<std::string>& argv) {
   size_t width = 0;
   for (const auto& v : s.values) width = std::max(width, v.name.size());
   for (const auto& v : s.values) std::printf("%-*s %.17g\n", int(width), v.name.c_str(), v.value);
+  return 0;
+}
+
+int run_pipelines(const std::vector<std::string>& argv) {
+  Args args("pipelines", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+                          {"pipeline", "-p", true, false, "show only this pipeline", "NAME"},
+                          {"token-file", "", true, false, "file holding the auth token", "FILE"},
+                          {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
+                          {"help", "-h", false, false, "this help", ""}});
+  args.parse(argv);
+  if (args.has("help")) {
+    std::printf("usage: dn pipelines --server URL [--pipeline NAME]\n\n"
+                "Lists the server's pipelines: required and optional channels, and each parameter's\n"
+                "name, default, range, whether it is an integer, and what it does.\n\noptions:\n%s",
+                args.usage().c_str());
+    return 0;
+  }
+  client::Connection conn = connect_for(args, "dn-pipelines");
+  const auto& w = conn.welcome();
+  std::printf("%s: %s on %s\n\n%s", conn.endpoint().c_str(), w.server_version.c_str(), w.device_name.c_str(),
+              pipelines_report(w, args.get_or("pipeline", "")).c_str());
   return 0;
 }
 

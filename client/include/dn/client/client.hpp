@@ -12,6 +12,7 @@
 #include "dn/client/endpoint.hpp"
 #include "dn/client/error.hpp"
 #include "dn/client/options.hpp"
+#include "dn/client/parameters.hpp"
 #include "dn/client/session.hpp"
 #include "dn/client/session_desc.hpp"
 #include "dn/client/watcher.hpp"

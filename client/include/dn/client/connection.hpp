@@ -47,8 +47,12 @@ class Connection {
   std::chrono::duration<double, std::milli> ping();
   // STATS_REQUEST -> STATS.
   protocol::Stats stats();
-  // OPEN_SESSION -> SESSION. Server errors (UnknownPipeline, MissingChannel,
-  // LimitExceeded, ...) are thrown as Error with the server's code and field.
+  // OPEN_SESSION -> SESSION. When the server announced parameter tables
+  // (protocol 1.1), the parameters are checked first (check_parameters in
+  // parameters.hpp): an unknown name or a value out of range throws Usage /
+  // InvalidParameter without sending anything. Server errors
+  // (UnknownPipeline, MissingChannel, LimitExceeded, ...) are thrown as Error
+  // with the server's code and field.
   Session open_session(const SessionDesc& desc);
   // ATTACH -> SESSION (read_only), then RESULTs through the Watcher.
   Watcher attach(uint64_t session_id);

@@ -1,0 +1,25 @@
+// Pipeline parameters as the server announces them (WELCOME, protocol 1.1),
+// and the check Connection::open_session makes with them before sending.
+#pragma once
+
+#include <string_view>
+#include <vector>
+
+#include "dn/client/session_desc.hpp"
+#include "dn/protocol/messages.hpp"
+
+namespace dn::client {
+
+// The parameter table of `pipeline`; nullptr when the server sent no tables
+// (a protocol 1.0 server) or offers no such pipeline.
+const std::vector<protocol::ParameterInfo>* find_parameters(const protocol::Welcome& welcome,
+                                                            std::string_view pipeline);
+
+// Checks desc.parameters against the table of desc.pipeline: every name known
+// (else the error lists the valid names), given once, every value finite,
+// within [min, max] and integral where required. Throws Error (Usage,
+// InvalidParameter, field "OPEN_SESSION.parameters[i].name" or ".value").
+// Does nothing when there is no table: the server then checks.
+void check_parameters(const protocol::Welcome& welcome, const SessionDesc& desc);
+
+}  // namespace dn::client
