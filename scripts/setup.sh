@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 packages=(
   cmake ninja-build g++ pkg-config zlib1g-dev
-  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools spirv-tools
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools spirv-tools spirv-cross
   libopenexr-dev libglm-dev libembree-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -16,33 +16,14 @@
 //   out    = mix(prev, c, alpha); history <- (out, len), (n, z)
 // Background pixels: out = c, history <- (c, 0), (0, 0).
 //
-// Bindings: 0 FrameConstants, 1 radiance, 2 normal, 3 depth, 4 motion,
-//   5 previous colour history, 6 previous geometry history,
-//   7 current colour history, 8 current geometry history, 9 output
-// History colour: vec4(rgb, length); geometry: vec4(normal, depth); fp32.
-// Specialization: 0 workgroup size, 1..4 radiance/normal/depth/motion are fp16,
-//   5 output is fp16
+// Resources: passes/accumulate.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "reproject.glsl"
-
-layout(constant_id = 1) const bool RADIANCE_HALF = false;
-layout(constant_id = 2) const bool NORMAL_HALF = false;
-layout(constant_id = 3) const bool DEPTH_HALF = false;
-layout(constant_id = 4) const bool MOTION_HALF = false;
-layout(constant_id = 5) const bool OUTPUT_HALF = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer RadiancePlane { uint data[]; } radiance;
-layout(std430, set = 0, binding = 2) readonly buffer NormalPlane { uint data[]; } normal;
-layout(std430, set = 0, binding = 3) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 4) readonly buffer MotionPlane { uint data[]; } motion;
-layout(std430, set = 0, binding = 5) readonly buffer PrevColour { vec4 data[]; } prev_colour;
-layout(std430, set = 0, binding = 6) readonly buffer PrevGeometry { vec4 data[]; } prev_geometry;
-layout(std430, set = 0, binding = 7) writeonly buffer CurColour { vec4 data[]; } cur_colour;
-layout(std430, set = 0, binding = 8) writeonly buffer CurGeometry { vec4 data[]; } cur_geometry;
-layout(std430, set = 0, binding = 9) writeonly buffer OutputPlane { uint data[]; } result;
+#include "pass.glsl"
+#include "passes/accumulate.pass"
 
 // Adds previous pixel q with bilinear weight w if it passes the tests.
 void accumulate_tap(ivec2 q, float w, vec3 n, float z, inout vec3 sum_colour, inout float sum_len,

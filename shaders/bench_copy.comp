@@ -5,13 +5,14 @@
 // any pipeline; it measures how fast the device moves bytes through a plain
 // compute pass, the bound a memory-bound filter can approach.
 //
-// Bindings: 0 CopyConstants (x: words), 1 source, 2 destination
-// Specialization: 0 workgroup size
+// Resources: binding 0 CopyConstants (x: words), then passes/bench_copy.pass.
+#extension GL_GOOGLE_include_directive : require
+#include "pass.glsl"
+
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 layout(std140, set = 0, binding = 0) uniform CopyConstants { uvec4 size; } constants;
-layout(std430, set = 0, binding = 1) readonly buffer Source { uint data[]; } src;
-layout(std430, set = 0, binding = 2) writeonly buffer Destination { uint data[]; } dst;
+#include "passes/bench_copy.pass"
 
 void main() {
   const uint words = constants.size.x;

@@ -27,16 +27,14 @@
 // at errors up to 1.3e-2 with 1024 samples near grazing; this one stays below
 // 1.3e-3: docs/pipelines.md.)
 //
-// Bindings: 0 unused (the layout's uniform), 1 table (vec2 per texel)
-// Specialization: 0 workgroup size, 1 samples per texel
+// Resources: passes/fb_lut.pass (no uniform block: binding 0 of the layout is unused).
 #extension GL_GOOGLE_include_directive : require
 #define DN_FB_LUT_NO_LOOKUP
 #include "fb_lut.glsl"
+#include "pass.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
-layout(constant_id = 1) const uint SAMPLES = 1024u;
-
-layout(std430, set = 0, binding = 1) writeonly buffer Table { vec2 data[]; } table;
+#include "passes/fb_lut.pass"
 
 const float PI = 3.14159265358979;
 

@@ -3,18 +3,15 @@
 // points of binding 1 and writes the (A, B) it returns. Not used by any
 // pipeline (tests/pipelines/fb_lut_test.cpp).
 //
-// Bindings: 0 ProbeConstants (x: point count), 1 points (vec2 cos θ_o, α),
-//   2 the F_beta table, 3 results (vec2 A, B)
-// Specialization: 0 workgroup size
+// Resources: binding 0 ProbeConstants (x: point count), then passes/fb_lut_probe.pass.
 #extension GL_GOOGLE_include_directive : require
-#define DN_FB_LUT_BINDING 2
+#include "pass.glsl"
+#include "passes/fb_lut_probe.pass"
 #include "fb_lut.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 layout(std140, set = 0, binding = 0) uniform ProbeConstants { uvec4 size; } constants;
-layout(std430, set = 0, binding = 1) readonly buffer Points { vec2 data[]; } points;
-layout(std430, set = 0, binding = 3) writeonly buffer Results { vec2 data[]; } results;
 
 void main() {
   uint p = gl_GlobalInvocationID.x;

@@ -9,17 +9,12 @@
 // pixel-per-invocation copy (fp32 unchanged, 12 ms); on a GPU it coalesces.
 // The dispatch is one invocation per pixel pair (PassSpec default).
 //
-// Bindings: 0 FrameConstants, 1 radiance (rgb), 2 output (rgb)
-// Specialization: 0 workgroup size, 1 radiance is fp16, 2 output is fp16
+// Resources: passes/passthrough.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
-
-layout(constant_id = 1) const bool RADIANCE_HALF = false;
-layout(constant_id = 2) const bool OUTPUT_HALF = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer RadiancePlane { uint data[]; } radiance;
-layout(std430, set = 0, binding = 2) writeonly buffer OutputPlane { uint data[]; } result;
+#include "pass.glsl"
+#include "passes/passthrough.pass"
 
 void main() {
   const uint invocations = (frame.size.z + 1u) / 2u;

@@ -3,17 +3,12 @@
 // or fp32 through the DN_LOADn macros and writes every component as fp32.
 // Not used by any pipeline.
 //
-// Bindings: 0 FrameConstants (size.z = pixel count), 1 input plane, 2 output (fp32)
-// Specialization: 0 workgroup size, 1 input is fp16, 2 components (1..3)
+// Resources: passes/plane_probe.pass (binding 0 FrameConstants, size.z = pixel count).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
-
-layout(constant_id = 1) const bool INPUT_HALF = false;
-layout(constant_id = 2) const uint COMPONENTS = 1u;
-
-layout(std430, set = 0, binding = 1) readonly buffer InputPlane { uint data[]; } plane;
-layout(std430, set = 0, binding = 2) writeonly buffer Decoded { float data[]; } decoded;
+#include "pass.glsl"
+#include "passes/plane_probe.pass"
 
 void main() {
   uint p = dn_invocation_index();

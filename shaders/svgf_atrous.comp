@@ -24,26 +24,17 @@
 // (ceil(W / (STEP * BLOCK)) * STEP) x (ceil(H / (STEP * BLOCK)) * STEP):
 // base = (ix / STEP * STEP * BLOCK + ix % STEP, same in y).
 //
-// Bindings: 0 FrameConstants, 1 guide, 2 source illumination,
-//   3 destination illumination, 4 colour history (writes .rgb if FEEDBACK)
-// Specialization: 0 workgroup size, 3 step, 4 feedback, 5 block
+// Resources: passes/svgf_atrous.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
 #include "sanitize.glsl"
 #include "luminance.glsl"
 #include "svgf_guards.glsl"
+#include "pass.glsl"
+#include "passes/svgf_atrous.pass"
 
-layout(constant_id = 3) const int STEP = 1;
-layout(constant_id = 4) const bool FEEDBACK = false;
-layout(constant_id = 5) const int BLOCK = 4;
-
-layout(std430, set = 0, binding = 1) readonly buffer Guide { uvec4 data[]; } guide;
-layout(std430, set = 0, binding = 2) readonly buffer Source { vec4 data[]; } src;
-layout(std430, set = 0, binding = 3) writeonly buffer Destination { vec4 data[]; } dst;
-layout(std430, set = 0, binding = 4) writeonly buffer Colour { vec4 data[]; } colour_history;
-
-const int B = BLOCK;
+#define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 const int WIN = BLOCK + 4;
 
 void main() {

@@ -11,25 +11,13 @@
 // reads cos theta_o = 0. Background pixels get 1 (nothing to demodulate).
 // The factor is guarded like albedo (svgf_guards.glsl) where it is used.
 //
-// Bindings: 0 FrameConstants, 1 specular_f0, 2 roughness, 3 normal, 4 depth,
-//   5 the F_beta table (shared, read-only), 6 factor (scratch, 3 fp32 per pixel)
-// Specialization: 0 workgroup size, 1..4 specular_f0/roughness/normal/depth are fp16
+// Resources: passes/svgf_fb_factor.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
-
-layout(constant_id = 1) const bool F0_HALF = false;
-layout(constant_id = 2) const bool ROUGHNESS_HALF = false;
-layout(constant_id = 3) const bool NORMAL_HALF = false;
-layout(constant_id = 4) const bool DEPTH_HALF = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer F0Plane { uint data[]; } specular_f0;
-layout(std430, set = 0, binding = 2) readonly buffer RoughnessPlane { uint data[]; } roughness;
-layout(std430, set = 0, binding = 3) readonly buffer NormalPlane { uint data[]; } normal;
-layout(std430, set = 0, binding = 4) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 5) readonly buffer FbLut { vec2 data[]; } fb_lut;
-layout(std430, set = 0, binding = 6) writeonly buffer Factor { float data[]; } factor;
+#include "pass.glsl"
+#include "passes/svgf_fb_factor.pass"
 
 #include "fb_lut.glsl"
 

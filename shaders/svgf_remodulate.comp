@@ -8,46 +8,14 @@
 // svgf_taa (docs/pipelines.md, "svgf in detail", 5): the TAA history is read
 // only here and rewritten only by svgf_taa, so one persistent copy suffices.
 //
-// Bindings: 0 FrameConstants, 1 illumination (the last a-trous output), 2 albedo,
-//   3 emission (bound to albedo and ignored when the session has none), 4 output,
-//   5 specular illumination (split mode; bound to binding 1 and ignored otherwise),
-//   6 depth, 7 motion, 8 TAA history (previous final output, 3 fp32 per pixel),
-//   9 TAA current: vec4(current rgb, 1 if the history is usable here else 0),
-//   10 TAA previous: vec4(reprojected previous final output, 0)
-//   (6..10 are bound to stand-ins and ignored without TAA),
-//   11 specular factor (svgf-fb: F_beta, 3 fp32 per pixel, guarded like
-//   albedo; bound to albedo and ignored otherwise)
-// Specialization: 0 workgroup size, 1 albedo is fp16, 2 emission is fp16,
-//   3 the session has emission, 4 output is fp16, 5 split mode (add binding 5),
-//   6 TAA (write bindings 9 and 10 instead of Output), 7 depth is fp16, 8 motion is fp16,
-//   9 multiply the specular illumination by binding 11 (svgf-fb)
+// Resources: passes/svgf_remodulate.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "reproject.glsl"
-
-layout(constant_id = 1) const bool ALBEDO_HALF = false;
-layout(constant_id = 2) const bool EMISSION_HALF = false;
-layout(constant_id = 3) const bool HAS_EMISSION = false;
-layout(constant_id = 4) const bool OUTPUT_HALF = false;
-layout(constant_id = 5) const bool HAS_SPECULAR = false;
-layout(constant_id = 6) const bool TAA = false;
-layout(constant_id = 7) const bool DEPTH_HALF = false;
-layout(constant_id = 8) const bool MOTION_HALF = false;
-layout(constant_id = 9) const bool SPECULAR_FACTOR = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer Illumination { vec4 data[]; } illum;
-layout(std430, set = 0, binding = 2) readonly buffer AlbedoPlane { uint data[]; } albedo;
-layout(std430, set = 0, binding = 3) readonly buffer EmissionPlane { uint data[]; } emission;
-layout(std430, set = 0, binding = 4) writeonly buffer OutputPlane { uint data[]; } result;
-layout(std430, set = 0, binding = 5) readonly buffer Specular { vec4 data[]; } specular;
-layout(std430, set = 0, binding = 6) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 7) readonly buffer MotionPlane { uint data[]; } motion;
-layout(std430, set = 0, binding = 8) readonly buffer TaaHistory { float data[]; } taa_history;
-layout(std430, set = 0, binding = 9) writeonly buffer TaaCurrent { vec4 data[]; } taa_current;
-layout(std430, set = 0, binding = 10) writeonly buffer TaaPrevious { vec4 data[]; } taa_previous;
-layout(std430, set = 0, binding = 11) readonly buffer SpecularFactor { uint data[]; } specular_factor;
+#include "pass.glsl"
+#include "passes/svgf_remodulate.pass"
 
 #include "svgf_guards.glsl"
 

@@ -3,54 +3,16 @@
 // integration of colour and moments (docs/pipelines.md, "svgf in detail", 1).
 // One invocation per pixel.
 //
-// Bindings: 0 FrameConstants, 1 radiance, 2 albedo, 3 normal, 4 depth, 5 motion,
-//   6 colour history, 7 aux history (single copies: read here, rewritten by
-//   svgf_variance and the feedback a-trous iteration after this pass),
-//   8 illumination (scratch), 9 guide (scratch), 10 temporal (scratch),
-//   11 emission (bound to albedo and ignored unless spec constant 8)
-// Colour history: vec4(demodulated rgb, length), fp32. Aux history: uvec4(m1, m2,
-//   depth (0 = no history here) as fp32 bits, octahedral snorm16x2 normal).
-// Illumination: vec4(temporal demodulated rgb, 0) (the variance pass fills .w).
-// Guide (read by every later pass instead of the depth and normal planes):
-//   uvec4(gz, octahedral snorm16x2 normal, depth gradient dz, 0) with gz = depth
-//   for a foreground pixel with a normal, -depth for one without (it takes no
-//   neighbour and no pixel takes it), 0 for background.
-// Temporal: vec4(m1, m2, length, luminance of the temporal colour).
-// Specialization: 0 workgroup size, 1..5 radiance/albedo/normal/depth/motion are fp16,
-//   6 demodulate by albedo (false: the specular chain of split mode, albedo = 1),
-//   7 write the guide (false: a later chain of split mode, which reads the one
-//   the first chain wrote; binding 1 is then its signal: diffuse or specular),
-//   8 subtract emission (binding 11) from the signal: radiance mode with an
-//   emission channel (radiance includes what the primary hit emits, which
-//   svgf_remodulate adds back unfiltered), 9 emission is fp16
+// Resources: passes/svgf_reproject.pass (binding 0 FrameConstants); the
+// buffer layouts are described there.
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "luminance.glsl"
-
-layout(constant_id = 1) const bool RADIANCE_HALF = false;
-layout(constant_id = 2) const bool ALBEDO_HALF = false;
-layout(constant_id = 3) const bool NORMAL_HALF = false;
-layout(constant_id = 4) const bool DEPTH_HALF = false;
-layout(constant_id = 5) const bool MOTION_HALF = false;
-layout(constant_id = 6) const bool DEMODULATE = true;
-layout(constant_id = 7) const bool WRITE_GUIDE = true;
-layout(constant_id = 8) const bool SUBTRACT_EMISSION = false;
-layout(constant_id = 9) const bool EMISSION_HALF = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer RadiancePlane { uint data[]; } radiance;
-layout(std430, set = 0, binding = 2) readonly buffer AlbedoPlane { uint data[]; } albedo;
-layout(std430, set = 0, binding = 3) readonly buffer NormalPlane { uint data[]; } normal;
-layout(std430, set = 0, binding = 4) readonly buffer DepthPlane { uint data[]; } depth;
-layout(std430, set = 0, binding = 5) readonly buffer MotionPlane { uint data[]; } motion;
-layout(std430, set = 0, binding = 6) readonly buffer PrevColour { vec4 data[]; } prev_colour;
-layout(std430, set = 0, binding = 7) readonly buffer PrevAux { uvec4 data[]; } prev_aux;
-layout(std430, set = 0, binding = 8) writeonly buffer Illumination { vec4 data[]; } illum;
-layout(std430, set = 0, binding = 9) writeonly buffer Guide { uvec4 data[]; } guide;
-layout(std430, set = 0, binding = 10) writeonly buffer Temporal { vec4 data[]; } temporal;
-layout(std430, set = 0, binding = 11) readonly buffer EmissionPlane { uint data[]; } emission;
+#include "pass.glsl"
+#include "passes/svgf_reproject.pass"
 
 #include "svgf.glsl"
 
@@ -84,9 +46,9 @@ void main() {
   uvec2 size = frame.size.xy;
   ivec2 pos = ivec2(p % size.x, p / size.x);
 
-  vec3 c = dn_svgf_sanitize(DN_LOAD3(radiance, RADIANCE_HALF, p));
+  vec3 c = dn_svgf_sanitize(DN_LOAD3(signal, SIGNAL_HALF, p));
   if (SUBTRACT_EMISSION) c = max(c - dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
-  vec3 a = DEMODULATE ? dn_svgf_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p)) : vec3(1.0);
+  vec3 a = DEMODULATE ? dn_svgf_albedo(DN_LOAD3(modulator, MODULATOR_HALF, p)) : vec3(1.0);
   vec3 d = c / a;
   float l = dn_luminance(d);
   vec2 m = vec2(l, l * l);

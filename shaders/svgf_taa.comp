@@ -7,20 +7,12 @@
 // taa_alpha); elsewhere out = current. out goes to Output (session format)
 // and to the TAA history (fp32). One invocation per pixel pair.
 //
-// Bindings: 0 FrameConstants, 1 TAA current vec4(rgb, history usable),
-//   2 TAA previous vec4(reprojected rgb, 0) (both written by svgf_remodulate),
-//   3 output, 4 TAA history (3 fp32 per pixel; read by svgf_remodulate only)
-// Specialization: 0 workgroup size, 1 output is fp16
+// Resources: passes/svgf_taa.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"
-
-layout(constant_id = 1) const bool OUTPUT_HALF = false;
-
-layout(std430, set = 0, binding = 1) readonly buffer TaaCurrent { vec4 data[]; } current;
-layout(std430, set = 0, binding = 2) readonly buffer TaaPrevious { vec4 data[]; } previous;
-layout(std430, set = 0, binding = 3) writeonly buffer OutputPlane { uint data[]; } result;
-layout(std430, set = 0, binding = 4) writeonly buffer TaaHistory { float data[]; } history;
+#include "pass.glsl"
+#include "passes/svgf_taa.pass"
 
 vec3 blend(uint p) {
   vec4 c = current.data[p];

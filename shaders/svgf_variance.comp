@@ -22,25 +22,17 @@
 // ceil(W / BLOCK) x ceil(H / BLOCK) grid, and loads their (BLOCK + 6)^2
 // window once when any of them needs the 7x7 estimate.
 //
-// Bindings: 0 FrameConstants, 1 guide, 2 temporal, 3 illumination (reads .rgb, writes .w),
-//   4 colour history (written), 5 aux history (written)
-// Specialization: 0 workgroup size, 1 block
+// Resources: passes/svgf_variance.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
 #include "sanitize.glsl"
 #include "luminance.glsl"
 #include "svgf_guards.glsl"
+#include "pass.glsl"
+#include "passes/svgf_variance.pass"
 
-layout(constant_id = 1) const int BLOCK = 2;
-
-layout(std430, set = 0, binding = 1) readonly buffer Guide { uvec4 data[]; } guide;
-layout(std430, set = 0, binding = 2) readonly buffer Temporal { vec4 data[]; } temporal;
-layout(std430, set = 0, binding = 3) buffer Illumination { vec4 data[]; } illum;
-layout(std430, set = 0, binding = 4) writeonly buffer Colour { vec4 data[]; } colour_history;
-layout(std430, set = 0, binding = 5) writeonly buffer Aux { uvec4 data[]; } aux_history;
-
-const int B = BLOCK;
+#define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 const int WIN = BLOCK + 6;
 
 void main() {

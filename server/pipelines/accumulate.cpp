@@ -21,24 +21,21 @@ GraphSpec build(const SessionConfig& config) {
   g.add_history("history_geometry", kGeometryHistoryBytes);
   g.add_output(config);
 
-  PassSpec pass;
-  pass.name = "accumulate";
-  pass.shader = "accumulate";
-  pass.bindings = {{"radiance"},
-                   {"normal"},
-                   {"depth"},
-                   {"motion"},
-                   {"history_colour", Slot::Previous},
-                   {"history_geometry", Slot::Previous},
-                   {"history_colour", Slot::Current},
-                   {"history_geometry", Slot::Current},
-                   {"output"}};
-  pass.spec_constants = {{1, is_half(channel_format(config, ChannelId::Radiance))},
-                         {2, is_half(channel_format(config, ChannelId::Normal))},
-                         {3, is_half(channel_format(config, ChannelId::Depth))},
-                         {4, is_half(channel_format(config, ChannelId::Motion))},
-                         {5, is_half(config.output_format)}};
-  g.passes.push_back(std::move(pass));
+  g.add_pass("accumulate", "accumulate")
+      .bind("radiance", "radiance")
+      .bind("normal", "normal")
+      .bind("depth", "depth")
+      .bind("motion", "motion")
+      .bind("prev_colour", "history_colour", Slot::Previous)
+      .bind("prev_geometry", "history_geometry", Slot::Previous)
+      .bind("cur_colour", "history_colour", Slot::Current)
+      .bind("cur_geometry", "history_geometry", Slot::Current)
+      .bind("result", "output")
+      .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
+      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
+      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+      .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
+      .set("OUTPUT_HALF", is_half(config.output_format));
   return g;
 }
 

@@ -2,10 +2,11 @@
 
 #include <chrono>
 
-#include "dn/shaders/shaders.hpp"
+#include "dn/shaders/declaration.hpp"
 #include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
-#include "pipelines/graph.hpp"  // kWorkgroupSize
+#include "pipelines/frame_constants.hpp"  // kWorkgroupSize
+#include "pipelines/pass.hpp"             // kernel_desc
 
 namespace dn::pipelines {
 namespace {
@@ -18,12 +19,9 @@ static_assert(kTexels % kWorkgroupSize == 0, "one invocation per texel, whole wo
 
 FbLut::FbLut(gpu::Context& ctx)
     : ctx_(ctx), table_(ctx, kTableBytes, gpu::BufferKind::Storage, "fb_lut") {
-  gpu::KernelDesc desc;
-  desc.name = "fb_lut";
-  desc.spirv = shaders::get("fb_lut");
-  desc.storage_buffers = 1;
-  desc.spec_constants = {{0, kWorkgroupSize}, {1, kFbLutSamples}};
-  auto kernel = ctx.kernels().get(desc);
+  PassSpec pass("fb_lut", "fb_lut");
+  pass.set("SAMPLES", kFbLutSamples);
+  auto kernel = ctx.kernels().get(kernel_desc(pass.declaration(), pass.specialization(kWorkgroupSize)));
 
   // Binding 0 of every kernel layout is a uniform buffer; fb_lut.comp reads none.
   gpu::Buffer uniform(ctx, 16, gpu::BufferKind::Uniform, "fb_lut:constants");
@@ -63,5 +61,7 @@ std::vector<float> FbLut::read() const {
 const FbLut& fb_lut(gpu::Context& ctx) {
   return ctx.shared<FbLut>([&ctx] { return std::make_unique<FbLut>(ctx); });
 }
+
+const gpu::Buffer& fb_lut_buffer(gpu::Context& ctx) { return fb_lut(ctx).buffer(); }
 
 }  // namespace dn::pipelines

@@ -50,5 +50,7 @@ class FbLut {
 // first callers wait for the one computation) and shared read-only by every
 // session of that context. Lives until the context is destroyed.
 const FbLut& fb_lut(gpu::Context& ctx);
+// Its buffer: the shared resource (graph.hpp SharedResource) svgf-fb binds.
+const gpu::Buffer& fb_lut_buffer(gpu::Context& ctx);
 
 }  // namespace dn::pipelines

@@ -9,9 +9,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "dn/shaders/shaders.hpp"
 #include "gpu/error.hpp"
-#include "pipelines/fb_lut.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -111,16 +109,70 @@ void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
   buffers.push_back(std::move(b));
 }
 
-void GraphSpec::add_shared(std::string name) {
+void GraphSpec::add_scratch(std::string name, uint64_t bytes_per_pixel) {
   BufferSpec b;
   b.name = std::move(name);
-  b.role = BufferRole::Shared;  // bytes 0: the context holds it for every session
+  b.role = BufferRole::Scratch;
+  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
   buffers.push_back(std::move(b));
 }
 
-const gpu::Buffer& shared_buffer(gpu::Context& context, const std::string& name) {
-  if (name == "fb_lut") return fb_lut(context).buffer();
-  throw std::logic_error("pipeline graph: unknown shared buffer " + name);
+void GraphSpec::add_shared(std::string name, SharedResource resource) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Shared;  // bytes 0: the context holds it for every session
+  b.shared = resource;
+  buffers.push_back(std::move(b));
+}
+
+PassSpec& GraphSpec::add_pass(std::string name, std::string_view shader) {
+  return passes.emplace_back(std::move(name), shader);
+}
+
+void GraphSpec::check() const {
+  for (size_t i = 0; i < buffers.size(); ++i) {
+    for (size_t j = 0; j < i; ++j)
+      if (buffers[j].name == buffers[i].name)
+        throw std::logic_error("pipeline graph: buffer " + buffers[i].name + " defined twice");
+    if (buffers[i].role == BufferRole::Shared && !buffers[i].shared)
+      throw std::logic_error("pipeline graph: shared buffer " + buffers[i].name + " has no resource");
+  }
+  for (const PassSpec& pass : passes) {
+    for (std::string_view missing : pass.unbound_required())
+      throw std::logic_error("pipeline graph: pass " + pass.name() + " leaves required binding " +
+                             std::string(missing) + " unbound");
+    for (size_t i = 0; i < pass.bindings().size(); ++i) {
+      const BindingRef& ref = pass.bindings()[i];
+      if (!ref.bound()) continue;
+      const std::string binding(pass.declaration().bindings[i].name);
+      const BufferSpec* b = find(ref.buffer);
+      if (!b)
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " to undefined buffer " + ref.buffer);
+      if (ref.slot == Slot::Previous && b->role != BufferRole::History)
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " to the previous copy of " + ref.buffer + ", which is not History");
+      const bool writes = pass.declaration().bindings[i].access != shaders::Access::read;
+      if (writes && (b->role == BufferRole::Input || b->role == BufferRole::Shared))
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " (written) to read-only buffer " + ref.buffer);
+    }
+  }
+}
+
+namespace {
+
+// The placeholder behind unbound optional bindings (one per context).
+struct UnboundBinding {
+  explicit UnboundBinding(gpu::Context& context)
+      : buffer(context, 16, gpu::BufferKind::Storage, "unbound_optional_binding") {}
+  gpu::Buffer buffer;
+};
+
+}  // namespace
+
+const gpu::Buffer& unbound_binding_buffer(gpu::Context& context) {
+  return context.shared<UnboundBinding>([&context] { return std::make_unique<UnboundBinding>(context); }).buffer;
 }
 
 GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
@@ -130,6 +182,7 @@ GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
 }
 
 const gpu::Buffer& GraphPipeline::bound(const BindingRef& ref, uint32_t parity) {
+  if (!ref.bound()) return unbound_binding_buffer(context_);
   Node& n = node(ref.buffer);
   if (n.shared) return *n.shared;
   uint32_t copy = 0;
@@ -142,19 +195,20 @@ void GraphPipeline::set_capture(bool on) {
   for (auto& pass : passes_) {
     pass.captures.clear();
     if (!on) continue;
-    for (const auto& ref : pass.spec->bindings) {
-      const BufferSpec* b = spec_.find(ref.buffer);
+    for (const auto& ref : pass.spec->bindings()) {
+      if (!ref.bound()) continue;
+      const BufferSpec* b = spec_->find(ref.buffer);
       if (b->role == BufferRole::Input || b->role == BufferRole::Shared) continue;
       pass.captures.push_back({ref.buffer, ref.slot,
                                gpu::Buffer(context_, b->bytes, gpu::BufferKind::StorageDownload,
-                                           pass.spec->name + ":" + ref.buffer)});
+                                           pass.spec->name() + ":" + ref.buffer)});
     }
   }
 }
 
 std::vector<uint8_t> GraphPipeline::captured(const std::string& pass, const std::string& buffer) const {
   for (const auto& p : passes_) {
-    if (p.spec->name != pass) continue;
+    if (p.spec->name() != pass) continue;
     for (const auto& c : p.captures) {
       if (c.buffer != buffer) continue;
       std::vector<uint8_t> bytes(c.copy.size());
@@ -184,19 +238,16 @@ void GraphPipeline::record_captures(VkCommandBuffer cmd, const Pass& pass, uint3
                       VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_HOST_READ_BIT);
 }
 
-GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config, GraphSpec spec)
+GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
+                             std::shared_ptr<const GraphSpec> spec)
     : context_(context), spec_(std::move(spec)), output_format_(config.output_format) {
-  const uint64_t limit = context.limits().max_storage_buffer_range;
-  if (const BufferSpec* big = spec_.largest_binding(); big && big->bytes > limit)
-    throw DeviceFailure("buffer " + big->name + " needs " + std::to_string(big->bytes) +
-                        " bytes in one binding; device " + context.name() + " allows " + std::to_string(limit));
   try {
-    nodes_.reserve(spec_.buffers.size());
-    for (const auto& b : spec_.buffers) {
+    nodes_.reserve(spec_->buffers.size());
+    for (const auto& b : spec_->buffers) {
       Node& n = nodes_.emplace_back();
       n.spec = &b;
       if (b.role == BufferRole::Shared) {
-        n.shared = &shared_buffer(context, b.name);
+        n.shared = &b.shared(context);
         continue;
       }
       gpu::BufferKind kind = gpu::BufferKind::Storage;
@@ -213,25 +264,19 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
     device_bytes_ += GraphSpec::kUniformBytes;
 
     uint32_t storage_total = 0;
-    for (const auto& p : spec_.passes) storage_total += static_cast<uint32_t>(p.bindings.size());
-    descriptors_ = std::make_unique<gpu::DescriptorPool>(context, 2 * static_cast<uint32_t>(spec_.passes.size()),
+    for (const auto& p : spec_->passes) storage_total += static_cast<uint32_t>(p.bindings().size());
+    descriptors_ = std::make_unique<gpu::DescriptorPool>(context, 2 * static_cast<uint32_t>(spec_->passes.size()),
                                                          2 * storage_total);
 
-    const uint64_t pixels = uint64_t{spec_.width} * spec_.height;
-    for (const auto& ps : spec_.passes) {
+    const uint64_t pixels = uint64_t{spec_->width} * spec_->height;
+    for (const auto& ps : spec_->passes) {
       Pass& pass = passes_.emplace_back();
       pass.spec = &ps;
-      gpu::KernelDesc desc;
-      desc.name = ps.shader;
-      desc.spirv = shaders::get(ps.shader);
-      desc.storage_buffers = static_cast<uint32_t>(ps.bindings.size());
-      desc.spec_constants.push_back({0, kWorkgroupSize});
-      desc.spec_constants.insert(desc.spec_constants.end(), ps.spec_constants.begin(), ps.spec_constants.end());
-      pass.kernel = context.kernels().get(desc);
+      pass.kernel = context.kernels().get(kernel_desc(ps.declaration(), ps.specialization(kWorkgroupSize)));
 
       for (uint32_t parity = 0; parity < 2; ++parity) {
         std::vector<VkBuffer> storage;
-        for (const auto& ref : ps.bindings) storage.push_back(bound(ref, parity).handle());
+        for (const auto& ref : ps.bindings()) storage.push_back(bound(ref, parity).handle());
         pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage);
       }
 
@@ -241,13 +286,13 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
       const uint64_t gx = std::min<uint64_t>(groups, context.limits().max_compute_work_group_count[0]);
       const uint64_t gy = (groups + gx - 1) / gx;
       if (gy > context.limits().max_compute_work_group_count[1])
-        throw DeviceFailure("pass " + ps.name + ": " + std::to_string(groups) + " workgroups exceed the device limit");
+        throw DeviceFailure("pass " + ps.name() + ": " + std::to_string(groups) + " workgroups exceed the device limit");
       pass.groups_x = static_cast<uint32_t>(gx);
       pass.groups_y = static_cast<uint32_t>(gy);
     }
 
     commands_ = std::make_unique<gpu::CommandStream>(context);
-    timestamps_ = std::make_unique<gpu::TimestampPool>(context, static_cast<uint32_t>(spec_.passes.size()) + 3);
+    timestamps_ = std::make_unique<gpu::TimestampPool>(context, static_cast<uint32_t>(spec_->passes.size()) + 3);
   } catch (const gpu::Error& e) {
     throw DeviceFailure(std::string("creating pipeline ") + config.pipeline + ": " + e.what());
   }
@@ -273,6 +318,21 @@ void GraphPipeline::process(const protocol::Frame& frame, bool want_output, std:
   }
 }
 
+const protocol::PlaneView& GraphPipeline::plane_of(const protocol::Frame& frame, const BufferSpec& input) {
+  const protocol::PlaneView* plane = nullptr;
+  for (const auto& p : frame.planes)
+    if (p.id == input.channel) plane = &p;
+  if (!plane || plane->format != input.format || plane->bytes.size() != input.plane_bytes)
+    throw std::invalid_argument(std::string("frame violates process()'s precondition: plane ") +
+                                channel_name(input.channel) +
+                                (!plane ? " is missing"
+                                        : plane->format != input.format
+                                              ? " has the wrong format"
+                                              : " has " + std::to_string(plane->bytes.size()) + " bytes, expected " +
+                                                    std::to_string(input.plane_bytes)));
+  return *plane;
+}
+
 void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
                         std::vector<protocol::PassTiming>& timings) {
   if (context_.lost()) throw gpu::VulkanError(VK_ERROR_DEVICE_LOST, "process");
@@ -282,25 +342,15 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   bool any_staged_input = false;
   for (auto& n : nodes_) {
     if (n.spec->role != BufferRole::Input) continue;
-    const protocol::PlaneView* plane = nullptr;
-    for (const auto& p : frame.planes)
-      if (p.id == n.spec->channel) plane = &p;
-    if (!plane) throw std::invalid_argument(std::string("frame has no ") + channel_name(n.spec->channel) + " plane");
-    if (plane->format != n.spec->format)
-      throw std::invalid_argument(std::string("plane ") + channel_name(n.spec->channel) + " has the wrong format");
-    if (plane->bytes.size() != n.spec->plane_bytes)
-      throw std::invalid_argument(std::string("plane ") + channel_name(n.spec->channel) + " has " +
-                                  std::to_string(plane->bytes.size()) + " bytes, expected " +
-                                  std::to_string(n.spec->plane_bytes));
-    n.copies[0].write(plane->bytes);
+    n.copies[0].write(plane_of(frame, *n.spec).bytes);
     any_staged_input = any_staged_input || n.copies[0].staged();
   }
 
   const bool reset = (frame.info.flags & protocol::kFrameReset) != 0 || !history_valid_;
   FrameConstants constants{};
-  constants.size[0] = spec_.width;
-  constants.size[1] = spec_.height;
-  constants.size[2] = spec_.width * spec_.height;
+  constants.size[0] = spec_->width;
+  constants.size[1] = spec_->height;
+  constants.size[2] = spec_->width * spec_->height;
   constants.size[3] = reset ? kFrameFlagReset : 0u;
   switch (frame.info.motion) {
     case protocol::MotionConvention::PixelsToPrevious:
@@ -310,13 +360,13 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
       constants.motion[0] = constants.motion[1] = -1.0f;
       break;
     case protocol::MotionConvention::UvToPrevious:
-      constants.motion[0] = static_cast<float>(spec_.width);
-      constants.motion[1] = static_cast<float>(spec_.height);
+      constants.motion[0] = static_cast<float>(spec_->width);
+      constants.motion[1] = static_cast<float>(spec_->height);
       break;
     default:
       throw std::invalid_argument("unknown motion convention");
   }
-  std::copy(spec_.parameters.begin(), spec_.parameters.end(), constants.params);
+  std::copy(spec_->parameters.begin(), spec_->parameters.end(), constants.params);
   inverse_view_projection(frame.info, constants.inverse_view_projection);
   uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);
@@ -378,7 +428,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   }
 
   timings.push_back({"upload", upload_host_ms + intervals[0]});
-  for (size_t i = 0; i < passes_.size(); ++i) timings.push_back({passes_[i].spec->name, intervals[i + 1]});
+  for (size_t i = 0; i < passes_.size(); ++i) timings.push_back({passes_[i].spec->name(), intervals[i + 1]});
   timings.push_back({"download", download_ms});
 
   ++frames_;

@@ -13,8 +13,8 @@
 //  - Persistent: per-session state kept across frames in a single copy (no
 //             ping-pong): for state whose every read in a frame comes before
 //             the pass that overwrites it (Slot is ignored)
-// Every binding of a pass is a storage buffer (bindings 1..n, in order);
-// binding 0 is the FrameConstants uniform buffer.
+// Every binding of a pass is a storage buffer, bound by the name its shader
+// declares (pass.hpp); binding 0 is the FrameConstants uniform buffer.
 #pragma once
 
 #include <array>
@@ -29,27 +29,20 @@
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/timestamps.hpp"
+#include "pipelines/frame_constants.hpp"
 #include "pipelines/parameters.hpp"
+#include "pipelines/pass.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace dn::pipelines {
 
-// Uniform block of every pass (shaders/include/frame.glsl), std140.
-struct FrameConstants {
-  uint32_t size[4];    // width, height, pixel count, flags
-  float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
-  float params[kMaxParameters];
-  float inverse_view_projection[16];  // (projection * view)^-1 of the frame, column-major: clip -> world
-};
-static_assert(sizeof(FrameConstants) == 160);
-
-inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
-inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass
-
 // Shared: a read-only device buffer the context holds for every session
-// (shared_buffer() below); bound, never allocated or counted per session.
+// (BufferSpec::shared gives it); bound, never allocated or counted per session.
 enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared };
-enum class Slot { Current, Previous };
+
+// A context-wide resource: made on first use, then the same buffer for every
+// session of that context (e.g. fb_lut_buffer, the F_beta table).
+using SharedResource = const gpu::Buffer& (*)(gpu::Context& context);
 
 struct BufferSpec {
   std::string name;
@@ -58,20 +51,7 @@ struct BufferSpec {
   uint64_t plane_bytes = 0;                              // Input/Output: exact plane size
   protocol::ChannelId channel = protocol::ChannelId::Radiance;  // Input/Output
   protocol::Format format = protocol::Format::F32;       // Input/Output
-};
-
-struct BindingRef {
-  std::string buffer;
-  Slot slot = Slot::Current;  // History buffers only
-};
-
-struct PassSpec {
-  std::string name;    // also the timing name
-  std::string shader;  // dn::shaders::get(shader)
-  std::vector<BindingRef> bindings;
-  std::vector<gpu::SpecConstant> spec_constants;  // ids >= 1 (0 is the workgroup size)
-  uint32_t pixels_per_invocation = 2;             // linear dispatch over pixels
-  uint64_t invocations = 0;                       // if nonzero: dispatch this many invocations instead
+  SharedResource shared = nullptr;                       // Shared
 };
 
 struct GraphSpec {
@@ -93,11 +73,17 @@ struct GraphSpec {
   void add_output(const SessionConfig& config);
   void add_history(std::string name, uint64_t bytes_per_pixel);
   void add_persistent(std::string name, uint64_t bytes_per_pixel);
-  void add_shared(std::string name);
-};
+  void add_scratch(std::string name, uint64_t bytes_per_pixel);
+  void add_shared(std::string name, SharedResource resource);
+  // Appends a pass running `shader`; bind and set on the result (the
+  // reference is valid until the next add_pass).
+  PassSpec& add_pass(std::string name, std::string_view shader);
 
-// The context-wide buffer a Shared binding names ("fb_lut": the F_beta table).
-const gpu::Buffer& shared_buffer(gpu::Context& context, const std::string& name);
+  // The build-time check of the whole graph: buffer names unique, every
+  // required binding bound, every bound buffer defined, Previous slots only
+  // on History buffers. Throws std::logic_error naming the pass and binding.
+  void check() const;
+};
 
 uint64_t round_up4(uint64_t bytes);
 // The declared format of a channel (F32 if it is not declared).
@@ -105,16 +91,22 @@ protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId
 // Specialization value "this plane is fp16".
 uint32_t is_half(protocol::Format format);
 
+// The context's buffer for optional bindings a pass leaves unbound (the
+// shader does not touch them): one small placeholder, never a real buffer
+// standing in for another.
+const gpu::Buffer& unbound_binding_buffer(gpu::Context& context);
+
 class GraphPipeline final : public Pipeline {
  public:
-  GraphPipeline(gpu::Context& context, const SessionConfig& config, GraphSpec spec);
+  // spec must have passed GraphSpec::check().
+  GraphPipeline(gpu::Context& context, const SessionConfig& config, std::shared_ptr<const GraphSpec> spec);
   ~GraphPipeline() override;
 
   uint64_t device_bytes() const override { return device_bytes_; }
   void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
                std::vector<protocol::PassTiming>& timings) override;
 
-  const GraphSpec& spec() const { return spec_; }
+  const GraphSpec& spec() const { return *spec_; }
 
   // Inspection for tests and debugging (the server never turns it on): while
   // on, every binding of every pass except Input planes is copied right
@@ -148,10 +140,14 @@ class GraphPipeline final : public Pipeline {
            std::vector<protocol::PassTiming>& timings);
   Node& node(const std::string& name);
   const gpu::Buffer& bound(const BindingRef& ref, uint32_t parity);
+  // The plane of `input` in `frame`; throws std::invalid_argument when it is
+  // missing or malformed (the precondition of process(): the session has
+  // checked it already and reports errors to the client).
+  static const protocol::PlaneView& plane_of(const protocol::Frame& frame, const BufferSpec& input);
   void record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity);
 
   gpu::Context& context_;
-  GraphSpec spec_;
+  std::shared_ptr<const GraphSpec> spec_;
   protocol::Format output_format_;
   std::vector<Node> nodes_;
   gpu::Buffer uniform_;

@@ -15,13 +15,11 @@ GraphSpec build(const SessionConfig& config) {
   for (const auto& decl : config.channels)
     if (decl.id != ChannelId::Radiance) g.add_input(config, decl.id, std::string(protocol::find_channel(decl.id)->name));
   g.add_output(config);
-  PassSpec pass;
-  pass.name = "passthrough";
-  pass.shader = "passthrough";
-  pass.bindings = {{"radiance"}, {"output"}};
-  pass.spec_constants = {{1, is_half(channel_format(config, ChannelId::Radiance))},
-                         {2, is_half(config.output_format)}};
-  g.passes.push_back(std::move(pass));
+  g.add_pass("passthrough", "passthrough")
+      .bind("radiance", "radiance")
+      .bind("result", "output")
+      .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
+      .set("OUTPUT_HALF", is_half(config.output_format));
   return g;
 }
 

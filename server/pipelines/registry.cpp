@@ -181,7 +181,9 @@ std::unique_ptr<Pipeline> create(gpu::Context& context, const SessionConfig& con
   if (auto err = validate_config(config)) throw std::invalid_argument(err->field + ": " + err->message);
   if (auto err = check_device_limits(config, context.limits())) throw DeviceFailure(err->message);
   const PipelineDefinition* def = find_definition(config.pipeline);
-  return std::make_unique<GraphPipeline>(context, config, def->build(config));
+  auto graph = std::make_shared<GraphSpec>(def->build(config));
+  graph->check();
+  return std::make_unique<GraphPipeline>(context, config, std::move(graph));
 }
 
 }  // namespace dn::pipelines

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "pipelines/definitions.hpp"
+#include "pipelines/fb_lut.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -72,7 +73,7 @@ GraphSpec build(const SessionConfig& config) {
   if (fb) {
     g.add_input(config, ChannelId::SpecularF0, "specular_f0");
     g.add_input(config, ChannelId::Roughness, "roughness");
-    g.add_shared("fb_lut");
+    g.add_shared("fb_lut", fb_lut_buffer);
   }
   g.add_persistent("svgf_colour", kColourHistoryBytes);
   g.add_persistent("svgf_aux", kAuxHistoryBytes);
@@ -84,29 +85,16 @@ GraphSpec build(const SessionConfig& config) {
   if (taa) g.add_persistent("svgf_taa", kTaaHistoryBytes);
   const uint32_t iterations = static_cast<uint32_t>(g.parameters[kIterationsSlot]);
   const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters[kFeedbackSlot]), iterations ? iterations - 1 : 0u);
-  const uint64_t pixels = uint64_t{config.width} * config.height;
   // Split mode: the specular chain ping-pongs between svgf_illum_c and the
   // diffuse chain's non-final illumination buffer (the diffuse result stays
   // for svgf_remodulate); guide and temporal are shared (the diffuse chain
   // is done with temporal before the specular reprojection rewrites it).
-  for (auto [name, bytes] : {std::pair{"svgf_illum_a", kIlluminationBytes}, std::pair{"svgf_illum_b", kIlluminationBytes},
-                              std::pair{"svgf_illum_c", kIlluminationBytes}, std::pair{"svgf_guide", kGuideBytes},
-                              std::pair{"svgf_temporal", kTemporalBytes}}) {
-    if (iterations == 0 && std::string(name) == "svgf_illum_b") continue;
-    if (!split && std::string(name) == "svgf_illum_c") continue;
-    BufferSpec b;
-    b.name = name;
-    b.role = BufferRole::Scratch;
-    b.bytes = round_up4(pixels * bytes);
-    g.buffers.push_back(std::move(b));
-  }
-  if (fb) {
-    BufferSpec b;
-    b.name = "svgf_fb";
-    b.role = BufferRole::Scratch;
-    b.bytes = round_up4(pixels * kFbFactorBytes);
-    g.buffers.push_back(std::move(b));
-  }
+  g.add_scratch("svgf_illum_a", kIlluminationBytes);
+  if (iterations > 0) g.add_scratch("svgf_illum_b", kIlluminationBytes);
+  if (split) g.add_scratch("svgf_illum_c", kIlluminationBytes);
+  g.add_scratch("svgf_guide", kGuideBytes);
+  g.add_scratch("svgf_temporal", kTemporalBytes);
+  if (fb) g.add_scratch("svgf_fb", kFbFactorBytes);
   g.add_output(config);
 
   const uint32_t albedo_half = is_half(channel_format(config, ChannelId::Albedo));
@@ -126,56 +114,69 @@ GraphSpec build(const SessionConfig& config) {
     const uint32_t demodulator_half = demodulator == "albedo" ? albedo_half : 0u;
     // Radiance includes emission; diffuse and specular do not (docs/protocol.md).
     const bool subtract_emission = emission && channel == ChannelId::Radiance;
-    PassSpec reproject;
-    reproject.name = "svgf_reproject" + suffix;
-    reproject.shader = "svgf_reproject";
-    reproject.bindings = {{signal}, {demodulate ? demodulator : "albedo"}, {"normal"}, {"depth"}, {"motion"},
-                          {colour}, {aux},      {current},        {"svgf_guide"}, {"svgf_temporal"},
-                          {subtract_emission ? "emission" : "albedo"}};
-    reproject.spec_constants = {{1, is_half(channel_format(config, channel))}, {2, demodulator_half}, {3, normal_half},
-                                {4, depth_half}, {5, motion_half}};
+    PassSpec& reproject = g.add_pass("svgf_reproject" + suffix, "svgf_reproject");
+    reproject.bind("signal", signal)
+        .bind("normal", "normal")
+        .bind("depth", "depth")
+        .bind("motion", "motion")
+        .bind("prev_colour", colour)
+        .bind("prev_aux", aux)
+        .bind("illum", current)
+        .bind("guide", "svgf_guide")
+        .bind("temporal", "svgf_temporal")
+        .set("SIGNAL_HALF", is_half(channel_format(config, channel)))
+        .set("MODULATOR_HALF", demodulator_half)
+        .set("NORMAL_HALF", normal_half)
+        .set("DEPTH_HALF", depth_half)
+        .set("MOTION_HALF", motion_half)
+        .set("DEMODULATE", demodulate)
+        .set("WRITE_GUIDE", write_guide)
+        .set("SUBTRACT_EMISSION", subtract_emission);
+    if (demodulate) reproject.bind("modulator", demodulator);
     if (subtract_emission)
-      reproject.spec_constants.insert(reproject.spec_constants.end(),
-                                      {{8, 1u}, {9, is_half(channel_format(config, ChannelId::Emission))}});
-    if (!demodulate) reproject.spec_constants.push_back({6, 0u});
-    if (!write_guide) reproject.spec_constants.push_back({7, 0u});
+      reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
     reproject.pixels_per_invocation = 1;
-    g.passes.push_back(std::move(reproject));
 
-    PassSpec variance;
-    variance.name = "svgf_variance" + suffix;
-    variance.shader = "svgf_variance";
-    variance.bindings = {{"svgf_guide"}, {"svgf_temporal"}, {current}, {colour}, {aux}};
-    variance.spec_constants = {{1, kVarianceBlock}};
+    PassSpec& variance = g.add_pass("svgf_variance" + suffix, "svgf_variance");
+    variance.bind("guide", "svgf_guide")
+        .bind("temporal", "svgf_temporal")
+        .bind("illum", current)
+        .bind("colour_history", colour)
+        .bind("aux_history", aux)
+        .set("BLOCK", kVarianceBlock);
     variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                            ((config.height + kVarianceBlock - 1) / kVarianceBlock);
-    g.passes.push_back(std::move(variance));
 
     for (uint32_t i = 0; i < iterations; ++i) {
-      PassSpec atrous;
-      atrous.name = "svgf_atrous_" + std::to_string(i) + suffix;
-      atrous.shader = "svgf_atrous";
-      atrous.bindings = {{"svgf_guide"}, {current}, {other}, {colour}};
-      atrous.spec_constants = {{3, 1u << i}, {4, i == tap ? 1u : 0u}, {5, kAtrousBlock}};
+      PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i) + suffix, "svgf_atrous");
+      atrous.bind("guide", "svgf_guide")
+          .bind("src", current)
+          .bind("dst", other)
+          .set("STEP", 1u << i)
+          .set("FEEDBACK", i == tap)
+          .set("BLOCK", kAtrousBlock);
+      if (i == tap) atrous.bind("colour_history", colour);
       // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
       const uint64_t step = uint64_t{1} << i, span = step * kAtrousBlock;
       atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
-      g.passes.push_back(std::move(atrous));
       std::swap(current, other);
     }
     return current;
   };
 
   if (fb) {
-    PassSpec factor;
-    factor.name = factor.shader = "svgf_fb_factor";
-    factor.bindings = {{"specular_f0"}, {"roughness"}, {"normal"}, {"depth"}, {"fb_lut"}, {"svgf_fb"}};
-    factor.spec_constants = {{1, is_half(channel_format(config, ChannelId::SpecularF0))},
-                             {2, is_half(channel_format(config, ChannelId::Roughness))},
-                             {3, normal_half},
-                             {4, depth_half}};
+    PassSpec& factor = g.add_pass("svgf_fb_factor", "svgf_fb_factor");
+    factor.bind("specular_f0", "specular_f0")
+        .bind("roughness", "roughness")
+        .bind("normal", "normal")
+        .bind("depth", "depth")
+        .bind("fb_lut", "fb_lut")
+        .bind("factor", "svgf_fb")
+        .set("F0_HALF", is_half(channel_format(config, ChannelId::SpecularF0)))
+        .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)))
+        .set("NORMAL_HALF", normal_half)
+        .set("DEPTH_HALF", depth_half);
     factor.pixels_per_invocation = 1;
-    g.passes.push_back(std::move(factor));
   }
 
   std::string diffuse_result, specular_result;
@@ -195,36 +196,36 @@ GraphSpec build(const SessionConfig& config) {
   // With TAA, svgf_remodulate writes the current colour to svgf_temporal and
   // the reprojected TAA history to svgf_guide (both free once the a-trous
   // chains are done) instead of Output; svgf_taa blends them. Without it,
-  // bindings 6..10 are stand-ins the shader does not touch.
-  PassSpec remodulate;
-  remodulate.name = remodulate.shader = "svgf_remodulate";
-  remodulate.bindings = {{diffuse_result},
-                         {"albedo"},
-                         {emission ? "emission" : "albedo"},
-                         {"output"},
-                         {split ? specular_result : diffuse_result},
-                         {"depth"},
-                         {"motion"},
-                         {taa ? "svgf_taa" : "albedo"},
-                         {"svgf_temporal"},
-                         {"svgf_guide"},
-                         {fb ? "svgf_fb" : "albedo"}};
-  remodulate.spec_constants = {{1, albedo_half},
-                               {2, emission ? is_half(channel_format(config, ChannelId::Emission)) : 0u},
-                               {3, emission ? 1u : 0u},
-                               {4, is_half(config.output_format)},
-                               {5, split ? 1u : 0u},
-                               {9, fb ? 1u : 0u}};
-  if (taa) remodulate.spec_constants.insert(remodulate.spec_constants.end(), {{6, 1u}, {7, depth_half}, {8, motion_half}});
-  g.passes.push_back(std::move(remodulate));
+  // the TAA bindings stay unbound.
+  PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
+  remodulate.bind("illum", diffuse_result)
+      .bind("albedo", "albedo")
+      .bind("result", "output")
+      .set("ALBEDO_HALF", albedo_half)
+      .set("HAS_EMISSION", emission)
+      .set("OUTPUT_HALF", is_half(config.output_format))
+      .set("HAS_SPECULAR", split)
+      .set("SPECULAR_FACTOR", fb)
+      .set("TAA", taa);
+  if (emission) remodulate.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  if (split) remodulate.bind("specular", specular_result);
+  if (fb) remodulate.bind("specular_factor", "svgf_fb");
+  if (taa)
+    remodulate.bind("depth", "depth")
+        .bind("motion", "motion")
+        .bind("taa_history", "svgf_taa")
+        .bind("taa_current", "svgf_temporal")
+        .bind("taa_previous", "svgf_guide")
+        .set("DEPTH_HALF", depth_half)
+        .set("MOTION_HALF", motion_half);
 
-  if (taa) {
-    PassSpec blend;
-    blend.name = blend.shader = "svgf_taa";
-    blend.bindings = {{"svgf_temporal"}, {"svgf_guide"}, {"output"}, {"svgf_taa"}};
-    blend.spec_constants = {{1, is_half(config.output_format)}};
-    g.passes.push_back(std::move(blend));
-  }
+  if (taa)
+    g.add_pass("svgf_taa", "svgf_taa")
+        .bind("current", "svgf_temporal")
+        .bind("previous", "svgf_guide")
+        .bind("result", "output")
+        .bind("history", "svgf_taa")
+        .set("OUTPUT_HALF", is_half(config.output_format));
   return g;
 }
 

@@ -6,10 +6,9 @@
 // (α, not perceptual roughness: the protocol's `roughness` channel is α).
 // Computed once per device by fb_lut.comp (server/pipelines/fb_lut.hpp).
 //
-// Using the lookup: declare the table before including this file,
-//   layout(std430, set = 0, binding = N) readonly buffer FbLut { vec2 data[]; } fb_lut;
-//   #include "fb_lut.glsl"
-// or let this file declare it: #define DN_FB_LUT_BINDING N before the include.
+// Using the lookup: declare the table before including this file, as a
+// binding named fb_lut with element vec2 in the pass declaration
+// (passes/<pass>.pass: DN_BINDING(n, fb_lut, vec2, read, required)).
 // Defining DN_FB_LUT_NO_LOOKUP leaves out the lookup (the generator does).
 #ifndef DN_FB_LUT_GLSL
 #define DN_FB_LUT_GLSL
@@ -23,9 +22,6 @@
 float dn_fb_lut_axis(uint i) { return (float(i) + 0.5) / float(DN_FB_LUT_SIZE); }
 
 #ifndef DN_FB_LUT_NO_LOOKUP
-#ifdef DN_FB_LUT_BINDING
-layout(std430, set = 0, binding = DN_FB_LUT_BINDING) readonly buffer FbLut { vec2 data[]; } fb_lut;
-#endif
 
 // Continuous texel coordinate of an axis value, clamped to the first/last
 // texel centre; NaN reads as the first texel (tested on the bits, immune to

@@ -1,0 +1,25 @@
+// What every pass sees besides its buffers: the per-frame uniform block
+// (binding 0, shaders/include/frame.glsl) and the dispatch conventions.
+// Depends on nothing else in pipelines/, so graph.cpp and fb_lut.cpp can both
+// use it without including each other.
+#pragma once
+
+#include <cstdint>
+
+#include "pipelines/parameters.hpp"
+
+namespace dn::pipelines {
+
+// Uniform block of every pass (shaders/include/frame.glsl), std140.
+struct FrameConstants {
+  uint32_t size[4];    // width, height, pixel count, flags
+  float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
+  float params[kMaxParameters];
+  float inverse_view_projection[16];  // (projection * view)^-1 of the frame, column-major: clip -> world
+};
+static_assert(sizeof(FrameConstants) == 160);
+
+inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
+inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass
+
+}  // namespace dn::pipelines

@@ -1,0 +1,68 @@
+#include "pipelines/pass.hpp"
+
+#include <stdexcept>
+
+#include "dn/shaders/shaders.hpp"
+
+namespace dn::pipelines {
+
+PassSpec::PassSpec(std::string name, std::string_view shader)
+    : name_(std::move(name)), decl_(shaders::declaration(shader)) {
+  if (!decl_) throw std::logic_error("pass " + name_ + ": shader " + std::string(shader) + " has no declaration");
+  bindings_.resize(decl_->bindings.size());
+  values_.resize(decl_->constants.size());
+}
+
+PassSpec& PassSpec::bind(std::string_view binding, std::string buffer, Slot slot) {
+  const shaders::BindingDecl* b = decl_->binding(binding);
+  if (!b)
+    throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) + " declares no binding " +
+                           std::string(binding));
+  BindingRef& ref = bindings_[b->binding - 1];
+  if (ref.bound()) throw std::logic_error("pass " + name_ + ": binding " + std::string(binding) + " bound twice");
+  if (buffer.empty()) throw std::logic_error("pass " + name_ + ": binding " + std::string(binding) + " to no buffer");
+  ref = {std::move(buffer), slot};
+  return *this;
+}
+
+PassSpec& PassSpec::set(std::string_view constant, uint32_t value) {
+  const shaders::SpecDecl* c = decl_->constant(constant);
+  if (!c)
+    throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) +
+                           " declares no specialization constant " + std::string(constant));
+  std::optional<uint32_t>& slot = values_[c->id - 1];
+  if (slot) throw std::logic_error("pass " + name_ + ": constant " + std::string(constant) + " set twice");
+  if (c->type == shaders::SpecType::t_bool && value > 1)
+    throw std::logic_error("pass " + name_ + ": bool constant " + std::string(constant) + " set to " +
+                           std::to_string(value));
+  slot = value;
+  return *this;
+}
+
+std::vector<std::string_view> PassSpec::unbound_required() const {
+  std::vector<std::string_view> out;
+  for (size_t i = 0; i < bindings_.size(); ++i)
+    if (!bindings_[i].bound() && decl_->bindings[i].need == shaders::Need::required)
+      out.push_back(decl_->bindings[i].name);
+  return out;
+}
+
+std::vector<gpu::SpecConstant> PassSpec::specialization(uint32_t workgroup_size) const {
+  std::vector<gpu::SpecConstant> out;
+  out.reserve(values_.size() + 1);
+  out.push_back({0, workgroup_size});
+  for (size_t i = 0; i < values_.size(); ++i)
+    out.push_back({decl_->constants[i].id, values_[i].value_or(decl_->constants[i].default_bits)});
+  return out;
+}
+
+gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::SpecConstant> constants) {
+  gpu::KernelDesc desc;
+  desc.name = std::string(decl.shader);
+  desc.spirv = shaders::get(decl.shader);
+  desc.storage_buffers = static_cast<uint32_t>(decl.bindings.size());
+  desc.spec_constants = std::move(constants);
+  return desc;
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,70 @@
+// One pass of a graph: a shader whose buffers are bound and whose
+// specialization constants are set by the names its declaration gives them
+// (shaders/passes/<shader>.pass, dn::shaders::declaration). Pure data: no
+// device objects, so building and checking a graph needs no device.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "dn/shaders/declaration.hpp"
+#include "gpu/compute.hpp"
+
+namespace dn::pipelines {
+
+// Which copy of a History buffer a binding takes (other roles: Current).
+enum class Slot { Current, Previous };
+
+struct BindingRef {
+  std::string buffer;  // a GraphSpec buffer; empty: not bound
+  Slot slot = Slot::Current;
+  bool bound() const { return !buffer.empty(); }
+};
+
+class PassSpec {
+ public:
+  // name: the pass (and timing) name; shader: dn::shaders name. Throws
+  // std::logic_error when the shader has no declaration.
+  PassSpec(std::string name, std::string_view shader);
+
+  const std::string& name() const { return name_; }
+  std::string_view shader() const { return decl_->shader; }
+  const shaders::Declaration& declaration() const { return *decl_; }
+
+  // Binds the declared binding `binding` to graph buffer `buffer`. Throws
+  // std::logic_error when the shader declares no such binding or it is bound
+  // already.
+  PassSpec& bind(std::string_view binding, std::string buffer, Slot slot = Slot::Current);
+  // Sets the declared specialization constant `constant` (bool: 0 or 1).
+  // Throws std::logic_error for an unknown name, a second set or a bool
+  // outside 0/1.
+  PassSpec& set(std::string_view constant, uint32_t value);
+
+  // One entry per declared binding, in binding order (bindings()[i] is
+  // binding i + 1); unbound ones have an empty buffer.
+  const std::vector<BindingRef>& bindings() const { return bindings_; }
+  // Names of required bindings nothing is bound to.
+  std::vector<std::string_view> unbound_required() const;
+  // Constant 0 (the workgroup size) followed by every declared constant, set
+  // or default, by id: equal specializations give equal kernel-cache keys.
+  std::vector<gpu::SpecConstant> specialization(uint32_t workgroup_size) const;
+
+  // Dispatch: one invocation per `pixels_per_invocation` pixels, or exactly
+  // `invocations` invocations when that is nonzero.
+  uint32_t pixels_per_invocation = 2;
+  uint64_t invocations = 0;
+
+ private:
+  std::string name_;
+  const shaders::Declaration* decl_ = nullptr;
+  std::vector<BindingRef> bindings_;
+  std::vector<std::optional<uint32_t>> values_;  // per declared constant
+};
+
+// The kernel description of a declared shader with these constants.
+gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::SpecConstant> constants);
+
+}  // namespace dn::pipelines

@@ -1,0 +1,68 @@
+// The resource declaration of every shader (shaders/passes/<name>.pass): the
+// storage buffers it binds and the specialization constants it reads. The
+// same X-macro file becomes the shader's GLSL declarations (include/pass.glsl)
+// and, here, a table, so the host binds buffers and sets constants by name
+// and never by position. The table is generated at build time (one per
+// shader in DN_SHADER_SOURCES); numbering is checked when it compiles.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+namespace dn::shaders {
+
+enum class Access : uint8_t { read, write, read_write };
+// An unbound optional binding is bound to a context-wide placeholder buffer;
+// the shader must not touch it then (a specialization constant decides).
+enum class Need : uint8_t { required, optional };
+enum class SpecType : uint8_t { t_bool, t_int, t_uint, t_float };
+
+struct BindingDecl {
+  uint32_t binding = 0;      // set 0, binding 1.. in declaration order (0 is the uniform block)
+  std::string_view name;     // the GLSL instance name (block name: <name>_block) and the host's name
+  std::string_view element;  // GLSL type of the block's only member, data[]
+  Access access = Access::read;
+  Need need = Need::required;
+  constexpr uint32_t number() const { return binding; }
+};
+
+struct SpecDecl {
+  uint32_t id = 0;  // constant_id 1.. in declaration order (0 is the workgroup size)
+  std::string_view name;
+  SpecType type = SpecType::t_bool;
+  uint32_t default_bits = 0;  // the 32-bit value VkSpecializationInfo would carry
+  constexpr uint32_t number() const { return id; }
+};
+
+struct Declaration {
+  std::string_view shader;
+  std::span<const BindingDecl> bindings;  // bindings[i].binding == i + 1
+  std::span<const SpecDecl> constants;    // constants[i].id == i + 1
+
+  constexpr const BindingDecl* binding(std::string_view name) const {
+    for (const auto& b : bindings)
+      if (b.name == name) return &b;
+    return nullptr;
+  }
+  constexpr const SpecDecl* constant(std::string_view name) const {
+    for (const auto& c : constants)
+      if (c.name == name) return &c;
+    return nullptr;
+  }
+};
+
+// The declaration of the shader compiled from <name>.comp; nullptr if none.
+const Declaration* declaration(std::string_view shader);
+// Every declaration, in DN_SHADER_SOURCES order.
+std::span<const Declaration> declarations();
+
+// A default literal as the 32 bits a specialization constant carries.
+constexpr uint32_t spec_bits(bool v) { return v ? 1u : 0u; }
+constexpr uint32_t spec_bits(int v) { return static_cast<uint32_t>(v); }
+constexpr uint32_t spec_bits(unsigned v) { return v; }
+constexpr uint32_t spec_bits(float v) { return std::bit_cast<uint32_t>(v); }
+constexpr uint32_t spec_bits(double v) { return std::bit_cast<uint32_t>(static_cast<float>(v)); }
+
+}  // namespace dn::shaders

@@ -1,0 +1,102 @@
+// Building graphs by name (pipelines/pass.hpp, GraphSpec::check): every name
+// a builder uses must exist in the shader's declaration, every required
+// binding must be bound, and specializations are canonical. No device.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "frames.hpp"
+#include "pipelines/definitions.hpp"
+#include "pipelines/graph.hpp"
+
+namespace dn {
+namespace {
+
+using test::ChannelId;
+using test::Format;
+
+pipelines::GraphSpec passthrough_graph() {
+  pipelines::GraphSpec g;
+  g.width = 4;
+  g.height = 2;
+  const auto config = test::make_config("passthrough", 4, 2, {{ChannelId::Radiance, Format::F32}});
+  g.add_input(config, ChannelId::Radiance, "radiance");
+  g.add_output(config);
+  return g;
+}
+
+TEST(GraphSpec, UnknownShaderBindingOrConstantNameIsRejected) {
+  pipelines::GraphSpec g = passthrough_graph();
+  EXPECT_THROW(g.add_pass("p", "no_such_shader"), std::logic_error);
+  auto& pass = g.add_pass("p", "passthrough");
+  EXPECT_THROW(pass.bind("radiance_plane", "radiance"), std::logic_error);
+  EXPECT_THROW(pass.set("RADIANCE_IS_HALF", 1), std::logic_error);
+  pass.bind("radiance", "radiance");
+  EXPECT_THROW(pass.bind("radiance", "radiance"), std::logic_error);  // twice
+  EXPECT_THROW(pass.set("OUTPUT_HALF", 2), std::logic_error);          // bool
+  pass.set("OUTPUT_HALF", 1);
+  EXPECT_THROW(pass.set("OUTPUT_HALF", 0), std::logic_error);          // twice
+}
+
+TEST(GraphSpec, CheckRequiresEveryRequiredBindingAndDefinedBuffers) {
+  pipelines::GraphSpec g = passthrough_graph();
+  g.add_pass("p", "passthrough").bind("radiance", "radiance");
+  try {
+    g.check();
+    FAIL() << "accepted a pass with an unbound required binding";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("result"), std::string::npos) << e.what();
+  }
+  pipelines::GraphSpec h = passthrough_graph();
+  h.add_pass("p", "passthrough").bind("radiance", "radiance").bind("result", "no_such_buffer");
+  EXPECT_THROW(h.check(), std::logic_error);
+  pipelines::GraphSpec w = passthrough_graph();
+  w.add_pass("p", "passthrough").bind("radiance", "output").bind("result", "radiance");  // writes an input
+  EXPECT_THROW(w.check(), std::logic_error);
+  pipelines::GraphSpec ok = passthrough_graph();
+  ok.add_pass("p", "passthrough").bind("radiance", "radiance").bind("result", "output");
+  EXPECT_NO_THROW(ok.check());
+}
+
+TEST(GraphSpec, OptionalBindingsMayStayUnbound) {
+  pipelines::GraphSpec g = passthrough_graph();
+  g.add_scratch("illum", 16);
+  g.add_scratch("guide", 16);
+  g.add_scratch("out", 16);
+  auto& pass = g.add_pass("a", "svgf_atrous");
+  pass.bind("guide", "guide").bind("src", "illum").bind("dst", "out");  // colour_history: optional
+  EXPECT_NO_THROW(g.check());
+  EXPECT_FALSE(g.passes[0].bindings()[3].bound());
+}
+
+// Every declared constant appears, by id, set or default: equal
+// specializations give equal kernel-cache keys whatever order a builder sets them in.
+TEST(GraphSpec, SpecializationListsEveryConstantById) {
+  pipelines::PassSpec a("a", "svgf_atrous"), b("b", "svgf_atrous");
+  a.set("BLOCK", 4).set("STEP", 2);
+  b.set("STEP", 2);
+  const auto sa = a.specialization(64), sb = b.specialization(64);
+  EXPECT_EQ(sa, sb);  // BLOCK's default is 4
+  ASSERT_EQ(sa.size(), 4u);
+  EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
+  EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
+  EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
+  EXPECT_EQ(sa[3], (gpu::SpecConstant{3, 4}));
+}
+
+// Every configuration the tests use builds a graph that passes check().
+TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
+  for (const auto& def : pipelines::definitions()) {
+    SCOPED_TRACE(def.description.name);
+    std::vector<protocol::ChannelDecl> channels;
+    for (const auto& c : protocol::kChannels)
+      if (def.description.required_channels & protocol::channel_bit(c.id)) channels.push_back({c.id, Format::F16});
+    if (def.description.name == "svgf") channels.push_back({ChannelId::Radiance, Format::F32});
+    const auto config = test::make_config(def.description.name, 33, 17, channels, Format::F16);
+    ASSERT_FALSE(pipelines::validate(config).has_value()) << pipelines::validate(config)->message;
+    EXPECT_NO_THROW(def.build(config).check());
+  }
+}
+
+}  // namespace
+}  // namespace dn

@@ -1,0 +1,165 @@
+// Every embedded shader against its declaration (shaders/passes/<name>.pass,
+// dn::shaders::declaration), from the compiled SPIR-V itself: spirv-cross
+// --reflect output written at build time (shaders/CMakeLists.txt). Storage
+// buffers: binding numbers, names, element type, readonly/writeonly;
+// specialization constants: ids, names, types, defaults; the uniform block at
+// binding 0: FrameConstants with the C++ struct's member offsets.
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "dn/shaders/declaration.hpp"
+#include "dn/shaders/shaders.hpp"
+#include "json_lite.hpp"
+#include "pipelines/frame_constants.hpp"
+
+namespace dn {
+namespace {
+
+using test::json::Value;
+
+Value reflection(std::string_view shader) {
+  const std::string path = std::string(DN_SPIRV_DIR) + "/" + std::string(shader) + ".spv.json";
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return test::json::parse(ss.str());
+}
+
+const char* type_name(shaders::SpecType t) {
+  switch (t) {
+    case shaders::SpecType::t_bool: return "bool";
+    case shaders::SpecType::t_int: return "int";
+    case shaders::SpecType::t_uint: return "uint";
+    case shaders::SpecType::t_float: return "float";
+  }
+  return "?";
+}
+
+// spirv-cross writes bool defaults as true/false and numbers as numbers
+// (a float default as its value).
+uint32_t default_bits(const Value& v, shaders::SpecType type) {
+  if (v.kind == Value::Kind::Bool) return v.boolean ? 1u : 0u;
+  if (type == shaders::SpecType::t_float) return shaders::spec_bits(static_cast<float>(v.number));
+  if (type == shaders::SpecType::t_int) return static_cast<uint32_t>(static_cast<int32_t>(v.number));
+  return static_cast<uint32_t>(v.number);
+}
+
+// Offsets of FrameConstants' members as C++ lays them out.
+struct Member {
+  std::string name;
+  size_t offset;
+};
+std::vector<Member> frame_constants_members() {
+  using pipelines::FrameConstants;
+  return {{"size", offsetof(FrameConstants, size)},
+          {"motion", offsetof(FrameConstants, motion)},
+          {"params", offsetof(FrameConstants, params)},
+          {"inverse_view_projection", offsetof(FrameConstants, inverse_view_projection)}};
+}
+
+
+std::vector<std::string> shader_names() {
+  std::vector<std::string> out;
+  for (auto n : shaders::names()) out.emplace_back(n);
+  return out;
+}
+
+TEST(Reflection, EveryEmbeddedShaderHasADeclarationAndViceVersa) {
+  std::set<std::string> embedded, declared;
+  for (auto n : shaders::names()) embedded.emplace(n);
+  for (const auto& d : shaders::declarations()) declared.emplace(d.shader);
+  EXPECT_EQ(embedded, declared);
+}
+
+class ShaderReflection : public testing::TestWithParam<std::string> {};
+
+TEST_P(ShaderReflection, StorageBuffersMatchTheDeclaration) {
+  const shaders::Declaration* decl = shaders::declaration(GetParam());
+  ASSERT_NE(decl, nullptr);
+  const Value r = reflection(GetParam());
+  std::set<uint32_t> seen;
+  const Value empty;
+  const Value& ssbos = r.has("ssbos") ? r["ssbos"] : empty;
+  for (const Value& b : ssbos.array) {
+    const uint32_t binding = static_cast<uint32_t>(b["binding"].number);
+    SCOPED_TRACE("binding " + std::to_string(binding) + " (" + b["name"].string + ")");
+    EXPECT_EQ(b["set"].number, 0.0);
+    ASSERT_GE(binding, 1u) << "binding 0 is the uniform block";
+    ASSERT_LE(binding, decl->bindings.size()) << "not declared";
+    EXPECT_TRUE(seen.insert(binding).second) << "bound twice";
+    const shaders::BindingDecl& d = decl->bindings[binding - 1];
+    EXPECT_EQ(b["name"].string, std::string(d.name) + "_block");
+    const bool readonly = b.has("readonly") && b["readonly"].boolean;
+    const bool writeonly = b.has("writeonly") && b["writeonly"].boolean;
+    EXPECT_EQ(readonly, d.access == shaders::Access::read) << d.name;
+    EXPECT_EQ(writeonly, d.access == shaders::Access::write) << d.name;
+    // The block's one member: `element data[]`, a runtime array.
+    const Value& type = r["types"][b["type"].string];
+    ASSERT_EQ(type["members"].array.size(), 1u);
+    const Value& member = type["members"][0];
+    EXPECT_EQ(member["name"].string, "data");
+    EXPECT_EQ(member["type"].string, std::string(d.element)) << d.name;
+    ASSERT_TRUE(member.has("array"));
+    EXPECT_EQ(member["array"].array.size(), 1u);
+    EXPECT_EQ(member["array"][0].number, 0.0) << "runtime-sized";
+  }
+  EXPECT_EQ(seen.size(), decl->bindings.size()) << "declared bindings missing from the SPIR-V";
+}
+
+TEST_P(ShaderReflection, SpecializationConstantsMatchTheDeclaration) {
+  const shaders::Declaration* decl = shaders::declaration(GetParam());
+  ASSERT_NE(decl, nullptr);
+  const Value r = reflection(GetParam());
+  // Constant 0 is the workgroup size (local_size_x_id = 0) in every shader.
+  const Value& entry = r["entryPoints"][0];
+  EXPECT_TRUE(entry["workgroup_size_is_spec_constant_id"][0].boolean);
+  EXPECT_EQ(entry["workgroup_size"][0].number, 0.0);
+  std::set<uint32_t> seen;
+  const Value empty;
+  const Value& constants = r.has("specialization_constants") ? r["specialization_constants"] : empty;
+  for (const Value& c : constants.array) {
+    const uint32_t id = static_cast<uint32_t>(c["id"].number);
+    if (id == 0) continue;
+    SCOPED_TRACE("constant_id " + std::to_string(id) + " (" + c["name"].string + ")");
+    ASSERT_LE(id, decl->constants.size()) << "not declared";
+    EXPECT_TRUE(seen.insert(id).second);
+    const shaders::SpecDecl& d = decl->constants[id - 1];
+    EXPECT_EQ(c["name"].string, std::string(d.name));
+    EXPECT_EQ(c["type"].string, type_name(d.type));
+    EXPECT_EQ(default_bits(c["default_value"], d.type), d.default_bits) << d.name;
+  }
+  EXPECT_EQ(seen.size(), decl->constants.size()) << "declared constants missing from the SPIR-V";
+}
+
+// Binding 0: FrameConstants with the C++ layout, or (kernels outside the
+// pipelines: fb_lut_probe, bench_copy) a block of their own; none at all for
+// the table generator fb_lut.
+TEST_P(ShaderReflection, UniformBlockIsFrameConstantsWithTheCppLayout) {
+  const Value r = reflection(GetParam());
+  if (!r.has("ubos")) return;  // fb_lut: no uniform block
+  ASSERT_EQ(r["ubos"].array.size(), 1u);
+  const Value& ubo = r["ubos"][0];
+  EXPECT_EQ(ubo["set"].number, 0.0);
+  EXPECT_EQ(ubo["binding"].number, 0.0);
+  if (ubo["name"].string != "FrameConstants") return;  // fb_lut_probe, bench_copy: their own block
+  EXPECT_LE(ubo["block_size"].number, static_cast<double>(sizeof(pipelines::FrameConstants)));
+  const Value& members = r["types"][ubo["type"].string]["members"];
+  const auto want = frame_constants_members();
+  ASSERT_EQ(members.array.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) {
+    EXPECT_EQ(members[i]["name"].string, want[i].name);
+    EXPECT_EQ(members[i]["offset"].number, static_cast<double>(want[i].offset)) << want[i].name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shaders, ShaderReflection, testing::ValuesIn(shader_names()),
+                         [](const testing::TestParamInfo<std::string>& info) { return info.param; });
+
+}  // namespace
+}  // namespace dn
