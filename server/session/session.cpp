@@ -5,6 +5,14 @@
 #include "dn/protocol/codec.hpp"
 
 namespace dn::server {
+
+uint64_t frame_message_bytes(const pipelines::SessionConfig& config) {
+  uint64_t bytes = 4096;
+  for (const auto& ch : config.channels)
+    bytes += protocol::plane_bytes(*protocol::find_channel(ch.id), ch.format, config.width, config.height) + 16;
+  return bytes;
+}
+
 namespace {
 
 protocol::Error make_error(protocol::ErrorCode code, std::string field, std::string message) {

@@ -35,6 +35,10 @@ struct FrameDone {
   bool failed = false;
 };
 
+// Bytes of one FRAME of a session: its planes plus generous room for the
+// fixed fields (the session's message limit and the --max-message check).
+uint64_t frame_message_bytes(const pipelines::SessionConfig& config);
+
 class Session {
  public:
   Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config, std::unique_ptr<pipelines::Pipeline> pipeline);

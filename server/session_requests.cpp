@@ -1,0 +1,196 @@
+// The server's session requests: OPEN_SESSION (validated here, built off the
+// loop by the PipelineBuilder), FRAME, ATTACH, CLOSE_SESSION, and the fan-out
+// of each finished frame to the owner and its watchers. Runs on the event loop.
+#include <algorithm>
+
+#include "server/log.hpp"
+#include "server/server.hpp"
+
+namespace dn::server {
+
+using protocol::ErrorCode;
+
+void Server::on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m) {
+  if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+  if (m.width > options_.max_width || m.height > options_.max_height)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, m.width > options_.max_width ? "OPEN_SESSION.width" : "OPEN_SESSION.height",
+                      "resolution " + std::to_string(m.width) + "x" + std::to_string(m.height) + " exceeds the server's " +
+                          std::to_string(options_.max_width) + "x" + std::to_string(options_.max_height),
+                      false);
+  if (sessions_.size() + sessions_being_built_ >= options_.max_sessions)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "sessions",
+                      "server already has " + std::to_string(sessions_.size() + sessions_being_built_) +
+                          " sessions (--max-sessions " +
+                          std::to_string(options_.max_sessions) + ")",
+                      false);
+
+  pipelines::SessionConfig config{m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters};
+  if (auto err = pipelines::validate(config)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+
+  // A frame of this session must fit one message.
+  const uint64_t frame_bytes = frame_message_bytes(config);
+  if (frame_bytes > options_.max_message_bytes)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
+                      "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
+                          std::to_string(options_.max_message_bytes) + "-byte message limit (--max-message)",
+                      false);
+  const uint64_t estimate = pipelines::estimate_device_bytes(config);
+  if (estimate > options_.max_session_bytes)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                      "session needs " + std::to_string(estimate) + " bytes of device memory, above the " +
+                          std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)",
+                      false);
+
+  // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
+  ++c.sessions_being_built;
+  ++sessions_being_built_;
+  builder_->submit(BuildRequest{c.id(), h.request_id, std::move(config)});
+}
+
+void Server::on_pipeline_built(BuiltPipeline&& built) {
+  --sessions_being_built_;
+  counters_.add_build(built);
+  net::Connection* c = find_connection(built.request.connection_id);
+  if (c) --c->sessions_being_built;
+  const pipelines::SessionConfig& config = built.request.config;
+  const uint64_t request_id = built.request.request_id;
+  if (!c) {
+    log::info("session.dropped", {{"conn", built.request.connection_id}, {"reason", "connection closed while building"}});
+    return;  // the pipeline (and its device memory) goes with `built`
+  }
+  if (!built.pipeline) {
+    log::error("session.create_failed", {{"conn", c->id()}, {"pipeline", config.pipeline}, {"reason", built.error}});
+    send_error(*c, request_id, ErrorCode::DeviceError, "OPEN_SESSION",
+               "could not create the pipeline on the device: " + built.error, false);
+    return update_interest(*c);
+  }
+  if (shutting_down_) {
+    send_error(*c, request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+    return update_interest(*c);
+  }
+
+  uint64_t id;
+  do id = session_ids_(); while (id == 0 || sessions_.count(id));
+  auto session = std::make_shared<Session>(id, c->id(), config, std::move(built.pipeline));
+  sessions_[id] = session;
+  c->owned_sessions.push_back(id);
+  refresh_message_limit(*c);  // before the next header is read: this session's frames may follow at once
+  ++counters_.sessions_opened;
+  log::info("session.open", {{"conn", c->id()},
+                             {"session", id},
+                             {"pipeline", config.pipeline},
+                             {"width", config.width},
+                             {"height", config.height},
+                             {"device_bytes", session->device_bytes()},
+                             {"build_ms", built.build_ms},
+                             {"compile_ms", built.compile_ms}});
+  send(*c, protocol::Session{id, config.width, config.height, config.pipeline, config.output_format,
+                             session->device_bytes(), false, config.channels},
+       request_id);
+  update_interest(*c);
+}
+
+void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
+  auto it = sessions_.find(m.info.session_id);
+  if (it == sessions_.end() || it->second->owner() != c.id())
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(m.info.session_id) + " is not open on this connection", false);
+  const std::shared_ptr<Session>& s = it->second;
+  if (s->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(s->id()) + " is closing", false);
+  if (shutting_down_)
+    return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+  if (auto err = s->check_frame(m)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+
+  s->last_frame_index = m.info.frame_index;
+  ++s->in_flight;
+  FrameJob job;
+  job.request_id = h.request_id;
+  job.owner_wants_output = (h.flags & protocol::kFlagNoOutput) == 0;
+  job.watchers_want_output = !s->watchers.empty();
+  job.frame = std::move(m);
+  job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
+  scheduler_->submit(s, std::move(job));
+  if (s->in_flight >= options_.max_frames_in_flight) c.reading_paused = true;  // backpressure: stop reading
+}
+
+void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
+  auto it = sessions_.find(m.session_id);
+  if (it == sessions_.end() || it->second->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
+                      "no open session " + std::to_string(m.session_id), false);
+  Session& s = *it->second;
+  if (std::find(s.watchers.begin(), s.watchers.end(), c.id()) == s.watchers.end()) s.watchers.push_back(c.id());
+  if (std::find(c.watched_sessions.begin(), c.watched_sessions.end(), s.id()) == c.watched_sessions.end())
+    c.watched_sessions.push_back(s.id());
+  const auto& cfg = s.config();
+  log::info("session.attach", {{"conn", c.id()}, {"session", s.id()}});
+  send(c, protocol::Session{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true, cfg.channels},
+       h.request_id);
+}
+
+void Server::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {
+  auto it = sessions_.find(m.session_id);
+  if (it == sessions_.end() || it->second->owner() != c.id() || it->second->closing)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "CLOSE_SESSION.session_id",
+                      "session " + std::to_string(m.session_id) + " is not open on this connection", false);
+  std::shared_ptr<Session> s = it->second;
+  s->closing = true;
+  s->close_request_id = h.request_id;
+  if (s->in_flight == 0) finish_session(s, true);  // else finished when its last frame completes
+}
+
+void Server::finish_session(const std::shared_ptr<Session>& s, bool notify) {
+  scheduler_->cancel(s);
+  protocol::SessionClosed closed{s->id(), s->frames_processed};
+  if (notify) {
+    if (net::Connection* owner = find_connection(s->owner())) send(*owner, closed, s->close_request_id);
+  }
+  for (uint64_t w : s->watchers) {
+    if (net::Connection* wc = find_connection(w)) {
+      send(*wc, closed, 0);
+      std::erase(wc->watched_sessions, s->id());
+      update_interest(*wc);
+    }
+  }
+  if (net::Connection* owner = find_connection(s->owner())) {
+    std::erase(owner->owned_sessions, s->id());
+    refresh_message_limit(*owner);
+    update_interest(*owner);
+  }
+  log::info("session.close", {{"session", s->id()}, {"frames", s->frames_processed}});
+  sessions_.erase(s->id());  // device memory is freed when the last worker reference goes
+}
+
+void Server::on_frame_done(FrameDone&& done) {
+  auto it = sessions_.find(done.session_id);
+  if (it == sessions_.end()) return;  // session closed by a disconnect: nobody to deliver to
+  std::shared_ptr<Session> s = it->second;
+  if (s->in_flight > 0) --s->in_flight;
+  if (done.failed) {
+    ++counters_.frames_failed;
+    log::error("frame.failed", {{"session", s->id()}, {"frame", done.frame_index}});
+  } else {
+    ++counters_.frames_processed;
+    ++s->frames_processed;
+    counters_.add_frame_timings(done.timings);
+  }
+  if (net::Connection* owner = find_connection(s->owner())) {
+    owner->queue(done.owner_message);
+    if (!owner->flush()) owner->close_after_flush = true;
+    update_interest(*owner);
+  }
+  if (done.watcher_message) {
+    for (uint64_t w : s->watchers) {
+      if (net::Connection* wc = find_connection(w)) {
+        wc->queue(done.watcher_message, s->id());
+        if (!wc->flush()) wc->close_after_flush = true;
+        update_interest(*wc);
+      }
+    }
+  }
+  if (s->closing && s->in_flight == 0) finish_session(s, true);
+}
+
+}  // namespace dn::server
