@@ -5,6 +5,8 @@
 // would choose (--device to pick another), feeds it --frames frames (default
 // 12, the first --warmup 2 not counted) of deterministic noisy radiance and
 // smooth G-buffers seen by a panning camera, and prints one markdown row:
+// cold figures apart from steady ones (create() wall time with the number of
+// kernels it compiled, the first frame's device time), then
 // the median device time of every pass (from the timings process() returns),
 // the median of their sum, upload and download, the persistent device bytes
 // per pixel, and the copy floor measured in the same run.
@@ -21,6 +23,7 @@
 // Only the public pipeline API (pipeline.hpp) and the gpu layer are used, so
 // the benchmark follows pipelines as their passes change.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -385,6 +388,9 @@ struct Row {
   std::string passes;  // "name ms · name ms"
   double device_ms = 0, upload_ms = 0, download_ms = 0;
   double bytes_per_pixel = 0;
+  double create_ms = 0;       // pipelines::create, wall clock: compiling (first use in this process) + allocating
+  uint64_t compiled = 0;      // kernels that create() compiled
+  double first_frame_ms = 0;  // device time of the first frame (cold: first dispatch of each kernel)
   uint64_t floor_bytes = 0;
   double copy_ms = 0;
   std::string error;
@@ -414,7 +420,11 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   }
   std::unique_ptr<dn::pipelines::Pipeline> pipe;
   try {
+    const uint64_t kernels_before = context.kernels().stats().kernels;
+    const auto start = std::chrono::steady_clock::now();
     pipe = dn::pipelines::create(context, config);
+    row.create_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    row.compiled = context.kernels().stats().kernels - kernels_before;
   } catch (const std::exception& e) {
     row.error = e.what();
     return row;
@@ -430,6 +440,9 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
     EncodedFrame f = make_frame(config, t);
     std::vector<dn::protocol::PassTiming> timings;
     pipe->process(f.frame, true, output, timings);
+    if (t == 0)
+      for (const auto& tm : timings)
+        if (tm.name != "upload" && tm.name != "download") row.first_frame_ms += tm.milliseconds;
     if (t < o.warmup) continue;
     double sum = 0;
     for (const auto& tm : timings) {
@@ -478,9 +491,9 @@ int main(int argc, char** argv) {
                 context.validation_enabled() ? " [validation ON: timings are not representative]" : "");
     std::printf("planes: %s inputs and output; %d frames per session, first %d not counted; medians\n\n",
                 o.format == Format::F16 ? "fp16" : "fp32", o.frames, o.warmup);
-    std::printf("| pipeline | size | passes (median ms) | device ms | upload ms | download ms | device B/px "
-                "| floor MB | copy floor ms | pipeline / copy |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| pipeline | size | create ms (kernels compiled) | first frame device ms | passes (median ms) "
+                "| device ms | upload ms | download ms | device B/px | floor MB | copy floor ms | pipeline / copy |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
 
     CopyFloor copy(context);
@@ -490,11 +503,12 @@ int main(int argc, char** argv) {
       for (const auto& [w, h] : o.sizes) {
         Row r = bench_one(context, copy, o, desc, w, h);
         if (!r.error.empty()) {
-          std::printf("| %s | %ux%u | failed: %s | | | | | | | |\n", r.pipeline.c_str(), w, h, r.error.c_str());
+          std::printf("| %s | %ux%u | failed: %s | | | | | | | | | |\n", r.pipeline.c_str(), w, h, r.error.c_str());
           ++failures;
         } else {
-          std::printf("| %s | %ux%u | %s | %s | %s | %s | %.0f | %.1f | %s | %.1f× |\n", r.pipeline.c_str(), w, h,
-                      r.passes.c_str(), fmt_ms(r.device_ms).c_str(), fmt_ms(r.upload_ms).c_str(),
+          std::printf("| %s | %ux%u | %s (%llu) | %s | %s | %s | %s | %s | %.0f | %.1f | %s | %.1f× |\n",
+                      r.pipeline.c_str(), w, h, fmt_ms(r.create_ms).c_str(), static_cast<unsigned long long>(r.compiled),
+                      fmt_ms(r.first_frame_ms).c_str(), r.passes.c_str(), fmt_ms(r.device_ms).c_str(), fmt_ms(r.upload_ms).c_str(),
                       fmt_ms(r.download_ms).c_str(), r.bytes_per_pixel, r.floor_bytes / 1e6,
                       fmt_ms(r.copy_ms).c_str(), r.copy_ms > 0 ? r.device_ms / r.copy_ms : 0.0);
         }
@@ -504,7 +518,9 @@ int main(int argc, char** argv) {
     std::printf(
         "\nfloor MB = device_bytes(): the least traffic per frame if every byte the session holds on the device "
         "is read or written once (inputs read, output written, previous history read, current history written, "
-        "scratch written); = inputs + 2 x history + output when a pipeline has no scratch. copy floor = "
+        "scratch written); = inputs + 2 x history + output when a pipeline has no scratch. create ms: "
+        "pipelines::create wall clock, cold (it compiles) for the first size of a pipeline in this process, warm "
+        "after; first frame: device time of frame 0, not in the medians. copy floor = "
         "bench_copy reading floor/2 bytes and writing floor/2 bytes, Vulkan timestamps, median of %d.\n",
         o.copy_reps);
     if (context.validation_enabled())
