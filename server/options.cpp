@@ -114,6 +114,8 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view) { o.disk_cache = false; return true; }},
       {"--no-warm-up", nullptr, "do not compile the default pipelines at start (each compiles on first use)",
        [](ServerOptions& o, std::string_view) { o.warm_up = false; return true; }},
+      {"--warm-up", nullptr, "compile the default pipelines at start, on a thread of their own (the default)",
+       [](ServerOptions& o, std::string_view) { o.warm_up = true; return true; }},
       {"--log-level", "LEVEL", "debug, info, warn or error (default info)",
        [](ServerOptions& o, std::string_view v) {
          o.log_level = v;

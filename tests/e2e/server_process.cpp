@@ -60,6 +60,10 @@ std::string field_after(const std::string& log, size_t from, const std::string& 
 std::string dnserver_path() { return DN_DNSERVER_PATH; }
 
 ServerProcess::ServerProcess(std::vector<std::string> args, bool add_listeners) {
+  // The start-up warm-up compiles every default pipeline on a thread of its
+  // own; most tests do not need it and it only adds load, so they run without
+  // (a test that wants it passes --warm-up, which comes later and wins).
+  args.insert(args.begin(), "--no-warm-up");
   if (add_listeners) {
     socket_path_ = "/tmp/dn-test-" + std::to_string(::getpid()) + "-" +
                    std::to_string(Clock::now().time_since_epoch().count() % 1000000) + ".sock";

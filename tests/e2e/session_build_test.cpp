@@ -145,7 +145,7 @@ TEST(SessionBuild, WarmUpWritesThePipelineCacheAndARestartLoadsIt) {
   const fs::path dir = temp_dir("cache");
   uint64_t saved = 0;
   {
-    ServerProcess server({"--cache-dir", dir.string()});
+    ServerProcess server({"--warm-up", "--cache-dir", dir.string()});
     RawClient c(server.tcp_url());
     c.hello();
     std::map<std::string, double> st;
@@ -191,7 +191,7 @@ TEST(SessionBuild, AForeignCacheFileIsIgnored) {
   // Let a server write this device's cache file, then replace its contents with garbage.
   std::string name;
   {
-    ServerProcess server({"--cache-dir", dir.string()});
+    ServerProcess server({"--warm-up", "--cache-dir", dir.string()});
     RawClient c(server.tcp_url());
     c.hello();
     for (int i = 0; i < 1200 && stats(c).at("warm_up_done") != 1.0; ++i) ::usleep(100000);
@@ -216,7 +216,7 @@ TEST(SessionBuild, AnUnsafeCacheDirectoryIsRefused) {
   fs::create_directories(dir);
   ::chmod(dir.c_str(), 0777);
   try {
-    ServerProcess server({"--cache-dir", dir.string()});
+    ServerProcess server({"--warm-up", "--cache-dir", dir.string()});
     ADD_FAILURE() << "dnserver started with a world-writable cache directory";
   } catch (const std::exception& e) {
     const std::string log = e.what();
@@ -227,7 +227,7 @@ TEST(SessionBuild, AnUnsafeCacheDirectoryIsRefused) {
   fs::create_directories(dir.parent_path());
   fs::create_directory_symlink("/tmp", dir);
   try {
-    ServerProcess server({"--cache-dir", dir.string()});
+    ServerProcess server({"--warm-up", "--cache-dir", dir.string()});
     ADD_FAILURE() << "dnserver started with a symlinked cache directory";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("symbolic link"), std::string::npos) << e.what();
