@@ -34,8 +34,8 @@ void accumulate_tap(ivec2 q, float w, vec3 n, float z, inout vec3 sum_colour, in
   vec4 g = prev_geometry.data[qi];
   float z_prev = g.w;
   if (!(z_prev > 0.0)) return;  // previous pixel was background
-  if (!(abs(z - z_prev) / max(z, z_prev) < DN_PARAM_VALUE(DN_P_accumulate_depth_tolerance))) return;
-  if (!(dot(n, g.xyz) > DN_PARAM_VALUE(DN_P_accumulate_normal_threshold))) return;
+  if (!(abs(z - z_prev) / max(z, z_prev) < DN_PARAM_VALUE(accumulate, depth_tolerance))) return;
+  if (!(dot(n, g.xyz) > DN_PARAM_VALUE(accumulate, normal_threshold))) return;
   vec4 h = prev_colour.data[qi];
   sum_colour += w * h.rgb;
   sum_len += w * h.a;
@@ -73,8 +73,8 @@ vec3 accumulate_pixel(uint p) {
       prev_len = sum_len / sum_w;
     }
   }
-  float len = min(prev_len + 1.0, DN_PARAM_VALUE(DN_P_accumulate_max_history));
-  float alpha = max(1.0 / len, DN_PARAM_VALUE(DN_P_accumulate_alpha_min));
+  float len = min(prev_len + 1.0, DN_PARAM_VALUE(accumulate, max_history));
+  float alpha = max(1.0 / len, DN_PARAM_VALUE(accumulate, alpha_min));
   vec3 result_colour = mix(prev, c, alpha);
   cur_colour.data[p] = vec4(result_colour, len);
   cur_geometry.data[p] = vec4(n, z);

@@ -47,9 +47,9 @@ void main() {
   if (iy >= ny) return;
   ivec2 base = ivec2(ix / STEP * span + ix % STEP, iy / STEP * span + iy % STEP);
 
-  float phi_n = DN_PARAM_VALUE(DN_P_svgf_phi_normal);
-  float phi_c = DN_PARAM_VALUE(DN_P_svgf_phi_colour);
-  float phi_z = DN_PARAM_VALUE(DN_P_svgf_phi_depth) * float(STEP);
+  float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
+  float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
+  float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * float(STEP);
 
   // Block pixels: centre data.
   float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];

@@ -97,9 +97,9 @@ void main() {
       prev_len = floor(sl / sw + 0.5);  // integral lengths: no fp32 vs exact flips of the len < 4 test
     }
   }
-  float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(DN_P_svgf_max_history)) : 1.0;
-  float alpha = valid ? max(1.0 / len, DN_PARAM_VALUE(DN_P_svgf_alpha_colour)) : 1.0;
-  float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(DN_P_svgf_alpha_moments)) : 1.0;
+  float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
+  float alpha = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_colour)) : 1.0;
+  float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
   illum.data[p] = vec4(colour, 0.0);

@@ -30,7 +30,7 @@ vec3 blend(uint p) {
         hi = max(hi, v);
       }
     vec3 prev = clamp(previous.data[p].rgb, lo, hi);
-    out_c = mix(prev, c.rgb, DN_PARAM_VALUE(DN_P_svgf_taa_alpha));
+    out_c = mix(prev, c.rgb, DN_PARAM_VALUE(svgf, taa_alpha));
   }
   history.data[3u * p] = out_c.r;
   history.data[3u * p + 1u] = out_c.g;

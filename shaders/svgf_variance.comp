@@ -42,9 +42,9 @@ void main() {
   ivec2 base = B * ivec2(int(inv % uint(nx)), int(inv / uint(nx)));
   if (base.y >= size.y) return;
 
-  float phi_n = DN_PARAM_VALUE(DN_P_svgf_phi_normal);
-  float phi_z = DN_PARAM_VALUE(DN_P_svgf_phi_depth) * 3.0;
-  float phi_c = DN_PARAM_VALUE(DN_P_svgf_phi_colour);
+  float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
+  float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
+  float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
   float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B], len[B * B], var[B * B], sw[B * B];
   vec3 cn[B * B];
   vec2 sm[B * B];

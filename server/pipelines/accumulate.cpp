@@ -49,7 +49,8 @@ PipelineDefinition accumulate_definition() {
   d.description.required_channels = protocol::channel_bit(ChannelId::Radiance) |
                                     protocol::channel_bit(ChannelId::Normal) |
                                     protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
-  d.description.parameters = parameters_of("accumulate");
+  d.parameter_groups = {"accumulate"};
+  d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;
   return d;
 }

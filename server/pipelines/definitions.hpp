@@ -14,6 +14,9 @@ namespace dn::pipelines {
 
 struct PipelineDefinition {
   PipelineDescription description;
+  // The parameters.def groups it takes, in order (description.parameters
+  // lists their rows): svgf-fb takes svgf's group and its own.
+  std::vector<std::string_view> parameter_groups;
   GraphSpec (*build)(const SessionConfig& config);
   // Optional channel rules beyond the required/optional masks (run by
   // validate() after the per-channel checks); nullptr if none.

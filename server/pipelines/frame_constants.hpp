@@ -10,14 +10,15 @@
 
 namespace dn::pipelines {
 
-// Uniform block of every pass (shaders/include/frame.glsl), std140.
+// Uniform block of every pass (shaders/include/frame.glsl), std140; the
+// spirv.* tests compare every member offset with the shaders'.
 struct FrameConstants {
   uint32_t size[4];    // width, height, pixel count, flags
   float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
-  float params[kMaxParameters];
   float inverse_view_projection[16];  // (projection * view)^-1 of the frame, column-major: clip -> world
+  Parameters params;   // last: grows with parameters.def (no slot cap)
 };
-static_assert(sizeof(FrameConstants) == 160);
+static_assert(sizeof(FrameConstants) % 16 == 0);
 
 inline constexpr uint32_t kFrameFlagReset = 1u;  // DN_FLAG_RESET
 inline constexpr uint32_t kWorkgroupSize = 64;   // specialization constant 0 of every pass

@@ -366,7 +366,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     default:
       throw std::invalid_argument("unknown motion convention");
   }
-  std::copy(spec_->parameters.begin(), spec_->parameters.end(), constants.params);
+  constants.params = spec_->parameters;
   inverse_view_projection(frame.info, constants.inverse_view_projection);
   uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);

@@ -17,7 +17,6 @@
 // declares (pass.hpp); binding 0 is the FrameConstants uniform buffer.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -58,7 +57,7 @@ struct GraphSpec {
   uint32_t width = 0, height = 0;
   std::vector<BufferSpec> buffers;
   std::vector<PassSpec> passes;
-  std::array<float, kMaxParameters> parameters{};
+  Parameters parameters;
 
   static constexpr uint64_t kUniformBytes = sizeof(FrameConstants);
 

@@ -32,7 +32,7 @@ PipelineDefinition passthrough_definition() {
   d.description.required_channels = protocol::channel_bit(ChannelId::Radiance);
   for (const auto& c : protocol::kChannels)
     if (c.id != ChannelId::Radiance && c.id != ChannelId::Output) d.description.optional_channels |= protocol::channel_bit(c.id);
-  d.description.parameters = parameters_of("passthrough");
+  d.description.parameters = parameters_of(d.parameter_groups);  // none
   d.build = build;
   return d;
 }

@@ -49,7 +49,7 @@ GraphSpec begin_graph(const SessionConfig& config) {
   GraphSpec g;
   g.width = config.width;
   g.height = config.height;
-  g.parameters = resolve_parameters(config.pipeline, config.parameters);
+  g.parameters = parameter_block(find_definition(config.pipeline)->parameter_groups, config.parameters);
   return g;
 }
 

@@ -40,12 +40,6 @@ constexpr uint32_t kAtrousBlock = 4;
 // svgf_variance register block: kVarianceBlock^2 pixels per invocation.
 constexpr uint32_t kVarianceBlock = 2;
 
-// Slots of parameters.def (svgf rows).
-constexpr uint32_t kIterationsSlot = 3;
-constexpr uint32_t kFeedbackSlot = 4;
-constexpr uint32_t kTaaAlphaSlot = 8;
-constexpr uint32_t kSpecularDemodulatedSlot = 9;  // svgf-fb
-
 bool has_channel(const SessionConfig& config, ChannelId id) {
   for (const auto& c : config.channels)
     if (c.id == id) return true;
@@ -81,10 +75,10 @@ GraphSpec build(const SessionConfig& config) {
     g.add_persistent("svgf_spec_colour", kColourHistoryBytes);
     g.add_persistent("svgf_spec_aux", kAuxHistoryBytes);
   }
-  const bool taa = g.parameters[kTaaAlphaSlot] > 0.0f;
+  const bool taa = g.parameters.svgf_taa_alpha > 0.0f;
   if (taa) g.add_persistent("svgf_taa", kTaaHistoryBytes);
-  const uint32_t iterations = static_cast<uint32_t>(g.parameters[kIterationsSlot]);
-  const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters[kFeedbackSlot]), iterations ? iterations - 1 : 0u);
+  const uint32_t iterations = static_cast<uint32_t>(g.parameters.svgf_atrous_iterations);
+  const uint32_t tap = std::min(static_cast<uint32_t>(g.parameters.svgf_feedback_tap), iterations ? iterations - 1 : 0u);
   // Split mode: the specular chain ping-pongs between svgf_illum_c and the
   // diffuse chain's non-final illumination buffer (the diffuse result stays
   // for svgf_remodulate); guide and temporal are shared (the diffuse chain
@@ -185,7 +179,7 @@ GraphSpec build(const SessionConfig& config) {
                            "albedo", true, "_diffuse");
     const std::string spare = diffuse_result == "svgf_illum_a" ? "svgf_illum_b" : "svgf_illum_a";
     // svgf-fb divides by F_beta unless the client sent L_W already.
-    const bool divide_by_fb = fb && g.parameters[kSpecularDemodulatedSlot] == 0.0f;
+    const bool divide_by_fb = fb && g.parameters.svgf_fb_specular_demodulated == 0.0f;
     specular_result = chain(ChannelId::Specular, "specular", "svgf_spec_colour", "svgf_spec_aux", "svgf_illum_c",
                             spare, divide_by_fb ? "svgf_fb" : "", false, "_specular");
   } else {
@@ -275,7 +269,8 @@ PipelineDefinition svgf_definition() {
                                      protocol::channel_bit(ChannelId::Diffuse) |
                                      protocol::channel_bit(ChannelId::Specular) |
                                      protocol::channel_bit(ChannelId::Emission);
-  d.description.parameters = parameters_of("svgf");
+  d.parameter_groups = {"svgf"};
+  d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;
   d.check_channels = check_channels;
   return d;
@@ -294,7 +289,8 @@ PipelineDefinition svgf_fb_definition() {
       protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
       protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
   d.description.optional_channels = protocol::channel_bit(ChannelId::Emission);
-  d.description.parameters = parameters_of("svgf-fb");
+  d.parameter_groups = {"svgf", "svgf_fb"};
+  d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;
   return d;
 }

@@ -3,7 +3,8 @@
 // --reflect output written at build time (shaders/CMakeLists.txt). Storage
 // buffers: binding numbers, names, element type, readonly/writeonly;
 // specialization constants: ids, names, types, defaults; the uniform block at
-// binding 0: FrameConstants with the C++ struct's member offsets.
+// binding 0: FrameConstants with the C++ struct's member offsets, down to
+// every parameters.def row in its parameter struct.
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -16,6 +17,7 @@
 #include "dn/shaders/shaders.hpp"
 #include "json_lite.hpp"
 #include "pipelines/frame_constants.hpp"
+#include "pipelines/parameters.hpp"
 
 namespace dn {
 namespace {
@@ -59,10 +61,20 @@ std::vector<Member> frame_constants_members() {
   using pipelines::FrameConstants;
   return {{"size", offsetof(FrameConstants, size)},
           {"motion", offsetof(FrameConstants, motion)},
-          {"params", offsetof(FrameConstants, params)},
-          {"inverse_view_projection", offsetof(FrameConstants, inverse_view_projection)}};
+          {"inverse_view_projection", offsetof(FrameConstants, inverse_view_projection)},
+          {"params", offsetof(FrameConstants, params)}};
 }
 
+// Offsets of the parameter struct's members (one per parameters.def row, <group>_<name>).
+std::vector<Member> parameter_members() {
+  std::vector<Member> out;
+  const pipelines::Parameters p;
+  for (const auto& row : pipelines::parameter_table())
+    out.push_back({std::string(row.group) + "_" + row.info.name,
+                   static_cast<size_t>(reinterpret_cast<const char*>(&(p.*row.member)) -
+                                       reinterpret_cast<const char*>(&p))});
+  return out;
+}
 
 std::vector<std::string> shader_names() {
   std::vector<std::string> out;
@@ -155,6 +167,15 @@ TEST_P(ShaderReflection, UniformBlockIsFrameConstantsWithTheCppLayout) {
   for (size_t i = 0; i < want.size(); ++i) {
     EXPECT_EQ(members[i]["name"].string, want[i].name);
     EXPECT_EQ(members[i]["offset"].number, static_cast<double>(want[i].offset)) << want[i].name;
+  }
+  // The parameter struct: every row of parameters.def, a float at C++'s offset.
+  const Value& params = r["types"][members[want.size() - 1]["type"].string]["members"];
+  const auto rows = parameter_members();
+  ASSERT_EQ(params.array.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(params[i]["name"].string, rows[i].name);
+    EXPECT_EQ(params[i]["type"].string, "float") << rows[i].name;
+    EXPECT_EQ(params[i]["offset"].number, static_cast<double>(rows[i].offset)) << rows[i].name;
   }
 }
 
