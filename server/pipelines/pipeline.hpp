@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
@@ -50,6 +51,29 @@ struct ConfigError {
   std::string message;  // names the value and what was expected
 };
 
+struct GraphSpec;  // pipelines/graph.hpp
+
+// A configuration that passed validation, with its pass graph built (once):
+// what prepare() returns and create() consumes, so one OPEN_SESSION builds
+// its graph once. Cheap to copy (the graph is shared and immutable).
+class PreparedPipeline {
+ public:
+  const SessionConfig& config() const { return config_; }
+  // Persistent device bytes create() will allocate (= the pipeline's device_bytes()).
+  uint64_t device_bytes() const { return device_bytes_; }
+  const GraphSpec& graph() const { return *graph_; }
+  const std::shared_ptr<const GraphSpec>& shared_graph() const { return graph_; }
+
+ private:
+  friend std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config);
+  PreparedPipeline(SessionConfig config, std::shared_ptr<const GraphSpec> graph, uint64_t device_bytes)
+      : config_(std::move(config)), graph_(std::move(graph)), device_bytes_(device_bytes) {}
+
+  SessionConfig config_;
+  std::shared_ptr<const GraphSpec> graph_;
+  uint64_t device_bytes_ = 0;
+};
+
 // Thrown by Pipeline::process and create() when the device fails.
 struct DeviceFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -72,15 +96,27 @@ class Pipeline {
 // Every pipeline this build offers, in a stable order.
 const std::vector<PipelineDescription>& available_pipelines();
 
-// Checks pipeline name, resolution, channels (required present, no unknown
-// ones) and parameters (known names, in range, integral where required).
-std::optional<ConfigError> validate(const SessionConfig& config);
+// Validates the configuration and builds its pass graph once: pipeline name,
+// resolution, channels (required present, no unknown ones), parameters (known
+// names, in range, integral where required) and the largest binding against
+// the current device limits (gpu::current_device_limits()). The result's
+// device_bytes() is what create() allocates. Thread-safe, no device work.
+std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config);
 
+// Builds the pipeline's device objects from a prepared graph (no second
+// build, no second validation; the largest binding is checked against this
+// context's limits, DeviceFailure otherwise). Safe to call from several
+// threads; process() of different pipelines may run concurrently.
+std::unique_ptr<Pipeline> create(gpu::Context& context, const PreparedPipeline& prepared);
+
+// The same three steps for callers that keep only the configuration; each
+// builds the graph again (prefer prepare()).
+// validate(): prepare()'s error, if any.
+std::optional<ConfigError> validate(const SessionConfig& config);
 // Persistent device bytes create() would allocate, so limits are enforced before allocating.
 uint64_t estimate_device_bytes(const SessionConfig& config);
-
-// Builds the pipeline's device objects; config must have passed validate().
-// Safe to call from several threads; process() of different pipelines may run concurrently.
+// Builds the pipeline's device objects; config must have passed validate()
+// (std::invalid_argument otherwise).
 std::unique_ptr<Pipeline> create(gpu::Context& context, const SessionConfig& config);
 
 }  // namespace dn::pipelines

@@ -1,5 +1,6 @@
 // The pipeline contract: the list of pipelines, configuration validation,
 // device-byte estimates and creation.
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -62,22 +63,45 @@ const std::vector<PipelineDescription>& available_pipelines() {
   return all;
 }
 
+namespace {
+
+std::atomic<uint64_t> graphs_built{0};
+
+// The one place a graph is built: the definition's builder, then the
+// build-time check of every binding and buffer name.
+std::shared_ptr<const GraphSpec> build_graph(const PipelineDefinition& def, const SessionConfig& config) {
+  graphs_built.fetch_add(1, std::memory_order_relaxed);
+  auto g = std::make_shared<GraphSpec>(def.build(config));
+  g->check();
+  return g;
+}
+
+std::optional<ConfigError> limit_error(const SessionConfig& config, const GraphSpec& graph,
+                                       const gpu::DeviceLimits& limits) {
+  const BufferSpec* big = graph.largest_binding();
+  if (big && big->bytes > limits.max_storage_buffer_range)
+    return error(protocol::ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                 "resolution " + std::to_string(config.width) + "x" + std::to_string(config.height) + " needs " +
+                     std::to_string(big->bytes) + " bytes in one device buffer (" + big->name +
+                     "); the device allows " + std::to_string(limits.max_storage_buffer_range));
+  return std::nullopt;
+}
+
+}  // namespace
+
+uint64_t graphs_built_count() { return graphs_built.load(std::memory_order_relaxed); }
+
 BindingSize largest_binding(const SessionConfig& config) {
   const PipelineDefinition* def = find_definition(config.pipeline);
   if (!def) return {};
-  const GraphSpec g = def->build(config);
-  const BufferSpec* b = g.largest_binding();
+  const BufferSpec* b = build_graph(*def, config)->largest_binding();
   return b ? BindingSize{b->name, b->bytes} : BindingSize{};
 }
 
 std::optional<ConfigError> check_device_limits(const SessionConfig& config, const gpu::DeviceLimits& limits) {
-  const BindingSize big = largest_binding(config);
-  if (big.bytes > limits.max_storage_buffer_range)
-    return error(protocol::ErrorCode::LimitExceeded, "OPEN_SESSION.width",
-                 "resolution " + std::to_string(config.width) + "x" + std::to_string(config.height) + " needs " +
-                     std::to_string(big.bytes) + " bytes in one device buffer (" + big.buffer +
-                     "); the device allows " + std::to_string(limits.max_storage_buffer_range));
-  return std::nullopt;
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  if (!def) return std::nullopt;
+  return limit_error(config, *build_graph(*def, config), limits);
 }
 
 namespace {
@@ -167,22 +191,34 @@ std::optional<ConfigError> validate_config(const SessionConfig& config) {
 
 }  // namespace
 
+std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config) {
+  if (auto err = validate_config(config)) return *err;
+  auto graph = build_graph(*find_definition(config.pipeline), config);
+  if (auto err = limit_error(config, *graph, gpu::current_device_limits())) return *err;
+  const uint64_t bytes = graph->device_bytes();
+  return PreparedPipeline(config, std::move(graph), bytes);
+}
+
+std::unique_ptr<Pipeline> create(gpu::Context& context, const PreparedPipeline& prepared) {
+  if (auto err = limit_error(prepared.config(), prepared.graph(), context.limits())) throw DeviceFailure(err->message);
+  return std::make_unique<GraphPipeline>(context, prepared.config(), prepared.shared_graph());
+}
+
 std::optional<ConfigError> validate(const SessionConfig& config) {
-  if (auto err = validate_config(config)) return err;
-  return check_device_limits(config, gpu::current_device_limits());
+  auto prepared = prepare(config);
+  if (auto* err = std::get_if<ConfigError>(&prepared)) return std::move(*err);
+  return std::nullopt;
 }
 
 uint64_t estimate_device_bytes(const SessionConfig& config) {
   const PipelineDefinition* def = find_definition(config.pipeline);
-  return def ? def->build(config).device_bytes() : 0;
+  return def ? build_graph(*def, config)->device_bytes() : 0;
 }
 
 std::unique_ptr<Pipeline> create(gpu::Context& context, const SessionConfig& config) {
   if (auto err = validate_config(config)) throw std::invalid_argument(err->field + ": " + err->message);
-  if (auto err = check_device_limits(config, context.limits())) throw DeviceFailure(err->message);
-  const PipelineDefinition* def = find_definition(config.pipeline);
-  auto graph = std::make_shared<GraphSpec>(def->build(config));
-  graph->check();
+  auto graph = build_graph(*find_definition(config.pipeline), config);
+  if (auto err = limit_error(config, *graph, context.limits())) throw DeviceFailure(err->message);
   return std::make_unique<GraphPipeline>(context, config, std::move(graph));
 }
 

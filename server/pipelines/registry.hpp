@@ -27,4 +27,9 @@ BindingSize largest_binding(const SessionConfig& config);
 // most recently created Context, or the Vulkan minimum of 128 MiB before any).
 std::optional<ConfigError> check_device_limits(const SessionConfig& config, const gpu::DeviceLimits& limits);
 
+// Pass graphs built by this process so far (each prepare(), estimate and
+// create(context, config) builds one; create(context, prepared) none). For
+// the test that one OPEN_SESSION through prepare() builds its graph once.
+uint64_t graphs_built_count();
+
 }  // namespace dn::pipelines

@@ -17,6 +17,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "frames.hpp"
@@ -252,8 +253,12 @@ TEST_P(GoldenTest, OutputIsBitIdentical) {
   std::vector<protocol::ChannelDecl> decls;
   for (ChannelId id : c.channels) decls.push_back({id, c.inputs});
   const auto config = test::make_config(c.pipeline, kWidth, kHeight, decls, c.output, c.parameters);
-  ASSERT_FALSE(pipelines::validate(config).has_value()) << pipelines::validate(config)->message;
-  auto pipe = pipelines::create(ctx(), config);
+  // The server's path: prepare once, create from the prepared graph.
+  auto prepared = pipelines::prepare(config);
+  ASSERT_TRUE(std::holds_alternative<pipelines::PreparedPipeline>(prepared))
+      << std::get<pipelines::ConfigError>(prepared).message;
+  auto pipe = pipelines::create(ctx(), std::get<pipelines::PreparedPipeline>(prepared));
+  EXPECT_EQ(pipe->device_bytes(), std::get<pipelines::PreparedPipeline>(prepared).device_bytes());
 
   uint64_t hash = 0xcbf29ce484222325ull;
   std::string passes;
