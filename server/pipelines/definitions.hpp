@@ -21,6 +21,9 @@ struct PipelineDefinition {
   // Optional channel rules beyond the required/optional masks (run by
   // validate() after the per-channel checks); nullptr if none.
   std::optional<ConfigError> (*check_channels)(const SessionConfig& config) = nullptr;
+  // Context-wide resources its graphs bind (GraphSpec::add_shared), so a
+  // server can make them before the first session (prepare_shared_resources).
+  std::vector<SharedResourceDecl> shared_resources;
 };
 
 PipelineDefinition passthrough_definition();

@@ -42,6 +42,11 @@ enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared };
 // A context-wide resource: made on first use, then the same buffer for every
 // session of that context (e.g. fb_lut_buffer, the F_beta table).
 using SharedResource = const gpu::Buffer& (*)(gpu::Context& context);
+// A pipeline's declaration of a shared resource it binds (PipelineDefinition::shared_resources).
+struct SharedResourceDecl {
+  const char* name;  // the graph buffer's name
+  SharedResource resource;
+};
 
 struct BufferSpec {
   std::string name;

@@ -91,6 +91,11 @@ std::optional<ConfigError> limit_error(const SessionConfig& config, const GraphS
 
 uint64_t graphs_built_count() { return graphs_built.load(std::memory_order_relaxed); }
 
+void prepare_shared_resources(gpu::Context& context) {
+  for (const auto& def : definitions())
+    for (const auto& shared : def.shared_resources) shared.resource(context);
+}
+
 BindingSize largest_binding(const SessionConfig& config) {
   const PipelineDefinition* def = find_definition(config.pipeline);
   if (!def) return {};

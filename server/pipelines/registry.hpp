@@ -32,4 +32,9 @@ std::optional<ConfigError> check_device_limits(const SessionConfig& config, cons
 // the test that one OPEN_SESSION through prepare() builds its graph once.
 uint64_t graphs_built_count();
 
+// Makes every shared resource any pipeline declares (the F_beta table, ...)
+// on this context now instead of on the first session that binds it. Throws
+// what making one throws (gpu::Error).
+void prepare_shared_resources(gpu::Context& context);
+
 }  // namespace dn::pipelines

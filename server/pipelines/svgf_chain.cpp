@@ -1,0 +1,202 @@
+#include "pipelines/svgf_chain.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace dn::pipelines {
+namespace {
+
+using protocol::ChannelId;
+
+// Per pixel, a single persistent copy (svgf_reproject reads it; svgf_variance
+// and the feedback a-trous iteration rewrite it after that pass):
+// vec4(demodulated rgb, length) fp32 and uvec4(m1, m2, depth as fp32 bits,
+// octahedral snorm16x2 normal).
+constexpr uint64_t kColourHistoryBytes = 16;
+constexpr uint64_t kAuxHistoryBytes = 16;
+// TAA: the previous final output, rgb fp32, one persistent copy (read by
+// svgf_remodulate, rewritten by svgf_taa after it).
+constexpr uint64_t kTaaHistoryBytes = 12;
+// Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
+constexpr uint64_t kIlluminationBytes = 16;
+// Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
+// temporal vec4(m1, m2, length, luminance), written by svgf_reproject.
+constexpr uint64_t kGuideBytes = 16;
+constexpr uint64_t kTemporalBytes = 16;
+// a-trous register block: one invocation filters kAtrousBlock^2 pixels.
+constexpr uint32_t kAtrousBlock = 4;
+// svgf_variance register block: kVarianceBlock^2 pixels per invocation.
+constexpr uint32_t kVarianceBlock = 2;
+
+// Illumination ping-pong: the first signal alternates a and b; the second
+// alternates c and whichever of a/b the first did not end in, so the first
+// signal's result survives until svgf_remodulate.
+constexpr const char* kIllumA = "svgf_illum_a";
+constexpr const char* kIllumB = "svgf_illum_b";
+constexpr const char* kIllumC = "svgf_illum_c";
+constexpr const char* kGuide = "svgf_guide";
+constexpr const char* kTemporal = "svgf_temporal";
+constexpr const char* kTaaHistory = "svgf_taa";
+
+uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
+  return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
+}
+
+// One reproject / variance / a-trous chain; returns the buffer holding its
+// final illumination.
+std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index,
+                      std::string current, std::string other) {
+  const SvgfSignal& s = v.signals[index];
+  const std::string colour = s.history + "_colour", aux = s.history + "_aux";
+  const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
+  const uint32_t normal_half = is_half(channel_format(config, ChannelId::Normal));
+  const uint32_t depth_half = is_half(channel_format(config, ChannelId::Depth));
+
+  PassSpec& reproject = g.add_pass("svgf_reproject" + s.suffix, "svgf_reproject");
+  reproject.bind("signal", s.input)
+      .bind("normal", "normal")
+      .bind("depth", "depth")
+      .bind("motion", "motion")
+      .bind("prev_colour", colour)
+      .bind("prev_aux", aux)
+      .bind("illum", current)
+      .bind("guide", kGuide)
+      .bind("temporal", kTemporal)
+      .set("SIGNAL_HALF", is_half(channel_format(config, s.channel)))
+      .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
+      .set("NORMAL_HALF", normal_half)
+      .set("DEPTH_HALF", depth_half)
+      .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
+      .set("DEMODULATE", demodulate)
+      .set("WRITE_GUIDE", index == 0)  // later chains read the first chain's guide
+      .set("SUBTRACT_EMISSION", s.subtract_emission);
+  if (demodulate) reproject.bind("modulator", s.modulator.buffer);
+  if (s.subtract_emission)
+    reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  reproject.pixels_per_invocation = 1;
+
+  PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
+  variance.bind("guide", kGuide)
+      .bind("temporal", kTemporal)
+      .bind("illum", current)
+      .bind("colour_history", colour)
+      .bind("aux_history", aux)
+      .set("BLOCK", kVarianceBlock);
+  variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
+                         ((config.height + kVarianceBlock - 1) / kVarianceBlock);
+
+  const uint32_t tap = std::min(v.feedback_tap, v.iterations ? v.iterations - 1 : 0u);
+  for (uint32_t i = 0; i < v.iterations; ++i) {
+    const uint32_t level = v.steps == StepOrder::Increasing ? i : v.iterations - 1 - i;
+    PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i) + s.suffix, "svgf_atrous");
+    atrous.bind("guide", kGuide)
+        .bind("src", current)
+        .bind("dst", other)
+        .set("STEP", 1u << level)
+        .set("FEEDBACK", i == tap)
+        .set("BLOCK", kAtrousBlock);
+    if (i == tap) atrous.bind("colour_history", colour);
+    // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
+    const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
+    atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
+    std::swap(current, other);
+  }
+  return current;
+}
+
+}  // namespace
+
+void check_supported(const SvgfVariant& v) {
+  auto reject = [](const std::string& what) { throw std::logic_error("svgf variant: " + what); };
+  if (v.signals.empty() || v.signals.size() > 2)
+    reject("svgf_remodulate combines one or two signals, not " + std::to_string(v.signals.size()));
+  if (v.signals[0].modulator.empty())
+    reject("the first signal needs a modulator: svgf_remodulate multiplies it by one");
+  for (const SvgfSignal& s : v.signals) {
+    if (s.input.empty() || s.history.empty()) reject("a signal needs an input plane and a history name");
+    if (s.motion != MotionSource::Primary)
+      reject("motion source of signal " + s.input + ": only the primary Motion plane is implemented");
+  }
+  if (v.kernel != AtrousKernel::B3_5x5) reject("kernel: svgf_atrous.comp implements only the 5x5 B3 kernel");
+  if (v.luminance_weight != LuminanceWeight::VarianceGuided)
+    reject("luminance weight: svgf_atrous.comp implements only the variance-guided form");
+  if (v.validity_mask) reject("validity mask: no svgf pass reads one yet");
+  if (v.iterations > 16) reject("more than 16 a-trous iterations (step 2^16)");
+}
+
+void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
+  for (const SvgfSignal& s : v.signals) g.add_input(config, s.channel, s.input);
+  for (const SvgfSignal& s : v.signals)
+    if (s.modulator.plane && !g.find(s.modulator.buffer)) g.add_input(config, *s.modulator.plane, s.modulator.buffer);
+  g.add_input(config, ChannelId::Normal, "normal");
+  g.add_input(config, ChannelId::Depth, "depth");
+  g.add_input(config, ChannelId::Motion, "motion");
+  if (v.emission) g.add_input(config, ChannelId::Emission, "emission");
+}
+
+void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
+  for (const SvgfSignal& s : v.signals) {
+    g.add_persistent(s.history + "_colour", kColourHistoryBytes);
+    g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
+  }
+  if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
+  g.add_scratch(kIllumA, kIlluminationBytes);
+  if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
+  if (v.signals.size() > 1) g.add_scratch(kIllumC, kIlluminationBytes);
+  // Guide and temporal are shared by the signals: each chain's variance pass
+  // has read temporal before the next chain's reprojection rewrites it.
+  g.add_scratch(kGuide, kGuideBytes);
+  g.add_scratch(kTemporal, kTemporalBytes);
+}
+
+void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
+  check_supported(v);
+  std::vector<std::string> results;
+  results.push_back(add_chain(g, config, v, 0, kIllumA, kIllumB));
+  if (v.signals.size() > 1) results.push_back(add_chain(g, config, v, 1, kIllumC, results[0] == kIllumA ? kIllumB : kIllumA));
+
+  // With TAA, svgf_remodulate writes the current colour to the temporal
+  // scratch and the reprojected TAA history to the guide scratch (both free
+  // once the a-trous chains are done) instead of Output; svgf_taa blends them.
+  // Without it, the TAA bindings stay unbound.
+  const Modulator& first = v.signals[0].modulator;
+  PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
+  remodulate.bind("illum", results[0])
+      .bind("albedo", first.buffer)
+      .bind("result", "output")
+      .set("ALBEDO_HALF", modulator_half(config, first))
+      .set("HAS_EMISSION", v.emission)
+      .set("OUTPUT_HALF", is_half(config.output_format))
+      .set("HAS_SPECULAR", v.signals.size() > 1)
+      .set("TAA", v.taa);
+  if (v.emission)
+    remodulate.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  if (v.signals.size() > 1) {
+    remodulate.bind("specular", results[1]);
+    const Modulator& second = v.signals[1].modulator;
+    if (!second.empty()) {
+      if (modulator_half(config, second))
+        throw std::logic_error("svgf variant: svgf_remodulate reads the second signal's modulator as fp32");
+      remodulate.bind("specular_factor", second.buffer).set("SPECULAR_FACTOR", 1u);
+    }
+  }
+  if (v.taa)
+    remodulate.bind("depth", "depth")
+        .bind("motion", "motion")
+        .bind("taa_history", kTaaHistory)
+        .bind("taa_current", kTemporal)
+        .bind("taa_previous", kGuide)
+        .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+
+  if (v.taa)
+    g.add_pass("svgf_taa", "svgf_taa")
+        .bind("current", kTemporal)
+        .bind("previous", kGuide)
+        .bind("result", "output")
+        .bind("history", kTaaHistory)
+        .set("OUTPUT_HALF", is_half(config.output_format));
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,87 @@
+// The SVGF pass chain as a reusable builder (docs/pipelines.md, "svgf in
+// detail"): per signal svgf_reproject -> svgf_variance -> svgf_atrous_<i>,
+// then svgf_remodulate and, with TAA, svgf_taa. What varies between
+// pipelines is data, an SvgfVariant: the signals (each with its modulator and
+// motion source), the a-trous kernel, step order and luminance weight, the
+// feedback tap, a validity mask, TAA and emission. svgf and svgf-fb are two
+// variant descriptions (svgf.cpp, svgf_fb.cpp); builders never compare
+// pipeline names. Fields the shaders do not support yet are part of the
+// description and rejected by check_supported() with a message naming them.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipelines/graph.hpp"
+
+namespace dn::pipelines {
+
+// The a-trous filter kernel.
+enum class AtrousKernel {
+  B3_5x5,  // the B3 spline {1/16, 1/4, 3/8, 1/4, 1/16}^2 (Schied 2017; svgf_atrous.comp)
+  Box3x3,  // 3x3 (as A-SVGF's later iterations); not implemented by svgf_atrous.comp
+};
+// Order of the a-trous step sizes 2^i over the iterations.
+enum class StepOrder {
+  Increasing,  // 1, 2, 4, ... (Schied 2017)
+  Decreasing,  // ..., 4, 2, 1 (coarse to fine)
+};
+// The luminance edge-stopping weight of the a-trous passes.
+enum class LuminanceWeight {
+  VarianceGuided,  // |l_p - l_q| / (phi_colour * sqrt(3x3 Gaussian of the variance + eps)) (Schied 2017)
+  Relative,        // |l_p - l_q| / (phi_colour * l_p) (scale-only); not implemented by svgf_atrous.comp
+};
+// Where a signal's reprojection takes its motion from.
+enum class MotionSource {
+  Primary,     // the Motion plane
+  Reflection,  // a reflection-motion plane (Beyond SVGF); no such channel yet
+};
+
+// What a signal is divided by before filtering and multiplied by after
+// (both guarded: components below 1e-3 or not finite count as 1).
+struct Modulator {
+  std::string buffer;   // a graph buffer with 3 components per pixel; empty: none (factor 1)
+  // Set: the buffer is this client plane (add_svgf_inputs adds it; fp16 or
+  // fp32 as declared). Unset: an fp32 buffer the caller provides.
+  std::optional<protocol::ChannelId> plane;
+  bool client_divided = false;  // the client sent the signal divided already: multiply only
+  bool empty() const { return buffer.empty(); }
+};
+
+struct SvgfSignal {
+  protocol::ChannelId channel = protocol::ChannelId::Radiance;  // its plane
+  std::string input;            // the plane's buffer
+  std::string suffix;           // of its passes' names ("" with one signal, "_diffuse", ...)
+  std::string history;          // prefix of its history buffers: <history>_colour, <history>_aux
+  Modulator modulator;
+  MotionSource motion = MotionSource::Primary;
+  bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
+};
+
+struct SvgfVariant {
+  std::vector<SvgfSignal> signals;  // the first writes the guide the others read
+  AtrousKernel kernel = AtrousKernel::B3_5x5;
+  StepOrder steps = StepOrder::Increasing;
+  LuminanceWeight luminance_weight = LuminanceWeight::VarianceGuided;
+  uint32_t iterations = 4;           // a-trous iterations (0: none)
+  uint32_t feedback_tap = 1;         // iteration whose output becomes the colour history (clamped)
+  std::optional<protocol::ChannelId> validity_mask;  // pixels without a sample this frame (PSVGF); not implemented
+  bool taa = false;                  // final svgf_taa pass
+  bool emission = false;             // add the Emission plane back after filtering
+};
+
+// Throws std::logic_error naming the first field (or combination) the
+// shaders do not implement.
+void check_supported(const SvgfVariant& variant);
+
+// The builder, in the graph's order: inputs, then the variant's persistent
+// and scratch buffers, then (after any buffers and passes of the caller's
+// own, such as svgf-fb's factor) the passes. The caller adds the output
+// plane; modulator buffers that are not inputs are the caller's too.
+void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVariant& variant);
+void add_svgf_buffers(GraphSpec& g, const SvgfVariant& variant);
+void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& variant);
+
+}  // namespace dn::pipelines

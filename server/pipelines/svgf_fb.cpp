@@ -1,0 +1,90 @@
+// svgf-fb: svgf's split mode with the specular signal demodulated by the
+// pre-integrated GGX F_beta instead of being filtered as sent (paper 000;
+// docs/pipelines.md "svgf-fb"): one pass in front, svgf_fb_factor, computes
+// F_beta = F0 * A + B per pixel from the context's F_beta table, and the SVGF
+// chain (svgf_chain.hpp) runs with that factor as the specular modulator.
+#include "pipelines/definitions.hpp"
+#include "pipelines/fb_lut.hpp"
+#include "pipelines/svgf_chain.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+using protocol::ChannelId;
+
+// Scratch, per pixel: F_beta rgb fp32 (svgf_fb_factor).
+constexpr uint64_t kFbFactorBytes = 12;
+constexpr const char* kFactor = "svgf_fb";
+// The context-wide table this pipeline binds (computed once per device).
+const SharedResourceDecl kFbLut{"fb_lut", fb_lut_buffer};
+
+bool has_channel(const SessionConfig& config, ChannelId id) {
+  for (const auto& c : config.channels)
+    if (c.id == id) return true;
+  return false;
+}
+
+SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
+  SvgfVariant v;
+  v.iterations = static_cast<uint32_t>(p.svgf_atrous_iterations);
+  v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
+  v.taa = p.svgf_taa_alpha > 0.0f;
+  v.emission = has_channel(config, ChannelId::Emission);
+  v.signals.push_back({ChannelId::Diffuse, "diffuse", "_diffuse", "svgf", Modulator{"albedo", ChannelId::Albedo}});
+  // specular_demodulated = 1: the client sent L_W = specular / F_beta, so the
+  // server only remodulates.
+  Modulator fb{kFactor, std::nullopt, p.svgf_fb_specular_demodulated != 0.0f};
+  v.signals.push_back({ChannelId::Specular, "specular", "_specular", "svgf_spec", fb});
+  return v;
+}
+
+GraphSpec build(const SessionConfig& config) {
+  GraphSpec g = begin_graph(config);
+  const SvgfVariant v = variant(config, g.parameters);
+  add_svgf_inputs(g, config, v);
+  g.add_input(config, ChannelId::SpecularF0, "specular_f0");
+  g.add_input(config, ChannelId::Roughness, "roughness");
+  g.add_shared(kFbLut.name, kFbLut.resource);
+  add_svgf_buffers(g, v);
+  g.add_scratch(kFactor, kFbFactorBytes);
+  g.add_output(config);
+
+  g.add_pass("svgf_fb_factor", "svgf_fb_factor")
+      .bind("specular_f0", "specular_f0")
+      .bind("roughness", "roughness")
+      .bind("normal", "normal")
+      .bind("depth", "depth")
+      .bind("fb_lut", kFbLut.name)
+      .bind("factor", kFactor)
+      .set("F0_HALF", is_half(channel_format(config, ChannelId::SpecularF0)))
+      .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)))
+      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
+      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+      .pixels_per_invocation = 1;
+  add_svgf_passes(g, config, v);
+  return g;
+}
+
+}  // namespace
+
+PipelineDefinition svgf_fb_definition() {
+  PipelineDefinition d;
+  d.description.name = "svgf-fb";
+  d.description.summary =
+      "svgf on split lighting with BRDF pre-integration demodulation (paper 000): diffuse divided by albedo, "
+      "specular by F_beta = F0 * A + B from a GGX table computed on the device at start-up; both filtered as "
+      "svgf and remodulated. Parameter specular_demodulated = 1 takes L_W (Eq. 11) in the specular channel.";
+  d.description.required_channels =
+      protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular) |
+      protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
+      protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
+      protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Emission);
+  d.parameter_groups = {"svgf", "svgf_fb"};
+  d.description.parameters = parameters_of(d.parameter_groups);
+  d.shared_resources = {kFbLut};
+  d.build = build;
+  return d;
+}
+
+}  // namespace dn::pipelines
