@@ -24,8 +24,12 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                           std::to_string(options_.max_sessions) + ")",
                       false);
 
-  pipelines::SessionConfig config{m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters};
-  if (auto err = pipelines::validate(config)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+  // Validation builds the pass graph (pure data, no device work); the builder reuses it.
+  auto prepared = pipelines::prepare({m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters});
+  if (auto* err = std::get_if<pipelines::ConfigError>(&prepared))
+    return send_error(c, h.request_id, err->code, err->field, err->message, false);
+  const pipelines::PreparedPipeline& ready = std::get<pipelines::PreparedPipeline>(prepared);
+  const pipelines::SessionConfig& config = ready.config();
 
   // A frame of this session must fit one message.
   const uint64_t frame_bytes = frame_message_bytes(config);
@@ -34,7 +38,7 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                       "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
                           std::to_string(options_.max_message_bytes) + "-byte message limit (--max-message)",
                       false);
-  const uint64_t estimate = pipelines::estimate_device_bytes(config);
+  const uint64_t estimate = ready.device_bytes();
   if (estimate > options_.max_session_bytes)
     return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
                       "session needs " + std::to_string(estimate) + " bytes of device memory, above the " +
@@ -44,7 +48,7 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
   // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
   ++c.sessions_being_built;
   ++sessions_being_built_;
-  builder_->submit(BuildRequest{c.id(), h.request_id, std::move(config)});
+  builder_->submit(BuildRequest{c.id(), h.request_id, ready});
 }
 
 void Server::on_pipeline_built(BuiltPipeline&& built) {
@@ -52,7 +56,7 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
   counters_.add_build(built);
   net::Connection* c = find_connection(built.request.connection_id);
   if (c) --c->sessions_being_built;
-  const pipelines::SessionConfig& config = built.request.config;
+  const pipelines::SessionConfig& config = built.request.prepared.config();
   const uint64_t request_id = built.request.request_id;
   if (!c) {
     log::info("session.dropped", {{"conn", built.request.connection_id}, {"reason", "connection closed while building"}});

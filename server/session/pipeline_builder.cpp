@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <stdexcept>
+#include <variant>
 
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
@@ -66,17 +68,16 @@ void PipelineBuilder::hold_for_test() {
 void PipelineBuilder::submit(BuildRequest&& request) {
   auto job = [this, request = std::move(request)]() mutable {
     hold_for_test();
-    BuiltPipeline out;
+    BuiltPipeline out{std::move(request)};
     const auto start = Clock::now();
     const double compiled_before = gpu::KernelCache::compile_ms_of_this_thread();
     try {
-      out.pipeline = pipelines::create(context_, request.config);
+      out.pipeline = pipelines::create(context_, out.request.prepared);
     } catch (const std::exception& e) {
       out.error = e.what();
     }
     out.build_ms = ms_since(start);
     out.compile_ms = gpu::KernelCache::compile_ms_of_this_thread() - compiled_before;
-    out.request = std::move(request);
     on_built_(std::move(out));
   };
   {
@@ -99,7 +100,10 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
         if (stopping_) return;
       }
       try {
-        pipelines::create(context_, config);  // built and dropped: its kernels stay in the cache
+        const auto prepared = pipelines::prepare(config);
+        if (auto* err = std::get_if<pipelines::ConfigError>(&prepared)) throw std::invalid_argument(err->message);
+        // Built and dropped: its kernels stay in the cache.
+        pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared));
         ++report.configs;
       } catch (const std::exception& e) {
         if (report.error.empty()) report.error = config.pipeline + ": " + e.what();
@@ -133,7 +137,7 @@ std::vector<pipelines::SessionConfig> PipelineBuilder::warm_up_configs() {
       if ((p.optional_channels & radiance) && !(mask & split)) mask |= radiance;
       for (const auto& c : protocol::kChannels)
         if (mask & protocol::channel_bit(c.id)) config.channels.push_back({c.id, format});
-      if (!pipelines::validate(config)) out.push_back(std::move(config));
+      out.push_back(std::move(config));
     }
   }
   return out;

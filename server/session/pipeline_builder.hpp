@@ -31,7 +31,7 @@ namespace dn::server {
 struct BuildRequest {
   uint64_t connection_id = 0;
   uint64_t request_id = 0;
-  pipelines::SessionConfig config;
+  pipelines::PreparedPipeline prepared;  // validated, its graph built (pipelines::prepare)
 };
 
 struct BuiltPipeline {
@@ -62,7 +62,8 @@ class PipelineBuilder {
   void stop();
 
   // The sessions the warm-up builds: every offered pipeline with its default
-  // parameters and its least channel set, all planes fp32, then all fp16.
+  // parameters and its least channel set, all planes fp32, then all fp16
+  // (a configuration a pipeline refuses is reported in WarmUpReport::error).
   static std::vector<pipelines::SessionConfig> warm_up_configs();
 
  private:
