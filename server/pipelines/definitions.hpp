@@ -26,10 +26,10 @@ struct PipelineDefinition {
   std::vector<SharedResourceDecl> shared_resources;
 };
 
-PipelineDefinition passthrough_definition();
-PipelineDefinition accumulate_definition();
-PipelineDefinition svgf_definition();
-PipelineDefinition svgf_fb_definition();
+// One per line of pipelines.def (each in its own <id>.cpp).
+#define DN_PIPELINE(id) PipelineDefinition id##_definition();
+#include "pipelines/pipelines.def"
+#undef DN_PIPELINE
 
 // All definitions in a stable order; find_definition returns nullptr if unknown.
 const std::vector<PipelineDefinition>& definitions();

@@ -35,8 +35,11 @@ ConfigError error(protocol::ErrorCode code, std::string field, std::string messa
 }  // namespace
 
 const std::vector<PipelineDefinition>& definitions() {
-  static const std::vector<PipelineDefinition> all = {passthrough_definition(), accumulate_definition(),
-                                                       svgf_definition(), svgf_fb_definition()};
+  static const std::vector<PipelineDefinition> all = {
+#define DN_PIPELINE(id) id##_definition(),
+#include "pipelines/pipelines.def"
+#undef DN_PIPELINE
+  };
   return all;
 }
 
