@@ -8,9 +8,37 @@
 
 namespace dn::gpu {
 
+namespace {
+
+// The workgroup shape of a desc as (x, y), checked; (0, 0) when the caller
+// sets constant 0 itself.
+std::array<uint32_t, 2> checked_local_size(const KernelDesc& desc) {
+  const std::string what = "kernel " + desc.name + ": ";
+  if (desc.local_size_x == 0) {
+    if (desc.local_size_y != 0) throw Error(what + "local_size_y without local_size_x");
+    return {0, 0};
+  }
+  const uint32_t y = desc.local_size_y == 0 ? 1 : desc.local_size_y;
+  // Square or 1-D only: both axes read constant 0 (see kLocalSizeId).
+  if (y != 1 && y != desc.local_size_x)
+    throw Error(what + "2-D workgroups are square (local_size_y must be 1 or local_size_x)");
+  for (const auto& c : desc.spec_constants)
+    if (c.id == kLocalSizeId) throw Error(what + "constant 0 given twice (local_size_x and spec_constants)");
+  return {desc.local_size_x, y};
+}
+
+}  // namespace
+
 Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
-    : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers) {
+    : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers),
+      push_constant_bytes_(desc.push_constant_bytes) {
   if (desc.spirv.empty()) throw Error("kernel " + name_ + ": no SPIR-V (shader not embedded?)");
+  const auto local = checked_local_size(desc);
+  local_size_x_ = local[0];
+  local_size_y_ = local[1];
+  if (push_constant_bytes_ % 4 != 0 || push_constant_bytes_ > kMaxPushConstantBytes)
+    throw Error("kernel " + name_ + ": push_constant_bytes must be a multiple of 4 and at most " +
+                std::to_string(kMaxPushConstantBytes));
   VkShaderModule module = VK_NULL_HANDLE;
   try {
     std::vector<VkDescriptorSetLayoutBinding> bindings(desc.storage_buffers + 1);
@@ -28,6 +56,11 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
     VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     layout_info.setLayoutCount = 1;
     layout_info.pSetLayouts = &set_layout_;
+    const VkPushConstantRange push_range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_};
+    if (push_constant_bytes_ > 0) {
+      layout_info.pushConstantRangeCount = 1;
+      layout_info.pPushConstantRanges = &push_range;
+    }
     check(vkCreatePipelineLayout(device_, &layout_info, nullptr, &layout_), "vkCreatePipelineLayout");
 
     VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
@@ -37,7 +70,9 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
 
     std::vector<VkSpecializationMapEntry> entries;
     std::vector<uint32_t> data;
-    for (const auto& c : desc.spec_constants) {
+    std::vector<SpecConstant> constants = desc.spec_constants;
+    if (local_size_x_ != 0) constants.push_back({kLocalSizeId, local_size_x_});
+    for (const auto& c : constants) {
       entries.push_back({c.id, static_cast<uint32_t>(data.size() * sizeof(uint32_t)), sizeof(uint32_t)});
       data.push_back(c.value);
     }
@@ -66,6 +101,28 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
 
 Kernel::~Kernel() { destroy(); }
 
+std::array<uint32_t, 2> Kernel::groups(uint32_t width, uint32_t height) const {
+  if (local_size_x_ == 0) throw Error("kernel " + name_ + ": no workgroup shape (KernelDesc::local_size_x)");
+  return {(width + local_size_x_ - 1) / local_size_x_, (height + local_size_y_ - 1) / local_size_y_};
+}
+
+void Kernel::record_push(VkCommandBuffer cmd, std::span<const uint8_t> bytes) const {
+  if (bytes.size() > push_constant_bytes_ || bytes.size() % 4 != 0)
+    throw Error("kernel " + name_ + ": " + std::to_string(bytes.size()) + " push-constant bytes, range is " +
+                std::to_string(push_constant_bytes_));
+  if (!bytes.empty())
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, static_cast<uint32_t>(bytes.size()),
+                       bytes.data());
+}
+
+void Kernel::record_dispatch(VkCommandBuffer cmd, VkDescriptorSet set, const GridPush& grid) const {
+  const auto g = groups(grid.size[0], grid.size[1]);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set, 0, nullptr);
+  if (push_constant_bytes_ > 0) record_push(cmd, {reinterpret_cast<const uint8_t*>(&grid), sizeof grid});
+  vkCmdDispatch(cmd, g[0], g[1], 1);
+}
+
 void Kernel::destroy() noexcept {
   if (pipeline_) vkDestroyPipeline(device_, pipeline_, nullptr);
   if (layout_) vkDestroyPipelineLayout(device_, layout_, nullptr);
@@ -82,7 +139,8 @@ thread_local double compile_ms_this_thread = 0.0;
 double KernelCache::compile_ms_of_this_thread() { return compile_ms_this_thread; }
 
 std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
-  Key key{desc.spirv.data(), desc.spirv.size(), desc.storage_buffers, desc.spec_constants};
+  Key key{desc.spirv.data(), desc.spirv.size(), desc.storage_buffers, desc.spec_constants,
+          desc.local_size_x, desc.local_size_y, desc.push_constant_bytes};
   std::promise<std::shared_ptr<const Kernel>> promise;
   std::shared_future<std::shared_ptr<const Kernel>> compiled_elsewhere;
   {
@@ -154,7 +212,15 @@ VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer uniform,
   alloc.pSetLayouts = &layout;
   VkDescriptorSet set = VK_NULL_HANDLE;
   check(vkAllocateDescriptorSets(device_, &alloc, &set), "vkAllocateDescriptorSets");
+  write(set, kernel, uniform, storage);
+  return set;
+}
 
+void DescriptorPool::write(VkDescriptorSet set, const Kernel& kernel, VkBuffer uniform,
+                           std::span<const VkBuffer> storage) {
+  if (storage.size() != kernel.storage_buffers())
+    throw Error("kernel " + kernel.name() + ": " + std::to_string(storage.size()) + " storage buffers given, " +
+                std::to_string(kernel.storage_buffers()) + " expected");
   std::vector<VkDescriptorBufferInfo> infos(storage.size() + 1);
   std::vector<VkWriteDescriptorSet> writes(storage.size() + 1);
   for (size_t i = 0; i < infos.size(); ++i) {
@@ -167,7 +233,6 @@ VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer uniform,
     writes[i].pBufferInfo = &infos[i];
   }
   vkUpdateDescriptorSets(device_, static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
-  return set;
 }
 
 }  // namespace dn::gpu

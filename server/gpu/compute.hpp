@@ -2,12 +2,18 @@
 // descriptor-set layout (binding 0: uniform buffer, bindings 1..n: storage
 // buffers) and pipeline layout. Kernels are immutable and shared: the
 // Context's KernelCache hands out one per (module, binding count,
-// specialization constants), so sessions with the same formats and shader
-// compile it once.
+// specialization constants, workgroup shape, push-constant size), so
+// sessions with the same formats and shader compile it once.
+//
+// 2-D kernels (shaders/include/grid2d.glsl) set KernelDesc::local_size_x/y
+// and push_constant_bytes: the workgroup's shape becomes specialization
+// constant 0 and each dispatch pushes its grid (GridPush), so a pass at a
+// reduced resolution knows its grid without a uniform of its own.
 #pragma once
 
 #include <vulkan/vulkan.h>
 
+#include <array>
 #include <cstdint>
 #include <future>
 #include <map>
@@ -28,12 +34,38 @@ struct SpecConstant {
   auto operator<=>(const SpecConstant&) const = default;
 };
 
+// The workgroup's x size is specialization constant 0 in every shader
+// (local_size_x_id = 0). 2-D shaders declare local_size_y_id = 0 as well:
+// square workgroups, because tests/pipelines' SPIR-V reflection check admits
+// no constant id outside a pass declaration but 0.
+inline constexpr uint32_t kLocalSizeId = 0;
+// Push constants a kernel may declare: Vulkan's guaranteed minimum.
+inline constexpr uint32_t kMaxPushConstantBytes = 128;
+
 struct KernelDesc {
   std::string name;                  // for error messages
   std::span<const uint32_t> spirv;
   uint32_t storage_buffers = 0;      // bindings 1..storage_buffers
   std::vector<SpecConstant> spec_constants;
+  // Workgroup shape. 0 (the default): the caller sets constant 0 itself in
+  // spec_constants and the kernel is 1-D, as every pass before 2-D kernels.
+  // Otherwise constant 0 = local_size_x, and local_size_y is 1 (1-D) or
+  // equal to local_size_x (square 2-D workgroup, grid2d.glsl).
+  uint32_t local_size_x = 0;
+  uint32_t local_size_y = 0;
+  // Size of the push-constant range (compute stage, offset 0; a multiple of
+  // 4, at most kMaxPushConstantBytes); 0: none.
+  uint32_t push_constant_bytes = 0;
 };
+
+// The push constants of grid2d.glsl (DnGrid, 32 bytes): the grid a dispatch
+// writes, the grid it reads, and four free per-dispatch values.
+struct GridPush {
+  uint32_t size[2] = {0, 0};    // width, height of the grid written
+  uint32_t source[2] = {0, 0};  // width, height of the grid read (a pyramid's finer level; else = size)
+  uint32_t args[4] = {0, 0, 0, 0};
+};
+static_assert(sizeof(GridPush) == 32);
 
 class Kernel {
  public:
@@ -48,12 +80,27 @@ class Kernel {
   VkDescriptorSetLayout set_layout() const { return set_layout_; }
   VkPipelineLayout layout() const { return layout_; }
   VkPipeline pipeline() const { return pipeline_; }
+  // Workgroup shape (x, y); (0, 0) for kernels whose constant 0 the caller set.
+  std::array<uint32_t, 2> local_size() const { return {local_size_x_, local_size_y_}; }
+  uint32_t push_constant_bytes() const { return push_constant_bytes_; }
+
+  // Workgroups covering a width x height grid with this kernel's shape.
+  std::array<uint32_t, 2> groups(uint32_t width, uint32_t height) const;
+  // Records push constants (bytes.size() <= push_constant_bytes()).
+  void record_push(VkCommandBuffer cmd, std::span<const uint8_t> bytes) const;
+  // Binds the pipeline and `set`, pushes `grid` (when the kernel has push
+  // constants: then at least sizeof(GridPush) bytes) and dispatches the
+  // groups covering grid.size: one invocation per pixel of a 2-D kernel.
+  void record_dispatch(VkCommandBuffer cmd, VkDescriptorSet set, const GridPush& grid) const;
 
  private:
   void destroy() noexcept;
   VkDevice device_;
   std::string name_;
   uint32_t storage_buffers_;
+  uint32_t local_size_x_ = 0;
+  uint32_t local_size_y_ = 0;
+  uint32_t push_constant_bytes_ = 0;
   VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipeline_ = VK_NULL_HANDLE;
@@ -80,7 +127,7 @@ class KernelCache {
   static double compile_ms_of_this_thread();
 
  private:
-  using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>>;
+  using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>, uint32_t, uint32_t, uint32_t>;
   VkDevice device_;
   VkPipelineCache pipeline_cache_;
   mutable std::mutex mutex_;
@@ -99,6 +146,10 @@ class DescriptorPool {
 
   // Allocates and writes a set: binding 0 = uniform, 1.. = storage (whole buffers).
   VkDescriptorSet allocate(const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage);
+  // Rewrites a set allocated for `kernel` to other buffers (e.g. when the
+  // transient buffers leased for a frame are not last frame's). The set must
+  // not be in use by a pending submission.
+  void write(VkDescriptorSet set, const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage);
 
  private:
   VkDevice device_;
