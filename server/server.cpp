@@ -14,13 +14,14 @@
 #include <stdexcept>
 
 #include "dn/protocol/codec.hpp"
+#include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
 #include "server/handshake.hpp"
 #include "server/log.hpp"
 #include "server/net/socket_options.hpp"
 #include "server/stats.hpp"
 #include "server/net/auth.hpp"
-#include "server/pipelines/fb_lut.hpp"
+#include "server/pipelines/registry.hpp"
 
 namespace dn::server {
 namespace {
@@ -52,14 +53,12 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
   std::random_device rd;
   session_ids_.seed((uint64_t{rd()} << 32) ^ rd());
 
-  // The F_beta table (svgf-fb): computed once per device before any session
-  // can ask for it, then shared read-only (a second Server on the same
-  // context reuses it and reports the first computation's time).
-  const pipelines::FbLut& fb = pipelines::fb_lut(device_);
-  log::info("fb_lut", {{"size", std::to_string(pipelines::kFbLutSize) + "x" + std::to_string(pipelines::kFbLutSize)},
-                       {"samples", pipelines::kFbLutSamples},
-                       {"compute_ms", fb.compute_ms()},
-                       {"device", device_name_}});
+  // Context-wide resources the pipelines declare (svgf-fb's F_beta table):
+  // made once per device before any session can bind them, then shared
+  // read-only (a second Server on the same context reuses them).
+  shared_resources_ = pipelines::prepare_shared_resources(device_);
+  for (const auto& r : shared_resources_)
+    log::info("shared_resource", {{"name", r.name}, {"ms", r.ms}, {"device", device_name_}});
 
   std::vector<net::Endpoint> endpoints;
   for (const std::string& url : options_.listen) {
@@ -457,6 +456,7 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
     std::lock_guard lock(completions_mutex_);
     live.warm_up = warm_up_;
   }
+  live.shared_resources = shared_resources_;
   send(c, make_stats(counters_, live, device_), h.request_id);
 }
 

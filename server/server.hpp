@@ -20,6 +20,7 @@
 #include "server/session/pipeline_builder.hpp"
 #include "server/session/scheduler.hpp"
 #include "server/session/session.hpp"
+#include "server/pipelines/registry.hpp"
 #include "server/stats.hpp"
 
 namespace dn::gpu {
@@ -98,6 +99,7 @@ class Server {
   int signal_fd_ = -1;
 
   ServerCounters counters_;
+  std::vector<pipelines::SharedResourceTiming> shared_resources_;
 };
 
 }  // namespace dn::server

@@ -5,7 +5,6 @@
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
-#include "server/pipelines/fb_lut.hpp"
 
 namespace dn::server {
 
@@ -41,7 +40,7 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
   add("bytes_in", n(counters.bytes_in_closed + live.bytes_in_open));
   add("bytes_out", n(counters.bytes_out_closed + live.bytes_out_open));
   add("device_bytes", n(live.device_bytes));  // held by open sessions
-  add("fb_lut_ms", pipelines::fb_lut(device).compute_ms());  // computed at start-up: a lookup here
+  for (const auto& r : live.shared_resources) add(r.name + "_ms", r.ms);  // e.g. fb_lut_ms
 
   // Compiling: every kernel this device compiled, and the OPEN_SESSION builds.
   const gpu::CompileStats compiled = device.kernels().stats();

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
+#include "server/pipelines/registry.hpp"
 #include "server/session/pipeline_builder.hpp"
 
 namespace dn::gpu {
@@ -54,6 +55,7 @@ struct LiveState {
   uint64_t device_bytes = 0;
   std::vector<std::pair<uint64_t, uint64_t>> session_frames;  // (session id, frames processed)
   std::optional<WarmUpReport> warm_up;                         // once it finished
+  std::vector<pipelines::SharedResourceTiming> shared_resources;  // made at start-up
 };
 
 protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live, gpu::Context& device);

@@ -1,6 +1,8 @@
 // The pipeline contract: the list of pipelines, configuration validation,
 // device-byte estimates and creation.
 #include <atomic>
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -94,9 +96,30 @@ std::optional<ConfigError> limit_error(const SessionConfig& config, const GraphS
 
 uint64_t graphs_built_count() { return graphs_built.load(std::memory_order_relaxed); }
 
-void prepare_shared_resources(gpu::Context& context) {
-  for (const auto& def : definitions())
-    for (const auto& shared : def.shared_resources) shared.resource(context);
+namespace {
+struct SharedResourceTimings {
+  std::vector<SharedResourceTiming> list;
+};
+}  // namespace
+
+const std::vector<SharedResourceTiming>& prepare_shared_resources(gpu::Context& context) {
+  return context
+      .shared<SharedResourceTimings>([&] {
+        auto timings = std::make_unique<SharedResourceTimings>();
+        for (const auto& def : definitions())
+          for (const auto& shared : def.shared_resources) {
+            if (std::any_of(timings->list.begin(), timings->list.end(),
+                            [&](const auto& t) { return t.name == shared.name; }))
+              continue;  // declared by several pipelines: made once
+            const auto start = std::chrono::steady_clock::now();
+            shared.resource(context);
+            timings->list.push_back(
+                {shared.name,
+                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count()});
+          }
+        return timings;
+      })
+      .list;
 }
 
 BindingSize largest_binding(const SessionConfig& config) {

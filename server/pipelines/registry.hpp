@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "gpu/limits.hpp"
 #include "pipelines/pipeline.hpp"
@@ -32,9 +33,15 @@ std::optional<ConfigError> check_device_limits(const SessionConfig& config, cons
 // the test that one OPEN_SESSION through prepare() builds its graph once.
 uint64_t graphs_built_count();
 
+struct SharedResourceTiming {
+  std::string name;  // as declared ("fb_lut")
+  double ms = 0.0;   // wall clock of making it: compiling its kernel and computing it on the device
+};
+
 // Makes every shared resource any pipeline declares (the F_beta table, ...)
-// on this context now instead of on the first session that binds it. Throws
-// what making one throws (gpu::Error).
-void prepare_shared_resources(gpu::Context& context);
+// on this context now instead of on the first session that binds it, once per
+// context; returns what each took, the same list on every call. Throws what
+// making one throws (gpu::Error).
+const std::vector<SharedResourceTiming>& prepare_shared_resources(gpu::Context& context);
 
 }  // namespace dn::pipelines
