@@ -388,6 +388,7 @@ struct Row {
   std::string passes;  // "name ms · name ms"
   double device_ms = 0, upload_ms = 0, download_ms = 0;
   double bytes_per_pixel = 0;
+  double transient_per_pixel = 0;  // of bytes_per_pixel, scratch leased per frame from the device's pool
   double create_ms = 0;       // pipelines::create, wall clock: compiling (first use in this process) + allocating
   uint64_t compiled = 0;      // kernels that create() compiled
   double first_frame_ms = 0;  // device time of the first frame (cold: first dispatch of each kernel)
@@ -431,6 +432,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   }
   const uint64_t pixels = uint64_t{w} * h;
   row.bytes_per_pixel = static_cast<double>(pipe->device_bytes()) / static_cast<double>(pixels);
+  row.transient_per_pixel = static_cast<double>(pipe->transient_bytes()) / static_cast<double>(pixels);
 
   std::map<std::string, std::vector<double>> times;
   std::vector<std::string> order;
@@ -492,7 +494,8 @@ int main(int argc, char** argv) {
     std::printf("planes: %s inputs and output; %d frames per session, first %d not counted; medians\n\n",
                 o.format == Format::F16 ? "fp16" : "fp32", o.frames, o.warmup);
     std::printf("| pipeline | size | create ms (kernels compiled) | first frame device ms | passes (median ms) "
-                "| device ms | upload ms | download ms | device B/px | floor MB | copy floor ms | pipeline / copy |\n");
+                "| device ms | upload ms | download ms | device B/px (persistent + pooled) | floor MB | copy floor ms "
+                "| pipeline / copy |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
 
@@ -506,10 +509,11 @@ int main(int argc, char** argv) {
           std::printf("| %s | %ux%u | failed: %s | | | | | | | | | |\n", r.pipeline.c_str(), w, h, r.error.c_str());
           ++failures;
         } else {
-          std::printf("| %s | %ux%u | %s (%llu) | %s | %s | %s | %s | %s | %.0f | %.1f | %s | %.1f× |\n",
+          std::printf("| %s | %ux%u | %s (%llu) | %s | %s | %s | %s | %s | %.0f (%.0f + %.0f) | %.1f | %s | %.1f× |\n",
                       r.pipeline.c_str(), w, h, fmt_ms(r.create_ms).c_str(), static_cast<unsigned long long>(r.compiled),
                       fmt_ms(r.first_frame_ms).c_str(), r.passes.c_str(), fmt_ms(r.device_ms).c_str(), fmt_ms(r.upload_ms).c_str(),
-                      fmt_ms(r.download_ms).c_str(), r.bytes_per_pixel, r.floor_bytes / 1e6,
+                      fmt_ms(r.download_ms).c_str(), r.bytes_per_pixel, r.bytes_per_pixel - r.transient_per_pixel,
+                      r.transient_per_pixel, r.floor_bytes / 1e6,
                       fmt_ms(r.copy_ms).c_str(), r.copy_ms > 0 ? r.device_ms / r.copy_ms : 0.0);
         }
         std::fflush(stdout);

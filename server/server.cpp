@@ -16,6 +16,7 @@
 #include "dn/protocol/codec.hpp"
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
+#include "gpu/transient_pool.hpp"
 #include "server/handshake.hpp"
 #include "server/log.hpp"
 #include "server/net/socket_options.hpp"
@@ -408,6 +409,8 @@ void Server::drain_completions() {
 
 void Server::check_timers() {
   const auto now = Clock::now();
+  // Scratch no frame has leased for a while goes back to the device.
+  gpu::TransientPool::of(device_).trim(std::chrono::seconds(30));
   std::vector<std::pair<uint64_t, const char*>> to_close;
   for (auto& [id, c] : connections_) {
     if (c->close_after_flush) {
@@ -450,7 +453,11 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
   for (auto& [id, s] : sessions_) {
     live.frames_in_flight += s->in_flight;
     live.device_bytes += s->device_bytes();  // a closed one's is freed once its last frame leaves the device
-    live.session_frames.emplace_back(id, s->frames_processed);
+    live.transient_bytes += s->transient_bytes();
+    const double pixels = static_cast<double>(uint64_t{s->config().width} * s->config().height);
+    live.sessions_figures.push_back({id, s->frames_processed,
+                                     static_cast<double>(s->device_bytes() - s->transient_bytes()) / pixels,
+                                     static_cast<double>(s->transient_bytes()) / pixels});
   }
   {
     std::lock_guard lock(completions_mutex_);

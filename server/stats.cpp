@@ -5,6 +5,7 @@
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
+#include "gpu/transient_pool.hpp"
 
 namespace dn::server {
 
@@ -39,7 +40,11 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
   add("frames_in_flight", n(live.frames_in_flight));
   add("bytes_in", n(counters.bytes_in_closed + live.bytes_in_open));
   add("bytes_out", n(counters.bytes_out_closed + live.bytes_out_open));
-  add("device_bytes", n(live.device_bytes));  // held by open sessions
+  add("device_bytes", n(live.device_bytes));  // needed by open sessions
+  add("persistent_bytes", n(live.device_bytes - live.transient_bytes));
+  const gpu::TransientPoolStats pool = gpu::TransientPool::of(device).stats();
+  add("transient_pool_bytes", n(pool.allocated_bytes));  // scratch the device holds for all sessions
+  add("transient_pool_in_use_bytes", n(pool.in_use_bytes));
   for (const auto& r : live.shared_resources) add(r.name + "_ms", r.ms);  // e.g. fb_lut_ms
 
   // Compiling: every kernel this device compiled, and the OPEN_SESSION builds.
@@ -59,9 +64,12 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
     add("warm_up_kernels", n(live.warm_up->kernels));
   }
 
-  for (const auto& [id, frames] : live.session_frames) {  // lets a watcher find a session to ATTACH to
+  for (const auto& f : live.sessions_figures) {  // lets a watcher find a session to ATTACH to
     if (st.values.size() >= 200) break;
-    add("session." + std::to_string(id) + ".frames", n(frames));
+    const std::string prefix = "session." + std::to_string(f.id) + ".";
+    add(prefix + "frames", n(f.frames));
+    add(prefix + "persistent_bytes_per_pixel", f.persistent_per_pixel);
+    add(prefix + "transient_bytes_per_pixel", f.transient_per_pixel);
   }
   for (const auto& [name, sum] : counters.pass_timings) {
     if (st.values.size() >= 250) break;

@@ -52,8 +52,13 @@ struct LiveState {
   uint64_t sessions = 0;
   uint64_t sessions_being_built = 0;
   uint64_t frames_in_flight = 0;
-  uint64_t device_bytes = 0;
-  std::vector<std::pair<uint64_t, uint64_t>> session_frames;  // (session id, frames processed)
+  uint64_t device_bytes = 0;      // every open session's device_bytes()
+  uint64_t transient_bytes = 0;   // of which scratch leased per frame
+  struct SessionFigures {
+    uint64_t id = 0, frames = 0;
+    double persistent_per_pixel = 0, transient_per_pixel = 0;
+  };
+  std::vector<SessionFigures> sessions_figures;
   std::optional<WarmUpReport> warm_up;                         // once it finished
   std::vector<pipelines::SharedResourceTiming> shared_resources;  // made at start-up
 };

@@ -55,6 +55,13 @@ uint64_t GraphSpec::device_bytes() const {
   return total;
 }
 
+uint64_t GraphSpec::transient_bytes() const {
+  uint64_t total = 0;
+  for (const auto& b : buffers)
+    if (b.role == BufferRole::Scratch) total += b.bytes;
+  return total;
+}
+
 const BufferSpec* GraphSpec::largest_binding() const {
   const BufferSpec* best = nullptr;
   for (const auto& b : buffers)
@@ -185,6 +192,7 @@ const gpu::Buffer& GraphPipeline::bound(const BindingRef& ref, uint32_t parity) 
   if (!ref.bound()) return unbound_binding_buffer(context_);
   Node& n = node(ref.buffer);
   if (n.shared) return *n.shared;
+  if (n.transient >= 0) return scratch_.buffer(static_cast<size_t>(n.transient));
   uint32_t copy = 0;
   if (n.spec->role == BufferRole::History) copy = ref.slot == Slot::Current ? parity : parity ^ 1u;
   return n.copies[copy];
@@ -250,6 +258,13 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
         n.shared = &b.shared(context);
         continue;
       }
+      if (b.role == BufferRole::Scratch) {
+        n.transient = static_cast<int>(scratch_sizes_.size());
+        scratch_sizes_.push_back(b.bytes);
+        device_bytes_ += b.bytes;
+        transient_bytes_ += b.bytes;
+        continue;
+      }
       gpu::BufferKind kind = gpu::BufferKind::Storage;
       if (b.role == BufferRole::Input) kind = gpu::BufferKind::StorageUpload;
       if (b.role == BufferRole::Output) kind = gpu::BufferKind::StorageDownload;
@@ -268,17 +283,21 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
     descriptors_ = std::make_unique<gpu::DescriptorPool>(context, 2 * static_cast<uint32_t>(spec_->passes.size()),
                                                          2 * storage_total);
 
+    // Sets are written with scratch leased now; lease_scratch() repoints them
+    // when a later frame gets other buffers.
+    if (!scratch_sizes_.empty()) {
+      scratch_ = gpu::TransientPool::of(context).lease(scratch_sizes_);
+      held_ids_ = scratch_.ids();
+    }
     const uint64_t pixels = uint64_t{spec_->width} * spec_->height;
     for (const auto& ps : spec_->passes) {
       Pass& pass = passes_.emplace_back();
       pass.spec = &ps;
       pass.kernel = context.kernels().get(kernel_desc(ps.declaration(), ps.specialization(kWorkgroupSize)));
-
-      for (uint32_t parity = 0; parity < 2; ++parity) {
-        std::vector<VkBuffer> storage;
-        for (const auto& ref : ps.bindings()) storage.push_back(bound(ref, parity).handle());
-        pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage);
-      }
+      for (const auto& ref : ps.bindings())
+        pass.binds_transient = pass.binds_transient || (ref.bound() && node(ref.buffer).transient >= 0);
+      for (uint32_t parity = 0; parity < 2; ++parity)
+        pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage_of(pass, parity));
 
       const uint64_t items =
           ps.invocations ? ps.invocations : (pixels + ps.pixels_per_invocation - 1) / ps.pixels_per_invocation;
@@ -293,9 +312,28 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
 
     commands_ = std::make_unique<gpu::CommandStream>(context);
     timestamps_ = std::make_unique<gpu::TimestampPool>(context, static_cast<uint32_t>(spec_->passes.size()) + 3);
+    scratch_.release();  // nothing runs yet: other sessions may use it until our first frame
   } catch (const gpu::Error& e) {
     throw DeviceFailure(std::string("creating pipeline ") + config.pipeline + ": " + e.what());
   }
+}
+
+std::vector<VkBuffer> GraphPipeline::storage_of(const Pass& pass, uint32_t parity) {
+  std::vector<VkBuffer> storage;
+  for (const auto& ref : pass.spec->bindings()) storage.push_back(bound(ref, parity).handle());
+  return storage;
+}
+
+void GraphPipeline::lease_scratch() {
+  if (scratch_sizes_.empty() || !scratch_.empty()) return;  // none, or still held after a failed frame
+  scratch_ = gpu::TransientPool::of(context_).lease(scratch_sizes_, held_ids_);
+  if (scratch_.ids() == held_ids_) return;
+  // The sets are idle: the previous frame's submission has completed.
+  for (const Pass& pass : passes_)
+    if (pass.binds_transient)
+      for (uint32_t parity = 0; parity < 2; ++parity)
+        descriptors_->write(pass.sets[parity], *pass.kernel, uniform_.handle(), storage_of(pass, parity));
+  held_ids_ = scratch_.ids();
 }
 
 GraphPipeline::~GraphPipeline() {
@@ -376,6 +414,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   for (auto& n : nodes_)
     if (n.spec->role == BufferRole::Output) out_node = &n;
 
+  lease_scratch();
   VkCommandBuffer cmd = commands_->begin();
   timestamps_->reset(cmd);
   // Orders this frame after everything the previous submissions did to the
@@ -416,6 +455,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
 
   commands_->submit_and_wait();
+  scratch_.release();  // the frame's work is done: other sessions may lease it now
   const std::vector<double> intervals = timestamps_->read_intervals_ms(mark);
 
   double download_ms = 0.0;

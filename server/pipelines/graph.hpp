@@ -9,7 +9,10 @@
 //  - History: persistent per-session state, allocated twice and ping-ponged:
 //             a pass binds the Current or the Previous copy, and the two
 //             descriptor sets of each pass swap them on alternate frames
-//  - Scratch: transient device-only intermediate
+//  - Scratch: transient device-only intermediate, written and read within one
+//             frame: leased per frame from the device's gpu::TransientPool and
+//             shared with other sessions between their frames, so a pass must
+//             write every scratch element it later reads in the same frame
 //  - Persistent: per-session state kept across frames in a single copy (no
 //             ping-pong): for state whose every read in a frame comes before
 //             the pass that overwrites it (Slot is ignored)
@@ -28,6 +31,7 @@
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/timestamps.hpp"
+#include "gpu/transient_pool.hpp"
 #include "pipelines/frame_constants.hpp"
 #include "pipelines/parameters.hpp"
 #include "pipelines/pass.hpp"
@@ -66,8 +70,10 @@ struct GraphSpec {
 
   static constexpr uint64_t kUniformBytes = sizeof(FrameConstants);
 
-  // Persistent device bytes: every buffer (History twice) plus the uniform buffer.
+  // Device bytes a session needs: every buffer (History twice) plus the
+  // uniform buffer; of which transient_bytes() are Scratch, leased per frame.
   uint64_t device_bytes() const;
+  uint64_t transient_bytes() const;
   // The largest single binding (what maxStorageBufferRange limits).
   const BufferSpec* largest_binding() const;
   const BufferSpec* find(const std::string& name) const;
@@ -107,6 +113,7 @@ class GraphPipeline final : public Pipeline {
   ~GraphPipeline() override;
 
   uint64_t device_bytes() const override { return device_bytes_; }
+  uint64_t transient_bytes() const override { return transient_bytes_; }
   void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
                std::vector<protocol::PassTiming>& timings) override;
 
@@ -126,6 +133,7 @@ class GraphPipeline final : public Pipeline {
     const BufferSpec* spec = nullptr;
     gpu::Buffer copies[2];               // History: [parity]; otherwise copies[0] only
     const gpu::Buffer* shared = nullptr;  // Shared: the context's buffer
+    int transient = -1;                   // Scratch: its index in the frame's lease
   };
   struct Capture {
     std::string buffer;
@@ -137,6 +145,7 @@ class GraphPipeline final : public Pipeline {
     std::vector<Capture> captures;  // set_capture(true) only
     std::shared_ptr<const gpu::Kernel> kernel;
     VkDescriptorSet sets[2] = {VK_NULL_HANDLE, VK_NULL_HANDLE};  // [parity]
+    bool binds_transient = false;  // its sets are rewritten when the leased scratch changes
     uint32_t groups_x = 1, groups_y = 1;
   };
 
@@ -149,6 +158,10 @@ class GraphPipeline final : public Pipeline {
   // checked it already and reports errors to the client).
   static const protocol::PlaneView& plane_of(const protocol::Frame& frame, const BufferSpec& input);
   void record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity);
+  // Leases this frame's scratch (the buffers held last frame when they are
+  // free) and points the descriptor sets at them if they changed.
+  void lease_scratch();
+  std::vector<VkBuffer> storage_of(const Pass& pass, uint32_t parity);
 
   gpu::Context& context_;
   std::shared_ptr<const GraphSpec> spec_;
@@ -160,6 +173,12 @@ class GraphPipeline final : public Pipeline {
   std::unique_ptr<gpu::CommandStream> commands_;
   std::unique_ptr<gpu::TimestampPool> timestamps_;
   uint64_t device_bytes_ = 0;
+  uint64_t transient_bytes_ = 0;
+  std::vector<uint64_t> scratch_sizes_;  // by Node::transient
+  std::vector<uint64_t> held_ids_;       // the pool ids the descriptor sets point at
+  // Held from lease_scratch() until the frame's work has completed; kept when
+  // a frame fails (its work may still be pending) and reused by the next.
+  gpu::TransientPool::Lease scratch_;
   uint64_t frames_ = 0;          // frames completed; parity = frames_ % 2
   bool history_valid_ = false;   // false until a frame completed, and after any failure
   std::mutex mutex_;

@@ -82,8 +82,13 @@ struct DeviceFailure : std::runtime_error {
 class Pipeline {
  public:
   virtual ~Pipeline() = default;
-  // Persistent device memory held by this session (history, inputs, outputs).
+  // Device memory this session needs to run a frame: what it holds for its
+  // lifetime (history, inputs, outputs, uniforms) plus transient_bytes().
   virtual uint64_t device_bytes() const = 0;
+  // Of device_bytes(), the scratch leased from the device's transient pool
+  // for each frame and shared with other sessions in between.
+  virtual uint64_t transient_bytes() const { return 0; }
+  uint64_t persistent_bytes() const { return device_bytes() - transient_bytes(); }
   // Runs one frame. The caller guarantees every declared channel is present
   // exactly once with width*height*components bytes in its declared format.
   // Fills `output` with the Output plane (width*height*3 in the session's

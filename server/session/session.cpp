@@ -31,6 +31,7 @@ Session::Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config,
                  std::unique_ptr<pipelines::Pipeline> pipeline)
     : id_(id), owner_(owner), config_(std::move(config)), pipeline_(std::move(pipeline)) {
   device_bytes_ = pipeline_ ? pipeline_->device_bytes() : 0;
+  transient_bytes_ = pipeline_ ? pipeline_->transient_bytes() : 0;
 }
 
 Session::~Session() = default;

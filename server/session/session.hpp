@@ -47,7 +47,10 @@ class Session {
   uint64_t id() const { return id_; }
   uint64_t owner() const { return owner_; }
   const pipelines::SessionConfig& config() const { return config_; }
+  // Device memory the session needs per frame; of which transient_bytes() is
+  // scratch leased from the device's pool only while one of its frames runs.
   uint64_t device_bytes() const { return device_bytes_; }
+  uint64_t transient_bytes() const { return transient_bytes_; }
 
   // Checks a decoded FRAME against this session: declared channels present
   // exactly once, in the declared format, with the right byte length, and a
@@ -77,6 +80,7 @@ class Session {
   pipelines::SessionConfig config_;
   std::unique_ptr<pipelines::Pipeline> pipeline_;
   uint64_t device_bytes_;
+  uint64_t transient_bytes_;
 };
 
 }  // namespace dn::server

@@ -237,3 +237,36 @@ TEST(SessionBuild, AnUnsafeCacheDirectoryIsRefused) {
 
 }  // namespace
 }  // namespace dn::test
+
+namespace dn::test {
+namespace {
+
+// STATS splits a session's device memory into what it holds (persistent) and
+// the scratch it leases per frame from the device's pool, shared by sessions.
+TEST(SessionBuild, StatsSplitPersistentAndPooledScratch) {
+  ServerProcess server;
+  RawClient c(server.tcp_url());
+  c.hello();
+  const uint32_t w = 64, h = 36;
+  const auto request = svgf_session(w, h);
+  const uint64_t sid = c.open(request);
+  auto f = make_frame(sid, 0, w, h, request.channels, 0.5f);
+  c.send(f.frame, 5);
+  auto r = c.receive();
+  ASSERT_TRUE(r);
+  ASSERT_TRUE(std::get_if<protocol::Result>(&r->message));
+  const auto st = stats(c);
+  const std::string prefix = "session." + std::to_string(sid) + ".";
+  const double persistent = st.at(prefix + "persistent_bytes_per_pixel");
+  const double transient = st.at(prefix + "transient_bytes_per_pixel");
+  EXPECT_GT(persistent, 0.0);
+  EXPECT_GT(transient, 0.0);
+  // The two parts add up to what the session needs (device_bytes, uniform buffer included).
+  EXPECT_NEAR((persistent + transient) * w * h, st.at("device_bytes"), 1.0);
+  EXPECT_NEAR(persistent * w * h, st.at("persistent_bytes"), 1.0);
+  EXPECT_GE(st.at("transient_pool_bytes"), transient * w * h);  // the frame leased it from the pool
+  EXPECT_EQ(st.at("transient_pool_in_use_bytes"), 0.0);         // and gave it back
+}
+
+}  // namespace
+}  // namespace dn::test
