@@ -124,6 +124,18 @@ void GraphSpec::add_scratch(std::string name, uint64_t bytes_per_pixel) {
   buffers.push_back(std::move(b));
 }
 
+void GraphSpec::add_scratch_elements(std::string name, uint64_t elements, uint64_t bytes_per_element) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Scratch;
+  b.bytes = round_up4(elements * bytes_per_element);
+  buffers.push_back(std::move(b));
+}
+
+gpu::Extent GraphSpec::level(uint32_t factor, uint32_t level) const {
+  return gpu::level_size(width, height, factor, level);
+}
+
 void GraphSpec::add_shared(std::string name, SharedResource resource) {
   BufferSpec b;
   b.name = std::move(name);
@@ -293,12 +305,13 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
     for (const auto& ps : spec_->passes) {
       Pass& pass = passes_.emplace_back();
       pass.spec = &ps;
-      pass.kernel = context.kernels().get(kernel_desc(ps.declaration(), ps.specialization(kWorkgroupSize)));
+      pass.kernel = context.kernels().get(kernel_desc(ps, kWorkgroupSize));
       for (const auto& ref : ps.bindings())
         pass.binds_transient = pass.binds_transient || (ref.bound() && node(ref.buffer).transient >= 0);
       for (uint32_t parity = 0; parity < 2; ++parity)
         pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage_of(pass, parity));
 
+      if (ps.grid) continue;  // 2-D: Kernel::record_dispatch sizes it from the grid
       const uint64_t items =
           ps.invocations ? ps.invocations : (pixels + ps.pixels_per_invocation - 1) / ps.pixels_per_invocation;
       const uint64_t groups = std::max<uint64_t>(1, (items + kWorkgroupSize - 1) / kWorkgroupSize);
@@ -439,10 +452,14 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     if (i > 0)
       gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                           VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->pipeline());
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->layout(), 0, 1, &pass.sets[parity], 0,
-                            nullptr);
-    vkCmdDispatch(cmd, pass.groups_x, pass.groups_y, 1);
+    if (pass.spec->grid) {
+      pass.kernel->record_dispatch(cmd, pass.sets[parity], pass.spec->grid->push);
+    } else {
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->pipeline());
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pass.kernel->layout(), 0, 1, &pass.sets[parity], 0,
+                              nullptr);
+      vkCmdDispatch(cmd, pass.groups_x, pass.groups_y, 1);
+    }
     timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
     record_captures(cmd, pass, parity);
   }

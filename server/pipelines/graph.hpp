@@ -29,6 +29,7 @@
 #include "gpu/buffer.hpp"
 #include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
+#include "gpu/levels.hpp"
 #include "gpu/context.hpp"
 #include "gpu/timestamps.hpp"
 #include "gpu/transient_pool.hpp"
@@ -84,6 +85,12 @@ struct GraphSpec {
   void add_history(std::string name, uint64_t bytes_per_pixel);
   void add_persistent(std::string name, uint64_t bytes_per_pixel);
   void add_scratch(std::string name, uint64_t bytes_per_pixel);
+  // Scratch over another grid than the session's: a reduced resolution (a
+  // level(), e.g. 1/2 or 1/3), or elements = pyramid_pixels() for a packed pyramid.
+  void add_scratch_elements(std::string name, uint64_t elements, uint64_t bytes_per_element);
+  // Level `level` of the session's resolution reduced by `factor` per level
+  // (gpu/levels.hpp: each level rounds up; level 0 is the full resolution).
+  gpu::Extent level(uint32_t factor, uint32_t level) const;
   void add_shared(std::string name, SharedResource resource);
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).

@@ -65,4 +65,25 @@ gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::S
   return desc;
 }
 
+PassSpec& PassSpec::over_grid(gpu::Extent size, gpu::Extent source, std::array<uint32_t, 4> args, uint32_t block) {
+  Grid g;
+  g.block = block;
+  g.push.size[0] = size.width;
+  g.push.size[1] = size.height;
+  g.push.source[0] = source.width;
+  g.push.source[1] = source.height;
+  for (int i = 0; i < 4; ++i) g.push.args[i] = args[i];
+  grid = g;
+  return *this;
+}
+
+gpu::KernelDesc kernel_desc(const PassSpec& pass, uint32_t linear_workgroup_size) {
+  if (!pass.grid) return kernel_desc(pass.declaration(), pass.specialization(linear_workgroup_size));
+  gpu::KernelDesc desc = kernel_desc(pass.declaration(), pass.specialization(pass.grid->block));
+  desc.spec_constants.erase(desc.spec_constants.begin());  // constant 0 is the local size: set below
+  desc.local_size_x = desc.local_size_y = pass.grid->block;
+  desc.push_constant_bytes = sizeof(gpu::GridPush);
+  return desc;
+}
+
 }  // namespace dn::pipelines

@@ -4,6 +4,7 @@
 // device objects, so building and checking a graph needs no device.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "dn/shaders/declaration.hpp"
 #include "gpu/compute.hpp"
+#include "gpu/levels.hpp"
 
 namespace dn::pipelines {
 
@@ -53,9 +55,18 @@ class PassSpec {
   std::vector<gpu::SpecConstant> specialization(uint32_t workgroup_size) const;
 
   // Dispatch: one invocation per `pixels_per_invocation` pixels, or exactly
-  // `invocations` invocations when that is nonzero.
+  // `invocations` invocations when that is nonzero (1-D, frame.glsl) ...
   uint32_t pixels_per_invocation = 2;
   uint64_t invocations = 0;
+  // ... or, when set, one invocation per pixel of grid.size in square
+  // block x block workgroups with grid as push constants (grid2d.glsl): for
+  // passes with shared-memory tiles or at a reduced resolution.
+  struct Grid {
+    uint32_t block = 8;
+    gpu::GridPush push;
+  };
+  std::optional<Grid> grid;
+  PassSpec& over_grid(gpu::Extent size, gpu::Extent source, std::array<uint32_t, 4> args = {}, uint32_t block = 8);
 
  private:
   std::string name_;
@@ -66,5 +77,7 @@ class PassSpec {
 
 // The kernel description of a declared shader with these constants.
 gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::SpecConstant> constants);
+// The kernel description of a pass: 1-D with the graph's workgroup size, or its grid's square workgroups.
+gpu::KernelDesc kernel_desc(const PassSpec& pass, uint32_t linear_workgroup_size);
 
 }  // namespace dn::pipelines
