@@ -51,8 +51,6 @@ double seconds_since(Clock::time_point t, Clock::time_point now) {
 
 Server::Server(ServerOptions options, gpu::Context& device, std::string device_name)
     : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
-  std::random_device rd;
-  session_ids_.seed((uint64_t{rd()} << 32) ^ rd());
 
   // Context-wide resources the pipelines declare (svgf-fb's F_beta table):
   // made once per device before any session can bind them, then shared
@@ -173,9 +171,7 @@ void Server::begin_shutdown() {
     loop_.remove(l.fd);
     net::close_listener(l);
   }
-  uint32_t in_flight = 0;
-  for (auto& [id, s] : sessions_) in_flight += s->in_flight;
-  log::info("shutdown.begin", {{"frames_in_flight", in_flight}, {"connections", connections_.size()}});
+  log::info("shutdown.begin", {{"frames_in_flight", sessions_.frames_in_flight()}, {"connections", connections_.size()}});
 }
 
 bool Server::shutdown_complete() const {
@@ -183,9 +179,7 @@ bool Server::shutdown_complete() const {
     log::warn("shutdown.deadline", {{"grace_s", options_.shutdown_grace_s}});
     return true;
   }
-  if (sessions_being_built_ > 0) return false;
-  for (const auto& [id, s] : sessions_)
-    if (s->in_flight > 0) return false;
+  if (sessions_being_built_ > 0 || sessions_.frames_in_flight() > 0) return false;
   for (const auto& [id, c] : connections_)
     if (c->has_pending_output()) return false;
   return true;
@@ -265,10 +259,8 @@ void Server::on_connection_event(uint64_t id, uint32_t events) {
 
 bool Server::has_work(const net::Connection& c) const {
   if (c.has_pending_output() || c.sessions_being_built > 0) return true;
-  for (uint64_t sid : c.owned_sessions) {
-    auto it = sessions_.find(sid);
-    if (it != sessions_.end() && it->second->in_flight > 0) return true;
-  }
+  for (uint64_t sid : c.owned_sessions)
+    if (const Session* s = sessions_.find(sid); s && s->in_flight > 0) return true;
   return false;
 }
 
@@ -277,8 +269,8 @@ void Server::refresh_message_limit(net::Connection& c) {
   // frame with a wrong plane size still gets a recoverable ERROR); nothing bigger is allocated.
   uint64_t limit = kControlMessageBytes;
   for (uint64_t sid : c.owned_sessions)
-    if (auto it = sessions_.find(sid); it != sessions_.end())
-      limit = std::max(limit, 2 * frame_message_bytes(it->second->config()) + kControlMessageBytes);
+    if (const Session* s = sessions_.find(sid))
+      limit = std::max(limit, 2 * frame_message_bytes(s->config()) + kControlMessageBytes);
   c.set_max_message_bytes(std::min(limit, options_.max_message_bytes));
 }
 
@@ -287,10 +279,8 @@ void Server::update_interest(net::Connection& c) {
   if (!c.reading_paused && c.queued_bytes() > options_.max_output_buffer_bytes) c.reading_paused = true;
   if (c.reading_paused) {
     bool window_full = false;
-    for (uint64_t sid : c.owned_sessions) {
-      auto it = sessions_.find(sid);
-      if (it != sessions_.end() && it->second->in_flight >= options_.max_frames_in_flight) window_full = true;
-    }
+    for (uint64_t sid : c.owned_sessions)
+      if (const Session* s = sessions_.find(sid); s && s->in_flight >= options_.max_frames_in_flight) window_full = true;
     if (!window_full && c.queued_bytes() <= options_.max_output_buffer_bytes / 2) c.reading_paused = false;
   }
   uint32_t events = 0;
@@ -384,14 +374,10 @@ void Server::close_connection(uint64_t id, const char* reason) {
   loop_.remove(c->fd());
   counters_.bytes_in_closed += c->bytes_in;
   counters_.bytes_out_closed += c->bytes_out;
-  for (uint64_t sid : std::vector<uint64_t>(c->owned_sessions)) {
-    auto s = sessions_.find(sid);
-    if (s != sessions_.end()) finish_session(s->second, false);
-  }
-  for (uint64_t sid : c->watched_sessions) {
-    auto s = sessions_.find(sid);
-    if (s != sessions_.end()) std::erase(s->second->watchers, id);
-  }
+  for (uint64_t sid : std::vector<uint64_t>(c->owned_sessions))
+    if (auto s = sessions_.get(sid)) finish_session(s, false);
+  for (uint64_t sid : c->watched_sessions)
+    if (Session* s = sessions_.find(sid)) std::erase(s->watchers, id);
   log::debug("connection.close", {{"conn", id}, {"peer", c->peer()}, {"reason", reason}});
 }
 

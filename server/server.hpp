@@ -8,9 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <random>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "server/net/connection.hpp"
@@ -18,6 +16,7 @@
 #include "server/net/listener.hpp"
 #include "server/options.hpp"
 #include "server/session/pipeline_builder.hpp"
+#include "server/session/registry.hpp"
 #include "server/session/scheduler.hpp"
 #include "server/session/session.hpp"
 #include "server/pipelines/registry.hpp"
@@ -81,9 +80,8 @@ class Server {
   net::EventLoop loop_;
   std::vector<net::Listener> listeners_;
   std::map<uint64_t, std::unique_ptr<net::Connection>> connections_;
-  std::unordered_map<uint64_t, std::shared_ptr<Session>> sessions_;
+  SessionRegistry sessions_;
   uint64_t next_connection_id_ = 1;
-  std::mt19937_64 session_ids_;
 
   std::unique_ptr<Scheduler> scheduler_;
   std::unique_ptr<PipelineBuilder> builder_;

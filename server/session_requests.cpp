@@ -73,10 +73,8 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
     return update_interest(*c);
   }
 
-  uint64_t id;
-  do id = session_ids_(); while (id == 0 || sessions_.count(id));
-  auto session = std::make_shared<Session>(id, c->id(), config, std::move(built.pipeline));
-  sessions_[id] = session;
+  auto session = sessions_.add(c->id(), config, std::move(built.pipeline));
+  const uint64_t id = session->id();
   c->owned_sessions.push_back(id);
   refresh_message_limit(*c);  // before the next header is read: this session's frames may follow at once
   ++counters_.sessions_opened;
@@ -95,11 +93,10 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
 }
 
 void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
-  auto it = sessions_.find(m.info.session_id);
-  if (it == sessions_.end() || it->second->owner() != c.id())
+  const std::shared_ptr<Session> s = sessions_.get(m.info.session_id);
+  if (!s || s->owner() != c.id())
     return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
                       "session " + std::to_string(m.info.session_id) + " is not open on this connection", false);
-  const std::shared_ptr<Session>& s = it->second;
   if (s->closing)
     return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
                       "session " + std::to_string(s->id()) + " is closing", false);
@@ -120,11 +117,11 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
 }
 
 void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
-  auto it = sessions_.find(m.session_id);
-  if (it == sessions_.end() || it->second->closing)
+  Session* found = sessions_.find(m.session_id);
+  if (!found || found->closing)
     return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
                       "no open session " + std::to_string(m.session_id), false);
-  Session& s = *it->second;
+  Session& s = *found;
   if (std::find(s.watchers.begin(), s.watchers.end(), c.id()) == s.watchers.end()) s.watchers.push_back(c.id());
   if (std::find(c.watched_sessions.begin(), c.watched_sessions.end(), s.id()) == c.watched_sessions.end())
     c.watched_sessions.push_back(s.id());
@@ -135,11 +132,10 @@ void Server::on_attach(net::Connection& c, const protocol::Header& h, const prot
 }
 
 void Server::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {
-  auto it = sessions_.find(m.session_id);
-  if (it == sessions_.end() || it->second->owner() != c.id() || it->second->closing)
+  std::shared_ptr<Session> s = sessions_.get(m.session_id);
+  if (!s || s->owner() != c.id() || s->closing)
     return send_error(c, h.request_id, ErrorCode::UnknownSession, "CLOSE_SESSION.session_id",
                       "session " + std::to_string(m.session_id) + " is not open on this connection", false);
-  std::shared_ptr<Session> s = it->second;
   s->closing = true;
   s->close_request_id = h.request_id;
   if (s->in_flight == 0) finish_session(s, true);  // else finished when its last frame completes
@@ -168,9 +164,9 @@ void Server::finish_session(const std::shared_ptr<Session>& s, bool notify) {
 }
 
 void Server::on_frame_done(FrameDone&& done) {
-  auto it = sessions_.find(done.session_id);
-  if (it == sessions_.end()) return;  // session closed by a disconnect: nobody to deliver to
-  std::shared_ptr<Session> s = it->second;
+  const std::shared_ptr<Session> found = sessions_.get(done.session_id);
+  if (!found) return;  // session closed by a disconnect: nobody to deliver to
+  const std::shared_ptr<Session>& s = found;
   if (s->in_flight > 0) --s->in_flight;
   if (done.failed) {
     ++counters_.frames_failed;
