@@ -47,6 +47,12 @@ protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId
   return protocol::Format::F32;
 }
 
+bool has_channel(const SessionConfig& config, protocol::ChannelId channel) {
+  for (const auto& c : config.channels)
+    if (c.id == channel) return true;
+  return false;
+}
+
 uint32_t is_half(protocol::Format format) { return format == protocol::Format::F16 ? 1u : 0u; }
 
 uint64_t GraphSpec::device_bytes() const {

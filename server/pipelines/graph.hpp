@@ -105,6 +105,8 @@ struct GraphSpec {
 uint64_t round_up4(uint64_t bytes);
 // The declared format of a channel (F32 if it is not declared).
 protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel);
+// Whether the session declared the channel.
+bool has_channel(const SessionConfig& config, protocol::ChannelId channel);
 // Specialization value "this plane is fp16".
 uint32_t is_half(protocol::Format format);
 

@@ -17,18 +17,8 @@ namespace {
 
 using protocol::ChannelId;
 
-bool has_channel(const SessionConfig& config, ChannelId id) {
-  for (const auto& c : config.channels)
-    if (c.id == id) return true;
-  return false;
-}
-
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
-  SvgfVariant v;
-  v.iterations = static_cast<uint32_t>(p.svgf_atrous_iterations);
-  v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
-  v.taa = p.svgf_taa_alpha > 0.0f;
-  v.emission = has_channel(config, ChannelId::Emission);
+  SvgfVariant v = svgf_variant_from(config, p);
   const Modulator albedo{"albedo", ChannelId::Albedo};
   // validate() guarantees Diffuse and Specular together, without Radiance.
   if (has_channel(config, ChannelId::Diffuse)) {

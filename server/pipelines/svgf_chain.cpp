@@ -107,6 +107,15 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
 
 }  // namespace
 
+SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) {
+  SvgfVariant v;
+  v.iterations = static_cast<uint32_t>(p.svgf_atrous_iterations);
+  v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
+  v.taa = p.svgf_taa_alpha > 0.0f;
+  v.emission = has_channel(config, protocol::ChannelId::Emission);
+  return v;
+}
+
 void check_supported(const SvgfVariant& v) {
   auto reject = [](const std::string& what) { throw std::logic_error("svgf variant: " + what); };
   if (v.signals.empty() || v.signals.size() > 2)

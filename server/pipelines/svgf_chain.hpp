@@ -72,6 +72,10 @@ struct SvgfVariant {
   bool emission = false;             // add the Emission plane back after filtering
 };
 
+// The svgf parameter group's part of a variant (iterations, feedback tap,
+// TAA) and whether the session declared Emission; signals are the caller's.
+SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p);
+
 // Throws std::logic_error naming the first field (or combination) the
 // shaders do not implement.
 void check_supported(const SvgfVariant& variant);

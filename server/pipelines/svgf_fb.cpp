@@ -18,18 +18,8 @@ constexpr const char* kFactor = "svgf_fb";
 // The context-wide table this pipeline binds (computed once per device).
 const SharedResourceDecl kFbLut{"fb_lut", fb_lut_buffer};
 
-bool has_channel(const SessionConfig& config, ChannelId id) {
-  for (const auto& c : config.channels)
-    if (c.id == id) return true;
-  return false;
-}
-
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
-  SvgfVariant v;
-  v.iterations = static_cast<uint32_t>(p.svgf_atrous_iterations);
-  v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
-  v.taa = p.svgf_taa_alpha > 0.0f;
-  v.emission = has_channel(config, ChannelId::Emission);
+  SvgfVariant v = svgf_variant_from(config, p);
   v.signals.push_back({ChannelId::Diffuse, "diffuse", "_diffuse", "svgf", Modulator{"albedo", ChannelId::Albedo}});
   // specular_demodulated = 1: the client sent L_W = specular / F_beta, so the
   // server only remodulates.
