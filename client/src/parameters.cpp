@@ -11,16 +11,6 @@
 namespace dn::client {
 namespace {
 
-std::string number(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-
-std::string range(const protocol::ParameterInfo& p) {
-  return "[" + number(p.min_value) + ", " + number(p.max_value) + "]";
-}
-
 std::string names(const std::vector<protocol::ParameterInfo>& table) {
   std::string out;
   for (const auto& p : table) out += (out.empty() ? "" : ", ") + p.name;
@@ -28,6 +18,16 @@ std::string names(const std::vector<protocol::ParameterInfo>& table) {
 }
 
 }  // namespace
+
+std::string format_value(double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", value);
+  return buf;
+}
+
+std::string format_range(const protocol::ParameterInfo& p) {
+  return "[" + format_value(p.min_value) + ", " + format_value(p.max_value) + "]";
+}
 
 const std::vector<protocol::ParameterInfo>* find_parameters(const protocol::Welcome& welcome,
                                                             std::string_view pipeline) {
@@ -56,13 +56,13 @@ void check_parameters(const protocol::Welcome& welcome, const SessionDesc& desc)
       if (desc.parameters[j].name == given.name)
         throw Error::usage(protocol::ErrorCode::InvalidParameter, field + ".name",
                            "parameter '" + given.name + "' is given twice");
-    const std::string what = "parameter '" + given.name + "' of " + pipeline + " is " + number(given.value);
+    const std::string what = "parameter '" + given.name + "' of " + pipeline + " is " + format_value(given.value);
     if (!std::isfinite(given.value) || given.value < info->min_value || given.value > info->max_value)
       throw Error::usage(protocol::ErrorCode::InvalidParameter, field + ".value",
-                         what + ", outside its range " + range(*info));
+                         what + ", outside its range " + format_range(*info));
     if (info->integer && given.value != std::floor(given.value))
       throw Error::usage(protocol::ErrorCode::InvalidParameter, field + ".value",
-                         what + ", but must be an integer in " + range(*info));
+                         what + ", but must be an integer in " + format_range(*info));
   }
 }
 

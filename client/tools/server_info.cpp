@@ -5,15 +5,10 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "dn/client/parameters.hpp"
 
 namespace dn::cli {
 namespace {
-
-std::string number(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
 
 std::string pad(std::string s, size_t width) {
   if (s.size() < width) s.resize(width, ' ');
@@ -24,7 +19,7 @@ std::string pad(std::string s, size_t width) {
 std::string parameter_table(const std::vector<protocol::ParameterInfo>& table) {
   std::vector<std::vector<std::string>> rows = {{"name", "default", "range", "integer", "description"}};
   for (const auto& p : table)
-    rows.push_back({p.name, number(p.default_value), "[" + number(p.min_value) + ", " + number(p.max_value) + "]",
+    rows.push_back({p.name, client::format_value(p.default_value), client::format_range(p),
                     p.integer ? "yes" : "no", p.description});
   std::vector<size_t> width(4, 0);
   for (const auto& r : rows)

@@ -2,6 +2,7 @@
 // and the check Connection::open_session makes with them before sending.
 #pragma once
 
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -14,6 +15,11 @@ namespace dn::client {
 // (a protocol 1.0 server) or offers no such pipeline.
 const std::vector<protocol::ParameterInfo>* find_parameters(const protocol::Welcome& welcome,
                                                             std::string_view pipeline);
+
+// A parameter's value ("%g") and inclusive range ("[min, max]") as the
+// client's messages and `dn pipelines` print them.
+std::string format_value(double value);
+std::string format_range(const protocol::ParameterInfo& parameter);
 
 // Checks desc.parameters against the table of desc.pipeline: every name known
 // (else the error lists the valid names), given once, every value finite,
