@@ -20,6 +20,25 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// One frame of zeros through a freshly built pipeline. Lavapipe compiles a
+// kernel's machine code at its first dispatch, not when the VkPipeline is
+// created (seconds per a-trous kernel with a cold Mesa cache), and the
+// kernel cache shares VkPipelines across sessions: dispatching once here
+// keeps that cost out of every session's first frame.
+void run_one_frame(pipelines::Pipeline& pipeline, const pipelines::SessionConfig& config) {
+  std::vector<std::vector<uint8_t>> planes;  // the frame's views point into these
+  planes.reserve(config.channels.size());
+  protocol::Frame frame;
+  for (const auto& c : config.channels) {
+    const auto* info = protocol::find_channel(c.id);
+    planes.emplace_back(protocol::plane_bytes(*info, c.format, config.width, config.height), uint8_t{0});
+    frame.planes.push_back({c.id, c.format, planes.back()});
+  }
+  std::vector<uint8_t> output;
+  std::vector<protocol::PassTiming> timings;
+  pipeline.process(frame, false, output, timings);
+}
+
 }  // namespace
 
 PipelineBuilder::PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built)
@@ -102,8 +121,8 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
       try {
         const auto prepared = pipelines::prepare(config);
         if (auto* err = std::get_if<pipelines::ConfigError>(&prepared)) throw std::invalid_argument(err->message);
-        // Built and dropped: its kernels stay in the cache.
-        pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared));
+        // Built, run once and dropped: its kernels stay in the cache, compiled and dispatched.
+        run_one_frame(*pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared)), config);
         ++report.configs;
       } catch (const std::exception& e) {
         if (report.error.empty()) report.error = config.pipeline + ": " + e.what();
