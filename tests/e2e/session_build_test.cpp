@@ -149,7 +149,7 @@ TEST(SessionBuild, WarmUpWritesThePipelineCacheAndARestartLoadsIt) {
     RawClient c(server.tcp_url());
     c.hello();
     std::map<std::string, double> st;
-    for (int i = 0; i < 900; ++i) {  // up to 90 s for a cold shader cache (ctest allows 120)
+    for (int i = 0; i < 2400; ++i) {  // up to 4 minutes for a cold shader cache (ctest allows 300 s)
       st = stats(c);
       if (st.at("warm_up_done") == 1.0) break;
       ::usleep(100000);
@@ -194,7 +194,7 @@ TEST(SessionBuild, AForeignCacheFileIsIgnored) {
     ServerProcess server({"--warm-up", "--cache-dir", dir.string()});
     RawClient c(server.tcp_url());
     c.hello();
-    for (int i = 0; i < 900 && stats(c).at("warm_up_done") != 1.0; ++i) ::usleep(100000);
+    for (int i = 0; i < 2400 && stats(c).at("warm_up_done") != 1.0; ++i) ::usleep(100000);
   }
   for (const auto& e : fs::directory_iterator(dir)) name = e.path().filename().string();
   ASSERT_FALSE(name.empty());
