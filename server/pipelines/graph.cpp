@@ -106,36 +106,28 @@ void GraphSpec::add_output(const SessionConfig& config) {
   buffers.push_back(std::move(b));
 }
 
-void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
+void GraphSpec::add_sized(std::string name, BufferRole role, uint64_t bytes) {
   BufferSpec b;
   b.name = std::move(name);
-  b.role = BufferRole::History;
-  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
+  b.role = role;
+  b.bytes = round_up4(bytes);
   buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
+  add_sized(std::move(name), BufferRole::History, uint64_t{width} * height * bytes_per_pixel);
 }
 
 void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
-  BufferSpec b;
-  b.name = std::move(name);
-  b.role = BufferRole::Persistent;
-  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
-  buffers.push_back(std::move(b));
+  add_sized(std::move(name), BufferRole::Persistent, uint64_t{width} * height * bytes_per_pixel);
 }
 
 void GraphSpec::add_scratch(std::string name, uint64_t bytes_per_pixel) {
-  BufferSpec b;
-  b.name = std::move(name);
-  b.role = BufferRole::Scratch;
-  b.bytes = round_up4(uint64_t{width} * height * bytes_per_pixel);
-  buffers.push_back(std::move(b));
+  add_sized(std::move(name), BufferRole::Scratch, uint64_t{width} * height * bytes_per_pixel);
 }
 
 void GraphSpec::add_scratch_elements(std::string name, uint64_t elements, uint64_t bytes_per_element) {
-  BufferSpec b;
-  b.name = std::move(name);
-  b.role = BufferRole::Scratch;
-  b.bytes = round_up4(elements * bytes_per_element);
-  buffers.push_back(std::move(b));
+  add_sized(std::move(name), BufferRole::Scratch, elements * bytes_per_element);
 }
 
 gpu::Extent GraphSpec::level(uint32_t factor, uint32_t level) const {

@@ -92,6 +92,7 @@ struct GraphSpec {
   // (gpu/levels.hpp: each level rounds up; level 0 is the full resolution).
   gpu::Extent level(uint32_t factor, uint32_t level) const;
   void add_shared(std::string name, SharedResource resource);
+
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).
   PassSpec& add_pass(std::string name, std::string_view shader);
@@ -100,6 +101,10 @@ struct GraphSpec {
   // required binding bound, every bound buffer defined, Previous slots only
   // on History buffers. Throws std::logic_error naming the pass and binding.
   void check() const;
+
+ private:
+  // A buffer of `bytes` (rounded up to 4) in `role`: what the add_* builders share.
+  void add_sized(std::string name, BufferRole role, uint64_t bytes);
 };
 
 uint64_t round_up4(uint64_t bytes);
