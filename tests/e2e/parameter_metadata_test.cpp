@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -12,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "command.hpp"
 #include "raw_client.hpp"
 #include "server_process.hpp"
 
@@ -46,17 +46,6 @@ std::vector<uint8_t> read_exactly(int fd, size_t n) {
   EXPECT_EQ(got, n) << "connection ended early";
   out.resize(got);
   return out;
-}
-
-// Runs a shell command, returning its exit status and its stdout + stderr.
-int shell(const std::string& command, std::string& output) {
-  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-  if (!p) return -1;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
-  const int status = ::pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 // The line of `text` that starts with `prefix`, or "".
@@ -159,7 +148,7 @@ TEST(ParameterMetadata, OneZeroClientGetsTheOneZeroPayloadAndWorks) {
 TEST(ParameterMetadata, DnPipelinesAndPingShowTheTables) {
   ServerProcess server;
   std::string out;
-  ASSERT_EQ(shell(std::string(DN_DN_PATH) + " pipelines --server " + server.tcp_url(), out), 0) << out;
+  ASSERT_EQ(run_command(std::string(DN_DN_PATH) + " pipelines --server " + server.tcp_url(), out), 0) << out;
   const std::string row = line_starting(out, "    atrous_iterations ");
   ASSERT_FALSE(row.empty()) << out;
   std::istringstream fields(row);
@@ -173,13 +162,13 @@ TEST(ParameterMetadata, DnPipelinesAndPingShowTheTables) {
   EXPECT_NE(line_starting(out, "    name ").find("default  range"), std::string::npos) << out;
 
   out.clear();
-  EXPECT_EQ(shell(std::string(DN_DN_PATH) + " pipelines --server " + server.tcp_url() + " --pipeline nope", out), 2);
+  EXPECT_EQ(run_command(std::string(DN_DN_PATH) + " pipelines --server " + server.tcp_url() + " --pipeline nope", out), 2);
   EXPECT_NE(out.find("offers no pipeline 'nope'; it offers: passthrough, accumulate, svgf, svgf-fb"),
             std::string::npos)
       << out;
 
   out.clear();
-  ASSERT_EQ(shell(std::string(DN_DN_PATH) + " ping --count 1 --server " + server.tcp_url(), out), 0) << out;
+  ASSERT_EQ(run_command(std::string(DN_DN_PATH) + " ping --count 1 --server " + server.tcp_url(), out), 0) << out;
   EXPECT_NE(out.find("  parameters: alpha_min, max_history, depth_tolerance, normal_threshold\n"), std::string::npos)
       << out;
   EXPECT_NE(out.find("  parameters: none\n"), std::string::npos) << out;
@@ -189,13 +178,13 @@ TEST(ParameterMetadata, DnDenoiseMisspeltParameterFailsBeforeTheSession) {
   const fs::path dir = fs::temp_directory_path() / ("dn-params-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::string out;
-  ASSERT_EQ(shell(std::string(DN_DNSYNTH_PATH) + " --out " + dir.string() + "/in --frames 2 --width 32 --height 16",
+  ASSERT_EQ(run_command(std::string(DN_DNSYNTH_PATH) + " --out " + dir.string() + "/in --frames 2 --width 32 --height 16",
                   out),
             0)
       << out;
   ServerProcess server;
   out.clear();
-  const int rc = shell(std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
+  const int rc = run_command(std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
                            " --pipeline accumulate --param alpha=0.1 --preset dnrender --input '" + dir.string() +
                            "/in/frame_%04d.exr' --start 0 --end 1",
                        out);
