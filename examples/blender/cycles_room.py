@@ -187,8 +187,8 @@ def build_scene(a):
     # Small area light near the ceiling, pointing down.
     light_data = bpy.data.lights.new("area", type="AREA")
     light_data.shape = "SQUARE"
-    light_data.size = 0.25
-    light_data.energy = 150.0
+    light_data.size = 0.5
+    light_data.energy = 200.0
     light = bpy.data.objects.new("area", light_data)
     light.location = (0.3, 0.4, H - 0.05)
     scene.collection.objects.link(light)
