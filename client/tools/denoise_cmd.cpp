@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "args.hpp"
+#include "camera_recovery.hpp"
 #include "commands.hpp"
 #include "dn/client/client.hpp"
 #include "dn/image/exr_io.hpp"
@@ -53,6 +54,9 @@ const std::vector<Args::Spec> kSpecs = {
     {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
     {"warmup", "", true, false,
      "denoise the first N frames but leave them out of the means (metrics, timings, temporal error)", "N"},
+    {"camera", "", true, false,
+     "per-frame cameras: lines 'frame N view <16> projection <16>' (default: EXR header, else from the Position pass)",
+     "FILE"},
     {"quiet", "-q", false, false, "no per-frame output", ""},
     {"help", "-h", false, false, "this help", ""},
 };
@@ -60,7 +64,7 @@ const std::vector<Args::Spec> kSpecs = {
 constexpr const char* kUsage =
     "usage: dn denoise --server URL --pipeline NAME --input PATTERN [--start N --end M] [--output PATTERN]\n"
     "                  [--png PATTERN] [--preset dnrender|cycles|auto] [--channel NAME=LAYER ...] [--fp16]\n"
-    "                  [--param NAME=VALUE ...] [-r PATTERN] [--in-flight K] [--token-file FILE]\n";
+    "                  [--param NAME=VALUE ...] [-r PATTERN] [--in-flight K] [--token-file FILE] [--camera FILE]\n";
 
 protocol::Mat4 identity() {
   protocol::Mat4 m{};
@@ -193,6 +197,8 @@ int run_denoise(const std::vector<std::string>& argv) {
   if (auto tf = args.get("token-file")) copts.token_file = *tf;
   copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   client::Connection conn = client::Connection::connect(url, copts);
+  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
+  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline_name));
   const protocol::PipelineInfo* pipeline = conn.find_pipeline(pipeline_name);
   if (!pipeline && !conn.welcome().pipelines.empty()) {
     std::string names;
@@ -308,6 +314,8 @@ int run_denoise(const std::vector<std::string>& argv) {
     try {
       return fn();
     } catch (const client::Error& e) {
+    if (auto cam = cameras.record(number); cam && cam->source == FrameCameras::Source::Recovered)
+      line += fmt("  camera residual %.3f px", cam->rms_px);
       const long long n = submitted.empty() ? -1 : newest ? submitted.back() : submitted.front();
       throw std::runtime_error("frame " + std::to_string(n) + ": " + e.what());
     }
@@ -316,7 +324,9 @@ int run_denoise(const std::vector<std::string>& argv) {
   auto load = [&](size_t i) {
     const std::string path = format_frame_path(input, frames[i]);
     image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
-    return load_frame(exr, plan, frames[i]);
+    LoadedFrame lf = load_frame(exr, plan, frames[i]);
+    cameras.apply(exr, frames[i], lf.camera);
+    return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -367,6 +377,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double r = double(std::max<size_t>(totals.with_ref, 1));
     const bool have_ref = totals.with_ref > 0;
     const double pixels = double(session.info().width) * session.info().height;
+    std::fprintf(stderr, "dn: %s\n", cameras.summary().c_str());
     std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel\n");
     std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f\n", have_ref ? totals.rmse / r : NAN,
                  have_ref ? totals.relmse / r : NAN, have_ref ? totals.ssim / r : NAN, totals.latency_ms / n,
