@@ -89,6 +89,92 @@ TEST(Metrics, ToneMapsAndOetf) {
   EXPECT_THROW(parse_tonemap("filmic"), std::invalid_argument);
 }
 
+TEST(Metrics, NoiseCorrectedOfKnownImages) {
+  const std::vector<float> a = {2, 1}, r1 = {1, 1}, r2 = {3, 0};
+  // ((2-1)(2-3) + (1-1)(1-0)) / 2
+  EXPECT_DOUBLE_EQ(noise_corrected_mse(a.data(), r1.data(), r2.data(), 2), -0.5);
+  // (-1 / (2^2 + 0.01) + 0) / 2
+  EXPECT_NEAR(noise_corrected_relative_mse(a.data(), r1.data(), r2.data(), 2), -0.5 / 4.01, 1e-12);
+  // ((1-3)^2 + (1-0)^2) / 2 / 2
+  EXPECT_DOUBLE_EQ(reference_noise_mse(r1.data(), r2.data(), 2), 1.25);
+  // Identical references: the plain MSE, and no noise.
+  EXPECT_DOUBLE_EQ(noise_corrected_mse(a.data(), r1.data(), r1.data(), 2), std::pow(rmse(a.data(), r1.data(), 2), 2));
+  EXPECT_DOUBLE_EQ(reference_noise_mse(r1.data(), r1.data(), 2), 0.0);
+  EXPECT_EQ(noise_corrected_mse(a.data(), r1.data(), r2.data(), 0), 0.0);
+}
+
+// Synthetic truth t, an estimate x = t + e (e fixed, its true MSE known) and
+// two references r1 = t + n1, r2 = t + n2 with independent Gaussian noise of
+// standard deviation s. Per component, (x - r1)(x - r2) has mean e^2 and
+// variance 2 e^2 s^2 + s^4, so the mean over N components is within
+// 5 sqrt((2 M s^2 + s^4) / N) of the true MSE M (5 standard errors; fixed seed);
+// (r1 - r2)^2 / 2 has mean s^2 and variance 2 s^4.
+TEST(Metrics, NoiseCorrectedMseConvergesToTheTrueMse) {
+  constexpr size_t N = 300000;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> truth(0.2f, 2.0f);
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  for (const double s : {0.05, 0.2, 0.5}) {
+    std::vector<float> t(N), x(N), r1(N), r2(N);
+    for (size_t i = 0; i < N; ++i) {
+      t[i] = truth(rng);
+      x[i] = t[i] + 0.05f * unit(rng) + 0.02f;  // noise and a bias
+      r1[i] = t[i] + float(s) * unit(rng);
+      r2[i] = t[i] + float(s) * unit(rng);
+    }
+    const double true_mse = std::pow(rmse(x.data(), t.data(), N), 2);
+    const double nc = noise_corrected_mse(x.data(), r1.data(), r2.data(), N);
+    const double tol = 5.0 * std::sqrt((2.0 * true_mse * s * s + s * s * s * s) / double(N));
+    EXPECT_NEAR(nc, true_mse, tol) << "s " << s;
+    // The plain MSE against one reference carries the reference's variance.
+    const double plain = std::pow(rmse(x.data(), r1.data(), N), 2);
+    const double plain_tol = 5.0 * std::sqrt((4.0 * true_mse * s * s + 2.0 * s * s * s * s) / double(N));
+    EXPECT_NEAR(plain, true_mse + s * s, plain_tol) << "s " << s;
+    EXPECT_GT(plain - true_mse, 10.0 * tol) << "s " << s;
+    // The reference's own noise floor is its variance.
+    EXPECT_NEAR(reference_noise_mse(r1.data(), r2.data(), N), s * s, 5.0 * s * s * std::sqrt(2.0 / double(N)))
+        << "s " << s;
+  }
+}
+
+TEST(Metrics, NoiseCorrectedMseOfThePerfectImageIsNearZero) {
+  // x = truth: the estimate is zero-mean noise of standard error s^2 / sqrt(N),
+  // either sign; the plain MSE is s^2.
+  constexpr size_t N = 200000;
+  const double s = 0.3;
+  std::mt19937 rng(11);
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  std::vector<float> t(N, 1.0f), r1(N), r2(N);
+  for (size_t i = 0; i < N; ++i) r1[i] = 1.0f + float(s) * unit(rng), r2[i] = 1.0f + float(s) * unit(rng);
+  const double nc = noise_corrected_mse(t.data(), r1.data(), r2.data(), N);
+  EXPECT_NEAR(nc, 0.0, 5.0 * s * s / std::sqrt(double(N)));
+  EXPECT_NEAR(std::pow(rmse(t.data(), r1.data(), N), 2), s * s, 5.0 * s * s * std::sqrt(2.0 / double(N)));
+}
+
+TEST(Metrics, NoiseCorrectedRelativeMseRemovesMostOfTheNoiseBias) {
+  // The relative form divides by the references' mean, which carries noise
+  // correlated with the numerator: it is unbiased only to first order in s / t
+  // (the next term is about 3 (e^2 s^2 / 2 + s^4 / 2) / t^4: 0.75 % here, the
+  // standard error 0.3 %). With x and the references each 5 % off the truth it
+  // is within 3 % of the true relative MSE, while the plain relative MSE
+  // against r1 is twice it.
+  constexpr size_t N = 300000;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> truth(1.0f, 4.0f);
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  std::vector<float> t(N), x(N), r1(N), r2(N);
+  for (size_t i = 0; i < N; ++i) {
+    t[i] = truth(rng);
+    x[i] = t[i] * (1.0f + 0.05f * unit(rng));
+    r1[i] = t[i] * (1.0f + 0.05f * unit(rng));
+    r2[i] = t[i] * (1.0f + 0.05f * unit(rng));
+  }
+  const double truth_rel = relative_mse(x.data(), t.data(), N);
+  const double nc_rel = noise_corrected_relative_mse(x.data(), r1.data(), r2.data(), N);
+  EXPECT_NEAR(nc_rel, truth_rel, 0.03 * truth_rel);
+  EXPECT_GT(relative_mse(x.data(), r1.data(), N), 1.8 * truth_rel);
+}
+
 TEST(Metrics, TemporalError) {
   const std::vector<float> a = {1, 1, 1, 0, 0, 0}, b = {0, 0, 0, 0, 0, 0};
   EXPECT_NEAR(temporal_error(a.data(), b.data(), 2), 0.5, 1e-6);

@@ -89,6 +89,33 @@ double relative_mse(const float* a, const float* ref, size_t count, double eps) 
   return sum / double(count);
 }
 
+double noise_corrected_mse(const float* a, const float* ref1, const float* ref2, size_t count) {
+  if (count == 0) return 0.0;
+  double sum = 0.0;
+  for (size_t i = 0; i < count; ++i) sum += (double(a[i]) - ref1[i]) * (double(a[i]) - ref2[i]);
+  return sum / double(count);
+}
+
+double noise_corrected_relative_mse(const float* a, const float* ref1, const float* ref2, size_t count, double eps) {
+  if (count == 0) return 0.0;
+  double sum = 0.0;
+  for (size_t i = 0; i < count; ++i) {
+    const double m = 0.5 * (double(ref1[i]) + ref2[i]);
+    sum += (double(a[i]) - ref1[i]) * (double(a[i]) - ref2[i]) / (m * m + eps);
+  }
+  return sum / double(count);
+}
+
+double reference_noise_mse(const float* ref1, const float* ref2, size_t count) {
+  if (count == 0) return 0.0;
+  double sum = 0.0;
+  for (size_t i = 0; i < count; ++i) {
+    const double d = double(ref1[i]) - ref2[i];
+    sum += d * d;
+  }
+  return 0.5 * sum / double(count);
+}
+
 namespace {
 
 // Separable Gaussian blur restricted to 'valid' output positions: output has

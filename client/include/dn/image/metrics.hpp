@@ -11,6 +11,19 @@
 //                    default), sRGB OETF, then Y' = 0.2126 R' + 0.7152 G' + 0.0722 B'.
 //  - temporal_error: mean |Y(a) - Y(b)| of linear luminance, for consecutive
 //                    frames of a fixed camera.
+//  - noise_corrected_mse: mean of (a - r1)(a - r2) over two independent,
+//                    unbiased references r1, r2 of the same image (and
+//                    independent of a): an unbiased estimate of the MSE of a
+//                    against the noise-free truth, E[(a-r1)(a-r2)] = (a-t)^2,
+//                    where the plain MSE against r1 is (a-t)^2 + Var(r1). It can
+//                    come out negative for an a within the references' noise of
+//                    the truth; report it as is.
+//  - noise_corrected_relative_mse: mean of (a - r1)(a - r2) / (((r1 + r2)/2)^2 + eps),
+//                    eps = 0.01 as relative_mse.
+//  - reference_noise_mse: mean((r1 - r2)^2) / 2, an unbiased estimate of the MSE of
+//                    one reference against the truth (the floor the references'
+//                    noise puts under the plain MSE; the mean of both references
+//                    has half of it).
 #pragma once
 
 #include <cstddef>
@@ -41,6 +54,11 @@ std::vector<float> display_luma(const float* rgb, size_t pixels, Tonemap t = Ton
 
 double rmse(const float* a, const float* ref, size_t count);
 double relative_mse(const float* a, const float* ref, size_t count, double eps = 0.01);
+// Error against the truth from two independent references (definitions above).
+double noise_corrected_mse(const float* a, const float* ref1, const float* ref2, size_t count);
+double noise_corrected_relative_mse(const float* a, const float* ref1, const float* ref2, size_t count,
+                                    double eps = 0.01);
+double reference_noise_mse(const float* ref1, const float* ref2, size_t count);
 
 // Single-channel SSIM, values expected in [0, 1].
 double ssim(const float* x, const float* y, int width, int height);
