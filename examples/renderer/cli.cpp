@@ -34,6 +34,8 @@ const char* const kUsage =
     "  --max-depth D      bounces after the primary hit (default 8)\n"
     "  --threads T        render threads (default: all cores)\n"
     "  --jitter           per-frame Halton sub-pixel camera jitter (written as dn.jitter)\n"
+    "  --gbuffer-grid K   albedo/specular_f0/roughness/normal: pixel-footprint averages of K x K\n"
+    "                     stratified G-buffer rays (default 4); 0: point-sampled at the radiance ray\n"
     "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1)\n"
     "  --spec-hit         also the first non-mirror hit behind mirror-like pixels (spec_hit_* layers)\n"
     "  --out DIR          write DIR/frame_%04d.exr (dnrender layout, docs/client.md)\n"
@@ -96,6 +98,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--max-depth") o.render.max_depth = parse_int(a, value(), 1, 64);
     else if (a == "--threads") o.render.threads = parse_int(a, value(), 1, 1024);
     else if (a == "--jitter") o.render.jitter = true;
+    else if (a == "--gbuffer-grid") o.render.gbuffer_grid = parse_int(a, value(), 0, 16);
     else if (a == "--stats") o.render.channels.statistics = true;
     else if (a == "--spec-hit") o.render.channels.specular_hit = true;
     else if (a == "--out") o.out = value();

@@ -47,4 +47,8 @@ struct SurfaceParams {
 
 SurfaceParams evaluate_material(const Material& m, const glm::vec3& world_position);
 
+// Whether a and b lie in one convex region over which m's maps are constant
+// (so is every point of a convex set with its corners in that region).
+bool same_material_region(const Material& m, const glm::vec3& a, const glm::vec3& b);
+
 }  // namespace dn::render

@@ -99,7 +99,146 @@ struct PixelContext {
   int frame;
 };
 
-void render_pixel(const PixelContext& pc, int x, int y, FrameBuffers& fb, TraceContext& ctx) {
+// The hits of the rays through the pixel corners of one tile, (tile + 1)^2,
+// traced once and shared by the pixels around each corner.
+struct TileCorners {
+  int x0 = 0, y0 = 0, stride = 0;
+  std::vector<Hit> hits;
+  const Hit& at(int x, int y) const { return hits[size_t(y - y0) * stride + (x - x0)]; }
+};
+
+// Whether two hits lie on the same convex surface: one sphere, or one planar
+// face of a quad or box (same geometry, same plane).
+bool same_surface(const Scene& scene, const Hit& a, const Hit& b) {
+  if (!a.found || !b.found || a.geometry != b.geometry) return false;
+  if (scene.is_sphere(a)) return true;
+  return glm::dot(a.normal, b.normal) > 0.9999f &&
+         std::fabs(glm::dot(b.position - a.position, a.normal)) <= 1e-4f * (a.t + b.t);
+}
+
+// Area-weighted sums of the averaged channels over a pixel's footprint.
+struct FootprintSum {
+  glm::vec3 albedo{0.0f}, f0{0.0f}, normal{0.0f};
+  float roughness = 0.0f;
+  void add(const SurfaceParams& s, const glm::vec3& facing_normal, float area) {
+    albedo += s.diffuse_albedo * area;
+    f0 += s.f0 * area;
+    roughness += (s.has_specular ? s.alpha : 1.0f) * area;
+    normal += facing_normal * area;
+  }
+  void add_background(float area) { roughness += area; }
+};
+
+// One pixel whose corners lie on one convex surface: the square
+// [x0, x0 + size)^2 with corner hits c[0..3] (x0y0, x1y0, x0y1, x1y1) on it.
+struct SurfaceFootprint {
+  const PixelContext& pc;
+  const Hit& surface;
+  const Material& material;
+  int max_depth;
+  Rng& rng;
+  TraceContext& ctx;
+  FootprintSum& sum;
+
+  Hit point(float px, float py) const { return pc.scene.intersect_surface(surface, pc.rays.eye(), pc.rays.direction(px, py)); }
+
+  glm::vec3 facing(const Hit& h) const { return facing_normal(h.normal, pc.rays.eye() - h.position); }
+
+  // A square whose corners share one region of the material's maps is
+  // constant (the region is convex, and so is the square's footprint on a
+  // face); otherwise split it in four, down to max_depth, where a square that
+  // still holds an edge takes one jittered sample.
+  void square(float x0, float y0, float size, const Hit (&c)[4], int depth) {
+    const float area = size * size;
+    bool found = true, same = true;
+    for (const Hit& h : c) found = found && h.found;
+    if (found)
+      for (int k = 1; k < 4 && same; ++k) same = same_material_region(material, c[0].position, c[k].position);
+    if (found && same) {
+      const glm::vec3 n = facing(c[0]) + facing(c[1]) + facing(c[2]) + facing(c[3]);
+      sum.add(evaluate_material(material, c[0].position), glm::normalize(n), area);
+      return;
+    }
+    if (depth == max_depth || !found) {
+      const glm::vec2 u = rng.next2();
+      const glm::vec3 dir = pc.rays.direction(x0 + u.x * size, y0 + u.y * size);
+      Hit h = pc.scene.intersect_surface(surface, pc.rays.eye(), dir);
+      if (!h.found) h = pc.scene.intersect(pc.rays.eye(), dir, ctx);  // a ray grazing a sphere
+      if (!h.found) return sum.add_background(area);
+      return sum.add(evaluate_material(pc.scene.material_of(h), h.position), facing_normal(h.normal, -dir), area);
+    }
+    const float half = 0.5f * size;
+    const Hit top = point(x0 + half, y0), left = point(x0, y0 + half), mid = point(x0 + half, y0 + half),
+              right = point(x0 + size, y0 + half), bottom = point(x0 + half, y0 + size);
+    square(x0, y0, half, {c[0], top, left, mid}, depth + 1);
+    square(x0 + half, y0, half, {top, c[1], mid, right}, depth + 1);
+    square(x0, y0 + half, half, {left, mid, c[2], bottom}, depth + 1);
+    square(x0 + half, y0 + half, half, {mid, right, bottom, c[3]}, depth + 1);
+  }
+};
+
+// The material channels as pixel-footprint averages: albedo, specular_f0,
+// roughness and normal over the pixel's box footprint [x, x+1) x [y, y+1),
+// the footprint the radiance samples beyond the first (and so the
+// references) are spread over. Unjittered: the frame's jitter moves only the
+// radiance sample 0 ray and the point-sampled channels (depth, position,
+// motion). Background counts with the background's values (albedo and F0 0,
+// roughness 1), so a silhouette pixel's albedo is its coverage-weighted mean,
+// as its converged radiance is. The normal is the renormalised mean facing
+// normal of the surfaces in the footprint, and 0 when the point-sampled depth
+// says background (normal 0 <=> depth +inf, as before). Random numbers depend
+// on (seed, pixel) but not on the frame: a still camera gets the same
+// G-buffers every frame (no flicker from them), and they are a stream of
+// their own, so the radiance samples are those of the point-sampled G-buffer.
+//
+// Two cases, by the rays through the pixel's four corners (traced once per
+// tile, shared by neighbouring pixels):
+// - all four hit one convex surface (one sphere, or one face of a quad or
+//   box): the whole footprint lies on it, as its screen projection is convex.
+//   No more rays: sub-squares are intersected with the surface analytically
+//   and split where the material's maps change, down to 1/(4K) of a pixel
+//   (1/16 by default), with one jittered sample in each finest square that
+//   still holds a texture edge. Exact where the maps are constant, so the
+//   whole face of a plain material costs one material evaluation. (An object
+//   smaller than the pixel that covers none of its corners is missed.)
+// - otherwise (a silhouette or a crease in the pixel): a K x K jittered
+//   stratified grid of G-buffer rays (primary hit + material, no path).
+void footprint_gbuffer(const PixelContext& pc, int x, int y, const TileCorners& corners, bool centre_hit,
+                       const glm::vec3& centre_normal, size_t i, FrameBuffers& fb, TraceContext& ctx) {
+  const Scene& scene = pc.scene;
+  const int k = pc.settings.gbuffer_grid;
+  const Hit& c00 = corners.at(x, y);
+  const Hit(&c)[4] = {c00, corners.at(x + 1, y), corners.at(x, y + 1), corners.at(x + 1, y + 1)};
+  Rng rng(pc.settings.seed ^ 0x6B0FF5E7u, 0x9B1D5EEDu, static_cast<uint32_t>(i));
+  FootprintSum sum;
+  if (same_surface(scene, c00, c[1]) && same_surface(scene, c00, c[2]) && same_surface(scene, c00, c[3])) {
+    int depth = 0;
+    while ((1 << depth) < 4 * k) ++depth;
+    SurfaceFootprint{pc, c00, scene.material_of(c00), depth, rng, ctx, sum}.square(float(x), float(y), 1.0f, c, 0);
+  } else {
+    const float cell = 1.0f / static_cast<float>(k);
+    const float area = cell * cell;
+    const glm::vec3 eye = pc.rays.eye();
+    for (int sy = 0; sy < k; ++sy)
+      for (int sx = 0; sx < k; ++sx) {
+        const glm::vec2 u = rng.next2();
+        const glm::vec3 dir = pc.rays.direction(x + (sx + u.x) * cell, y + (sy + u.y) * cell);
+        const Hit h = scene.intersect(eye, dir, ctx);
+        if (h.found) sum.add(evaluate_material(scene.material_of(h), h.position), facing_normal(h.normal, -dir), area);
+        else sum.add_background(area);
+      }
+  }
+  put3(fb.albedo, i, sum.albedo);
+  put3(fb.specular_f0, i, sum.f0);
+  fb.roughness[i] = sum.roughness;
+  if (centre_hit) {
+    const float len = glm::length(sum.normal);
+    put3(fb.normal, i, len > 1e-6f ? sum.normal / len : centre_normal);
+  }
+}
+
+void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corners, FrameBuffers& fb,
+                  TraceContext& ctx) {
   const RenderSettings& st = pc.settings;
   const ChannelSet& want = st.channels;
   const Scene& scene = pc.scene;
@@ -116,16 +255,21 @@ void render_pixel(const PixelContext& pc, int x, int y, FrameBuffers& fb, TraceC
   SurfaceParams surface0;
   if (hit0.found) surface0 = evaluate_material(scene.material_of(hit0), hit0.position);
   if (want.gbuffer) {
+    // Point-sampled at the radiance sample 0 ray (centre + jitter): depth and
+    // position. Averaging them across a silhouette would invent geometry that
+    // is in neither surface; the motion below comes from the same point.
     put3(fb.position, i, world);
-    if (hit0.found) {
+    fb.depth[i] = hit0.found ? -(pc.view * glm::vec4(world, 1.0f)).z : kInf;
+    if (st.gbuffer_grid > 0) {
+      footprint_gbuffer(pc, x, y, corners, hit0.found, hit0.found ? facing_normal(hit0.normal, -dir0) : glm::vec3(0.0f), i,
+                        fb, ctx);
+    } else if (hit0.found) {
       put3(fb.albedo, i, surface0.diffuse_albedo);
       put3(fb.specular_f0, i, surface0.f0);
       fb.roughness[i] = surface0.has_specular ? surface0.alpha : 1.0f;
       put3(fb.normal, i, facing_normal(hit0.normal, -dir0));
-      fb.depth[i] = -(pc.view * glm::vec4(world, 1.0f)).z;
     } else {
       fb.roughness[i] = 1.0f;
-      fb.depth[i] = kInf;
     }
   }
   if (want.motion) {
@@ -233,10 +377,21 @@ void render_frame_into(const Scene& scene, const Camera& camera, const Camera& p
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     TraceContext ctx;
+    TileCorners corners;
+    const bool footprint = settings.channels.gbuffer && settings.gbuffer_grid > 0;
     for (int t = next_tile++; t < tiles_x * tiles_y; t = next_tile++) {
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-      for (int y = y0; y < std::min(y0 + tile, settings.height); ++y)
-        for (int x = x0; x < std::min(x0 + tile, settings.width); ++x) render_pixel(pc, x, y, fb, ctx);
+      const int x1 = std::min(x0 + tile, settings.width), y1 = std::min(y0 + tile, settings.height);
+      if (footprint) {
+        corners.x0 = x0, corners.y0 = y0, corners.stride = x1 - x0 + 1;
+        corners.hits.resize(size_t(corners.stride) * (y1 - y0 + 1));
+        for (int y = y0; y <= y1; ++y)
+          for (int x = x0; x <= x1; ++x)
+            corners.hits[size_t(y - y0) * corners.stride + (x - x0)] =
+                scene.intersect(rays.eye(), rays.direction(float(x), float(y)), ctx);
+      }
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) render_pixel(pc, x, y, corners, fb, ctx);
     }
     rays_traced += ctx.rays;
   };

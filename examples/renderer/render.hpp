@@ -27,6 +27,10 @@ struct RenderSettings {
   double spp = 1.0;       // < 1: each pixel is sampled with this probability; fractions add a sample likewise
   uint32_t seed = 1;
   bool jitter = false;    // per-frame Halton sub-pixel camera jitter
+  // Albedo, specular_f0, roughness and normal are pixel-footprint averages over a
+  // gbuffer_grid x gbuffer_grid jittered stratified grid of G-buffer-only rays
+  // (primary hit + material, no path). 0: point-sampled from the radiance sample 0 ray.
+  int gbuffer_grid = 4;
   int max_depth = 8;      // path vertices after the primary hit
   bool next_event = true; // false: BSDF sampling only (tests compare the two estimators)
   int threads = 0;        // 0: hardware concurrency

@@ -170,6 +170,7 @@ void Scene::add_sphere(const glm::vec3& centre, float radius, int material) {
   shape.material = material;
   shape.sphere = true;
   shape.centre = centre;
+  shape.radius = radius;
   if (materials_[material].kind == MaterialKind::Emitter) {
     Light l;
     l.kind = Light::Kind::Sphere;
@@ -210,6 +211,27 @@ void Scene::commit() {
     light_cdf_.push_back(running);
   }
   if (!light_cdf_.empty()) light_cdf_.back() = 1.0f;
+}
+
+Hit Scene::intersect_surface(const Hit& on, const glm::vec3& o, const glm::vec3& d) const {
+  Hit hit;
+  const Shape& s = shapes_[on.geometry];
+  if (s.sphere) {
+    hit.t = sphere_root(glm::vec4(s.centre, s.radius), o, d, 0.0f, INFINITY);
+    if (!(hit.t > 0.0f)) return hit;
+    hit.position = o + hit.t * d;
+    hit.normal = glm::normalize(hit.position - s.centre);
+  } else {
+    const float denom = glm::dot(d, on.normal);
+    if (denom == 0.0f) return hit;
+    hit.t = glm::dot(on.position - o, on.normal) / denom;
+    if (!(hit.t > 0.0f)) return hit;
+    hit.position = o + hit.t * d;
+    hit.normal = on.normal;
+  }
+  hit.found = true;
+  hit.geometry = on.geometry;
+  return hit;
 }
 
 Hit Scene::intersect(const glm::vec3& o, const glm::vec3& d, TraceContext& ctx, float tfar) const {

@@ -69,6 +69,12 @@ class Scene {
   Hit intersect(const glm::vec3& origin, const glm::vec3& dir, TraceContext& ctx, float tfar = INFINITY) const;
   bool occluded(const glm::vec3& origin, const glm::vec3& dir, float tfar, TraceContext& ctx) const;
 
+  // The intersection of a ray with the surface `on` lies on, without Embree and
+  // without occlusion: a sphere's sphere, a triangle's (unbounded) plane. For
+  // G-buffer sub-samples of a pixel whose footprint is known to lie on `on`.
+  Hit intersect_surface(const Hit& on, const glm::vec3& origin, const glm::vec3& dir) const;
+  bool is_sphere(const Hit& hit) const { return shapes_[hit.geometry].sphere; }
+
   const Material& material_of(const Hit& hit) const { return materials_[shapes_[hit.geometry].material]; }
   // Emitted radiance leaving the hit towards -dir (one-sided quads emit only on their front).
   glm::vec3 emitted(const Hit& hit, const glm::vec3& dir) const;
@@ -89,6 +95,7 @@ class Scene {
     int light = -1;
     bool sphere = false;
     glm::vec3 centre{0.0f};
+    float radius = 0.0f;  // sphere
     std::vector<glm::vec3> normals;  // per triangle
   };
   void add_triangles(const std::vector<glm::vec3>& vertices, const std::vector<glm::uvec3>& triangles, int material,

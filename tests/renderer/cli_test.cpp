@@ -13,7 +13,7 @@ TEST(RendererCli, ParsesEveryOption) {
                                   "180", "--spp", "0.25", "--seed", "9", "--out", "o", "--reference", "512", "--cache",
                                   "c", "--server", "tcp://h:1", "--pipeline", "svgf", "--in-flight", "3", "--stats",
                                   "--spec-hit", "--jitter", "--max-depth", "5", "--threads", "2", "--send-split",
-                                  "--png", "--quiet"});
+                                  "--png", "--quiet", "--gbuffer-grid", "2"});
   EXPECT_EQ(o.scene, 3);
   EXPECT_EQ(o.frames, 10);
   EXPECT_EQ(o.first, 5);
@@ -31,6 +31,7 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_TRUE(o.render.channels.statistics && o.render.channels.specular_hit && o.render.jitter);
   EXPECT_EQ(o.render.max_depth, 5);
   EXPECT_EQ(o.render.threads, 2);
+  EXPECT_EQ(o.render.gbuffer_grid, 2);
   EXPECT_TRUE(o.send_split && o.png && o.quiet);
   EXPECT_FALSE(o.help);
 }
@@ -46,7 +47,8 @@ TEST(RendererCli, RejectsBadArguments) {
                                              {"--bogus"},
                                              {"--server", "tcp://h:1"},
                                              {"--png"},
-                                             {"--height", "12abc"}})
+                                             {"--height", "12abc"},
+                                             {"--gbuffer-grid", "-1"}})
     EXPECT_THROW(parse_cli(bad), UsageError) << bad[0];
   try {
     parse_cli({"--scene", "7"});
