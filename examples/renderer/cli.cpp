@@ -42,6 +42,8 @@ const char* const kUsage =
     "  --png              with --out, also DIR/frame_%04d.png (ACES tone-mapped radiance preview)\n"
     "  --reference SPP    render SPP-sample references into the cache (reused when present);\n"
     "                     with --out also copied to DIR/ref_%04d.exr\n"
+    "  --reference2       with --reference, also a second reference with an independent seed\n"
+    "                     (cache ref2_%04d.exr; with --out copied to DIR/ref2_%04d.exr)\n"
     "  --cache DIR        reference cache (default out/cache)\n"
     "  --server URL       stream frames to dnserver (tcp://HOST:PORT or unix:///path), write\n"
     "                     DIR/denoised_%04d.exr when --out is given\n"
@@ -103,6 +105,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--spec-hit") o.render.channels.specular_hit = true;
     else if (a == "--out") o.out = value();
     else if (a == "--reference") o.reference_spp = parse_int(a, value(), 1, 1 << 20);
+    else if (a == "--reference2") o.reference2 = true;
     else if (a == "--cache") o.cache = value();
     else if (a == "--server") o.server = value();
     else if (a == "--pipeline") o.pipeline = value();
@@ -114,6 +117,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
   }
   if (!o.server.empty() && o.pipeline.empty()) throw UsageError("--server needs --pipeline");
   if (o.png && o.out.empty()) throw UsageError("--png needs --out");
+  if (o.reference2 && !o.reference_spp) throw UsageError("--reference2 needs --reference");
   if (o.server.empty() && !o.pipeline.empty()) throw UsageError("--pipeline needs --server");
   return o;
 }
@@ -127,28 +131,32 @@ std::string frame_file(const std::string& dir, const char* pattern, int frame) {
 }
 
 void make_references(const Scene& scene, const CliOptions& o) {
-  for (int f = o.first; f < o.first + o.frames; ++f) {
-    ReferenceRequest rq;
-    rq.scene_id = o.scene;
-    rq.width = o.render.width;
-    rq.height = o.render.height;
-    rq.frame = o.hold_camera.value_or(f);
-    rq.spp = *o.reference_spp;
-    rq.seed = o.render.seed;
-    rq.threads = o.render.threads;
-    rq.cache_dir = o.cache;
-    const auto t0 = std::chrono::steady_clock::now();
-    bool rendered = false;
-    const std::string path = ensure_reference(scene, rq, rendered);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (rendered) std::fprintf(stderr, "dnrender: reference rendered %s (%.1f s)\n", path.c_str(), s);
-    else std::fprintf(stderr, "dnrender: reference reused %s\n", path.c_str());
-    if (!o.out.empty()) {
-      std::filesystem::create_directories(o.out);
-      std::filesystem::copy_file(path, frame_file(o.out, "ref_%04d.exr", f),
-                                 std::filesystem::copy_options::overwrite_existing);
+  for (int f = o.first; f < o.first + o.frames; ++f)
+    for (int index = 1; index <= (o.reference2 ? 2 : 1); ++index) {
+      ReferenceRequest rq;
+      rq.scene_id = o.scene;
+      rq.width = o.render.width;
+      rq.height = o.render.height;
+      rq.frame = o.hold_camera.value_or(f);
+      rq.spp = *o.reference_spp;
+      rq.seed = o.render.seed;
+      rq.index = index;
+      rq.threads = o.render.threads;
+      rq.cache_dir = o.cache;
+      const auto t0 = std::chrono::steady_clock::now();
+      bool rendered = false;
+      const std::string path = ensure_reference(scene, rq, rendered);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      // "reference2" for the second, so that scripts reading "reference rendered|reused PATH" see only the first.
+      const char* what = index == 1 ? "reference" : "reference2";
+      if (rendered) std::fprintf(stderr, "dnrender: %s rendered %s (%.1f s)\n", what, path.c_str(), s);
+      else std::fprintf(stderr, "dnrender: %s reused %s\n", what, path.c_str());
+      if (!o.out.empty()) {
+        std::filesystem::create_directories(o.out);
+        std::filesystem::copy_file(path, frame_file(o.out, index == 1 ? "ref_%04d.exr" : "ref2_%04d.exr", f),
+                                   std::filesystem::copy_options::overwrite_existing);
+      }
     }
-  }
 }
 
 }  // namespace

@@ -22,6 +22,7 @@ struct CliOptions {
   RenderSettings render;
   std::string out;                  // frames to DIR/frame_%04d.exr
   std::optional<int> reference_spp;
+  bool reference2 = false;          // also the second, independent reference (ref2_%04d.exr)
   std::string cache = "out/cache";
   std::string server, pipeline;
   int in_flight = 2;

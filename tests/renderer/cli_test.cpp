@@ -1,6 +1,10 @@
 // dnrender's argument parsing: every option, and clear errors for bad ones.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+
 #include "cli.hpp"
 #include "dn/protocol/channels.hpp"
 #include "stream.hpp"
@@ -13,7 +17,7 @@ TEST(RendererCli, ParsesEveryOption) {
                                   "180", "--spp", "0.25", "--seed", "9", "--out", "o", "--reference", "512", "--cache",
                                   "c", "--server", "tcp://h:1", "--pipeline", "svgf", "--in-flight", "3", "--stats",
                                   "--spec-hit", "--jitter", "--max-depth", "5", "--threads", "2", "--send-split",
-                                  "--png", "--quiet", "--gbuffer-grid", "2"});
+                                  "--png", "--quiet", "--gbuffer-grid", "2", "--reference2"});
   EXPECT_EQ(o.scene, 3);
   EXPECT_EQ(o.frames, 10);
   EXPECT_EQ(o.first, 5);
@@ -25,6 +29,7 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_EQ(o.out, "o");
   EXPECT_EQ(o.reference_spp, 512);
   EXPECT_EQ(o.cache, "c");
+  EXPECT_TRUE(o.reference2);
   EXPECT_EQ(o.server, "tcp://h:1");
   EXPECT_EQ(o.pipeline, "svgf");
   EXPECT_EQ(o.in_flight, 3);
@@ -34,6 +39,19 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_EQ(o.render.gbuffer_grid, 2);
   EXPECT_TRUE(o.send_split && o.png && o.quiet);
   EXPECT_FALSE(o.help);
+}
+
+// --reference2 writes the second reference next to the first in --out.
+TEST(RendererCli, SecondReferenceIsCopiedToOut) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dn_renderer_cli_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const std::string out = (dir / "seq").string(), cache = (dir / "cache").string();
+  ASSERT_EQ(run_cli(parse_cli({"--scene", "2", "--width", "32", "--height", "18", "--frames", "2", "--reference", "2",
+                               "--reference2", "--cache", cache, "--out", out, "--quiet"})),
+            0);
+  for (const char* name : {"ref_0000.exr", "ref2_0000.exr", "ref_0001.exr", "ref2_0001.exr", "frame_0001.exr"})
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / name)) << name;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(RendererCli, RejectsBadArguments) {
@@ -48,7 +66,8 @@ TEST(RendererCli, RejectsBadArguments) {
                                              {"--server", "tcp://h:1"},
                                              {"--png"},
                                              {"--height", "12abc"},
-                                             {"--gbuffer-grid", "-1"}})
+                                             {"--gbuffer-grid", "-1"},
+                                             {"--reference2"}})
     EXPECT_THROW(parse_cli(bad), UsageError) << bad[0];
   try {
     parse_cli({"--scene", "7"});
