@@ -18,6 +18,7 @@
 #include "frame_source.hpp"
 #include "presets.hpp"
 #include "progress.hpp"
+#include "sequence_metrics.hpp"
 
 namespace dn::cli {
 
@@ -43,6 +44,8 @@ const std::vector<Args::Spec> kSpecs = {
     {"output-format", "", true, false, "f32 | f16 output on the wire (default f16 with --fp16, else f32)", "FMT"},
     {"param", "", true, true, "pipeline parameter NAME=VALUE", "NAME=VALUE"},
     {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE and SSIM per frame", "PATTERN"},
+    {"reference2", "", true, false,
+     "second reference independent of -r: noise-corrected MSE and the references' noise floor", "PATTERN"},
     {"in-flight", "", true, false, "frames kept in flight (default 3)", "K"},
     {"token-file", "", true, false, "file holding the auth token (default $DN_TOKEN / $DN_TOKEN_FILE)", "FILE"},
     {"tonemap", "", true, false, "PNG and SSIM tone map: aces | reinhard | clamp (default aces)", "OP"},
@@ -51,12 +54,12 @@ const std::vector<Args::Spec> kSpecs = {
     {"motion-convention", "", true, false,
      "motion vectors in the input: to-previous | to-next | uv (default: preset's)", "NAME"},
     {"timeout", "", true, false, "seconds to wait for any one reply (default 120)", "SECONDS"},
-    {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
-    {"warmup", "", true, false,
-     "denoise the first N frames but leave them out of the means (metrics, timings, temporal error)", "N"},
     {"camera", "", true, false,
      "per-frame cameras: lines 'frame N view <16> projection <16>' (default: EXR header, else from the Position pass)",
      "FILE"},
+    {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
+    {"warmup", "", true, false,
+     "denoise the first N frames but leave them out of the means (metrics, timings, temporal error)", "N"},
     {"quiet", "-q", false, false, "no per-frame output", ""},
     {"help", "-h", false, false, "this help", ""},
 };
@@ -121,6 +124,8 @@ int run_denoise(const std::vector<std::string>& argv) {
   const auto output = args.get("output");
   const auto png = args.get("png");
   const auto reference = args.get("reference");
+  const auto reference2 = args.get("reference2");
+  if (reference2 && !reference) throw UsageError("--reference2 needs -r/--reference");
   const bool fp16 = args.has("fp16");
   const bool quiet = args.has("quiet");
   const bool exr_float = args.has("exr-float");
@@ -181,15 +186,19 @@ int run_denoise(const std::vector<std::string>& argv) {
     if (args.has("end") && end != start) throw UsageError("--input has no frame-number placeholder (%04d or ####)");
     frames.push_back(start);
   }
-  for (const auto* opt : {&output, &png, &reference})
+  for (const auto* opt : {&output, &png, &reference, &reference2})
     if (*opt && frames.size() > 1 && !has_frame_placeholder(**opt))
       throw UsageError("output/reference pattern '" + **opt + "' has no frame-number placeholder (%04d or ####)");
+
+  if (reference2) check_reference2_files(frames, [&](long long n) { return format_frame_path(*reference2, n); });
 
   // ---- first frame: size and channel layout ---------------------------------
   const std::string first_path = format_frame_path(input, frames.front());
   image::ExrReader first(first_path);
   const int width = first.width(), height = first.height();
   Preset preset = make_preset(args.get_or("preset", "auto"), first.channels(), args.get_or("layer", ""));
+  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
+  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline_name));
 
   // ---- connect and open the session -----------------------------------------
   client::ConnectOptions copts;
@@ -197,8 +206,6 @@ int run_denoise(const std::vector<std::string>& argv) {
   if (auto tf = args.get("token-file")) copts.token_file = *tf;
   copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   client::Connection conn = client::Connection::connect(url, copts);
-  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
-  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline_name));
   const protocol::PipelineInfo* pipeline = conn.find_pipeline(pipeline_name);
   if (!pipeline && !conn.welcome().pipelines.empty()) {
     std::string names;
@@ -237,6 +244,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   // ---- the pipelined loop ------------------------------------------------------
   Progress progress(frames.size(), Progress::stderr_is_tty(), quiet);
   Totals totals;
+  NoiseCorrectedTotals nc_totals;
   const auto t_begin = std::chrono::steady_clock::now();
   std::deque<long long> submitted;  // frame numbers in flight, in order
   std::vector<float> previous_rgb;  // the last output, for the temporal error
@@ -262,6 +270,7 @@ int run_denoise(const std::vector<std::string>& argv) {
       image::write_png_rgb8(path, int(r.width), int(r.height), bytes.data());
     }
     std::optional<Metrics> m;
+    std::optional<NoiseCorrected> nc;
     if (reference) {
       int rw = 0, rh = 0;
       const std::string path = format_frame_path(*reference, number);
@@ -272,6 +281,10 @@ int run_denoise(const std::vector<std::string>& argv) {
       m = Metrics{image::rmse(rgb.data(), ref.data(), rgb.size()),
                   image::relative_mse(rgb.data(), ref.data(), rgb.size()),
                   image::ssim_tonemapped(rgb.data(), ref.data(), rw, rh, tonemap, exposure)};
+      if (reference2) {
+        nc = noise_corrected_metrics(rgb, ref, rw, rh, format_frame_path(*reference2, number));
+        if (measured) nc_totals.add(*nc);
+      }
       if (measured) {
         totals.with_ref++;
         totals.rmse += m->rmse;
@@ -301,10 +314,13 @@ int run_denoise(const std::vector<std::string>& argv) {
         line += (i ? ", " : "") + r.timings[i].name + " " + fmt("%.2f", r.timings[i].milliseconds);
       line += "]";
     }
+    if (auto cam = cameras.record(number); cam && cam->source == FrameCameras::Source::Recovered)
+      line += fmt("  camera residual %.3f px", cam->rms_px);
     std::string status = fmt("e2e %.1f ms", r.latency.count()) + fmt("  server %.1f ms", r.total_timing_ms());
     if (m) {
       const std::string q = fmt("  rmse %.5f", m->rmse) + fmt("  relmse %.5f", m->relmse) + fmt("  ssim %.4f", m->ssim);
       line += q;
+      if (nc) line += noise_corrected_status(*nc);
       status += fmt("  rmse %.5f", m->rmse) + fmt("  ssim %.4f", m->ssim);
     }
     progress.frame_done(line, status);
@@ -314,8 +330,6 @@ int run_denoise(const std::vector<std::string>& argv) {
     try {
       return fn();
     } catch (const client::Error& e) {
-    if (auto cam = cameras.record(number); cam && cam->source == FrameCameras::Source::Recovered)
-      line += fmt("  camera residual %.3f px", cam->rms_px);
       const long long n = submitted.empty() ? -1 : newest ? submitted.back() : submitted.front();
       throw std::runtime_error("frame " + std::to_string(n) + ": " + e.what());
     }
@@ -363,11 +377,13 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double n = double(std::max<size_t>(totals.frames, 1));
     std::fprintf(stderr, "dn: %zu frames in %.2f s (%.2f fps), mean e2e %.1f ms, mean server %.1f ms\n", totals.frames,
                  wall, wall > 0 ? double(handled) / wall : 0.0, totals.latency_ms / n, totals.server_ms / n);
+    std::fprintf(stderr, "dn: %s\n", cameras.summary().c_str());
   }
   if (reference && totals.with_ref) {
     const double n = double(totals.with_ref);
     std::printf("mean rmse %.6f  relmse %.6f  ssim %.5f  (%zu frames, ssim on %s-tone-mapped luma)\n",
                 totals.rmse / n, totals.relmse / n, totals.ssim / n, totals.with_ref, image::to_string(tonemap));
+    if (nc_totals.frames) std::printf("mean%s\n", noise_corrected_status(nc_totals.mean()).c_str());
   }
   if (auto summary = args.get("summary")) {
     ensure_parent_dir(*summary);
@@ -377,13 +393,14 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double r = double(std::max<size_t>(totals.with_ref, 1));
     const bool have_ref = totals.with_ref > 0;
     const double pixels = double(session.info().width) * session.info().height;
-    std::fprintf(stderr, "dn: %s\n", cameras.summary().c_str());
-    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel\n");
-    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f\n", have_ref ? totals.rmse / r : NAN,
+    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel%s\n",
+                 noise_corrected_summary_header());
+    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f%s\n", have_ref ? totals.rmse / r : NAN,
                  have_ref ? totals.relmse / r : NAN, have_ref ? totals.ssim / r : NAN, totals.latency_ms / n,
                  totals.server_ms / n, totals.frames, wall > 0 ? double(handled) / wall : 0.0,
                  totals.device_ms / n, totals.temporal_pairs ? totals.temporal / double(totals.temporal_pairs) : NAN,
-                 pixels > 0 ? double(session.info().device_bytes) / pixels : 0.0);
+                 pixels > 0 ? double(session.info().device_bytes) / pixels : 0.0,
+                 noise_corrected_summary_values(nc_totals.mean()).c_str());
     std::fclose(f);
   }
   return 0;
