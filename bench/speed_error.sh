@@ -4,7 +4,14 @@
 # then streamed through every pipeline the server offers and the baselines
 # (the noisy input, plain temporal accumulation, and a non-temporal
 # edge-avoiding a-trous filter). Writes to OUT: results.tsv, results.md (the
-# table), speed_error.png (plot) and scene<N>.png (side by side with crops).
+# table), region.tsv (error over glossy surfaces, highlights, disocclusions and
+# roughness-mapped surfaces), speed_error.png (plot) and scene<N>.png (side by
+# side with crops).
+# Two independent references per frame (dnrender --reference2: the second has
+# a seed of its own; the noisy inputs are rendered with seed 3, so they share
+# random numbers with neither) give the noise-corrected MSE and the references'
+# own noise (dn denoise --reference2, metrics.hpp); --no-reference2 skips the
+# second one.
 # --docs also copies the images to docs/images/ and puts the section into
 # docs/results.md between its speed-error markers.
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
@@ -20,10 +27,11 @@ ref_spp=256
 out=out/bench
 cache=out/cache
 docs=0
+reference2=1
 usage() {
   cat <<EOF
 usage: bench/speed_error.sh [--scenes "1 2 3 4"] [--frames N] [--still N] [--size WxH]
-                            [--ref-spp S] [--out DIR] [--cache DIR] [--docs]
+                            [--ref-spp S] [--out DIR] [--cache DIR] [--no-reference2] [--docs]
 defaults: --scenes "$scenes" --frames $frames --still $still --size $size --ref-spp $ref_spp --out $out
 EOF
 }
@@ -37,6 +45,7 @@ while [ $# -gt 0 ]; do
     --out) out=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
     --docs) docs=1; shift ;;
+    --no-reference2) reference2=0; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "speed_error: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
@@ -76,21 +85,30 @@ rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emi
 column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 
 # The roughness values of each scene's roughness-mapped surfaces (dnrender
-# scenes.cpp): error over those pixels only goes to region.tsv.
+# scenes.cpp); region_metrics adds glossy surfaces, highlights and
+# disocclusions for every scene: error over those pixels only goes to region.tsv.
 region_roughness() { case "$1" in 1) echo 0.04,0.35 ;; 5) echo 0.03,0.4 ;; esac; }
 region="$out/region.tsv"
-printf 'scene\tmethod\trmse\trelmse\tssim\tpixels\n' > "$region"
+printf 'scene\tregion\tmethod\trmse\trelmse\tssim\tnc_mse\tnc_relmse\tref_noise_mse\tpixels\n' > "$region"
 
 results="$out/results.tsv"
-printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\n' > "$results"
+printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\tnc_mse\tnc_relmse\tref_noise_mse\n' > "$results"
 last=$(printf '%04d' $((frames - 1)))
 for s in $scenes; do
   dir="$out/scene$s"
   echo "speed_error: scene $s: rendering $frames frames + $still still frames at ${width}x${height}, references at $ref_spp spp"
+  # The references (seed 1, the second its own) into refs/ (dnrender also renders
+  # that seed's noisy frames there: not used), the noisy inputs at seed 3.
+  ref2_args=()
+  [ "$reference2" = 0 ] || ref2_args=(--reference2)
+  "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/refs" \
+    --reference "$ref_spp" "${ref2_args[@]}" --cache "$cache" --quiet
+  rm -f "$dir/refs"/frame_*.exr
+  [ "$reference2" = 0 ] || ref2_args=(--reference2 "$dir/refs/ref2_%04d.exr")
   "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/input" \
-    --reference "$ref_spp" --cache "$cache" --quiet
+    --seed 3 --quiet
   "$dnrender" --scene "$s" --frames "$still" --hold-camera 0 --width "$width" --height "$height" \
-    --out "$dir/still" --quiet
+    --out "$dir/still" --seed 3 --quiet
   panels=()
   for row in "${rows[@]}"; do
     read -r label pipeline params <<< "$row"
@@ -101,21 +119,25 @@ for s in $scenes; do
     echo "speed_error: scene $s: $label"
     "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
       --input "$dir/input/frame_%04d.exr" --start 0 --end $((frames - 1)) \
-      --output "$dir/$label/frame_%04d.exr" -r "$dir/input/ref_%04d.exr" --summary "$dir/$label/moving.tsv"
+      --output "$dir/$label/frame_%04d.exr" -r "$dir/refs/ref_%04d.exr" "${ref2_args[@]}" \
+      --summary "$dir/$label/moving.tsv"
     "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
       --input "$dir/still/frame_%04d.exr" --start 0 --end $((still - 1)) --warmup $((still / 2)) \
       --summary "$dir/$label/still.tsv"
     m="$dir/$label/moving.tsv"
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" "$(column "$m" relmse)" \
-      "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" "$(column "$m" device_ms)" \
-      "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" \
-      "$(column "$m" device_bytes_per_pixel)" >> "$results"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" \
+      "$(column "$m" relmse)" "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" \
+      "$(column "$m" device_ms)" "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" \
+      "$(column "$m" device_bytes_per_pixel)" "$(column "$m" nc_mse)" "$(column "$m" nc_relmse)" \
+      "$(column "$m" ref_noise_mse)" >> "$results"
     panels+=("$dir/$label/frame_$last.exr")
-    if [ -n "$(region_roughness "$s")" ]; then
-      "$bin/bench/region_metrics" --output "$dir/$label/frame_%04d.exr" --reference "$dir/input/ref_%04d.exr" \
-        --input "$dir/input/frame_%04d.exr" --frames "$frames" --roughness "$(region_roughness "$s")" |
-        awk -F'\t' -v s="$s" -v m="$label" 'NR == 2 { print s "\t" m "\t" $0 }' >> "$region"
-    fi
+    region_args=(--region glossy,highlights,disocclusion)
+    [ -z "$(region_roughness "$s")" ] ||
+      region_args=(--roughness "$(region_roughness "$s")" --region roughness-mapped,glossy,highlights,disocclusion)
+    [ "$reference2" = 0 ] || region_args+=(--reference2 "$dir/refs/ref2_%04d.exr")
+    "$bin/bench/region_metrics" --output "$dir/$label/frame_%04d.exr" --reference "$dir/refs/ref_%04d.exr" \
+      --input "$dir/input/frame_%04d.exr" --frames "$frames" --method "$label" "${region_args[@]}" |
+      awk -v s="$s" 'NR > 1 { print s "\t" $0 }' >> "$region"
   done
   # Detail areas (fractions of the frame) per scene.
   case "$s" in
@@ -125,16 +147,16 @@ for s in $scenes; do
     4) crops=(--crop 0.35,0.55,0.3,0.3 --crop 0.6,0.3,0.25,0.25) ;;
     *) crops=(--crop 0.3,0.2,0.25,0.3 --crop 0.35,0.7,0.3,0.3) ;;
   esac
-  "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panels[@]}" "$dir/input/ref_$last.exr"
+  "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panels[@]}" "$dir/refs/ref_$last.exr"
 done
 
 # The table, grouped by scene.
 labels=""
 for row in "${rows[@]}"; do labels+="${row%% *} "; done
 {
-  echo "| scene | method | RMSE | relMSE | SSIM | temporal | device ms/frame | end-to-end ms/frame | device B/pixel |"
-  echo "|---|---|---|---|---|---|---|---|---|"
-  awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9 }' "$results"
+  echo "| scene | method | RMSE | relMSE | SSIM | nc MSE | nc relMSE | reference noise MSE | temporal | device ms/frame | end-to-end ms/frame | device B/pixel |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+  awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $10, $11, $12, $6, $7, $8, $9 }' "$results"
 } > "$out/results.md"
 
 # The plot: relMSE against device time, one colour per scene, points labelled.
@@ -165,11 +187,11 @@ cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
   cat "$out/results.md"
   if [ "$(wc -l < "$region")" -gt 1 ]; then
     echo
-    echo "Over the roughness-mapped surfaces only (pixels whose roughness is one of the map's values: scene 1 floor, scene 5 floor and back panel):"
+    echo "Over regions of the frame only (bench/region_metrics: roughness-mapped = pixels whose roughness is one of the map's values, scene 1 floor, scene 5 floor and back panel; glossy = roughness below 0.3; highlights = reference luminance above 20 × the frame's median, dilated 1 px; disocclusion = no matching previous-frame depth where the motion points, from the second frame on):"
     echo
-    echo "| scene | method | RMSE | relMSE | SSIM | pixels/frame |"
-    echo "|---|---|---|---|---|---|"
-    awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.0f |\n", $1, $2, $3, $4, $5, $6 }' "$region"
+    echo "| scene | region | method | RMSE | relMSE | SSIM | nc MSE | nc relMSE | reference noise MSE | pixels/frame |"
+    echo "|---|---|---|---|---|---|---|---|---|---|"
+    awk -F'\t' 'NR > 1 { printf "| %s | %s | %s | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %.0f |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10 }' "$region"
   fi
   echo
   echo "![speed against error](images/speed_error.png)"

@@ -1,8 +1,11 @@
 #!/bin/sh
 # bench/speed_error.sh at 64x36 on scene 1: every row is present with finite
-# numbers (also over the roughness-mapped floor), the filters flicker less
-# than the noisy input on the still shot, and the plot and the side-by-side
-# image are written.
+# numbers (also the noise-corrected columns from the second reference, and
+# every region: the roughness-mapped floor, glossy surfaces, highlights,
+# disocclusions), the noise-corrected MSE is below the plain MSE for the noisy
+# input (the references' noise removed), the filters flicker less than the
+# noisy input on the still shot, and the plot and the side-by-side image are
+# written.
 # usage: speed_error_test.sh SOURCE_DIR BUILD_DIR WORKDIR
 set -eu
 src=$1
@@ -15,11 +18,20 @@ DN_SKIP_SETUP=1 DN_BUILD_DIR="$build" "$src/bench/speed_error.sh" --scenes 1 --f
 results="$dir/out/results.tsv"
 for method in noisy accumulate atrous svgf svgf-fb svgf-split; do
   grep -q "^1	$method	" "$results" || { echo "no row for $method"; cat "$results"; exit 1; }
-  grep -q "^1	$method	" "$dir/out/region.tsv" || { echo "no floor row for $method"; cat "$dir/out/region.tsv"; exit 1; }
+  for region in roughness-mapped glossy highlights disocclusion; do
+    grep -q "^1	$region	$method	" "$dir/out/region.tsv" ||
+      { echo "no $region row for $method"; cat "$dir/out/region.tsv"; exit 1; }
+  done
 done
 # Every numeric field is a finite number.
-awk -F'\t' 'FNR > 1 { for (i = 3; i <= NF; ++i) if ($i !~ /^-?[0-9.]+(e[-+]?[0-9]+)?$/) { print FILENAME " field " i " of row " FNR ": " $i; bad = 1 } }
+# (results.tsv: from field 3 on; region.tsv: scene, region, method, then numbers)
+awk -F'\t' 'FNR == 1 { first = FILENAME ~ /region/ ? 4 : 3 }
+            FNR > 1 { for (i = first; i <= NF; ++i) if ($i !~ /^-?[0-9.]+(e[-+]?[0-9]+)?$/) { print FILENAME " field " i " of row " FNR ": " $i; bad = 1 } }
             END { exit bad }' "$results" "$dir/out/region.tsv"
+# Noise-corrected MSE (column 10) against the plain MSE (RMSE^2, column 3) and
+# the references' noise (column 12): for the noisy input, nc = plain - noise
+# within the sampling error; checked loosely (nc < plain, noise > 0).
+awk -F'\t' '$2 == "noisy" { if (!($10 < $3 * $3 && $12 > 0)) { print "nc_mse " $10 " rmse^2 " $3 * $3 " ref_noise " $12; exit 1 } }' "$results"
 # Temporal error on the still shot: any filter well below the noisy input.
 awk -F'\t' '$2 == "noisy" { noisy = $6 } $2 == "accumulate" { acc = $6 } $2 == "svgf" { svgf = $6 }
             END { if (!(acc < 0.5 * noisy && svgf < 0.5 * noisy)) { print "temporal: noisy " noisy " accumulate " acc " svgf " svgf; exit 1 } }' "$results"
