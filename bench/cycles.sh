@@ -124,12 +124,13 @@ device=$("$dn" ping --server "$server_url" --count 1 | sed -n '1s/.* on //p')
 
 # Rows: "label pipeline [NAME=VALUE | channels=LIST ...]": the noisy input,
 # every pipeline the server offers (new ones are picked up without changes),
-# then svgf on the split lighting (DiffDir+DiffInd, GlossDir+GlossInd).
+# then svgf on the split lighting (DiffDir+DiffInd over DiffCol, GlossDir+GlossInd
+# over GlossCol: the lighting forms, docs/protocol.md §7.4).
 rows=("noisy passthrough")
 for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" { print $2 }'); do
   case "$p" in passthrough) ;; *) rows+=("$p $p") ;; esac
 done
-rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emission")
+rows+=("svgf-split svgf channels=diffuse_lighting,specular_lighting,specular_albedo,albedo,normal,depth,motion,emission,roughness")
 
 column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 

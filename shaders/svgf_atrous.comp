@@ -2,8 +2,9 @@
 // svgf_atrous: one edge-stopping a-trous iteration (docs/pipelines.md,
 // "svgf in detail", 3); one pipeline specialization per iteration (STEP).
 // For a foreground pixel p with (c_p, v_p):
-//   g   = 3x3 gaussian {1/4, 1/2, 1/4}^2 of the variance over the pixels inside
-//         the image, renormalised
+//   g   = 3x3 gaussian {1/4, 1/2, 1/4}^2 of the variance over the pixels q
+//         inside the image whose luminance step to p their own noise explains,
+//         |l_p - l_q| <= 3 sqrt(v_q) (the HDR step rule; p always), renormalised
 //   phi_l = phi_colour * sqrt(g + 1e-20)
 //   taps q = p + STEP * (i, j), i, j in -2..2, inside and foreground, q != p:
 //     w_q = h(i) h(j) * exp(-|z_p - z_q| / (phi_depth * max(dz_p, 1e-8) * STEP * |(i, j)|)
@@ -81,8 +82,12 @@ void main() {
           for (int xx = -1; xx <= 1; ++xx) {
             ivec2 q = p + ivec2(xx, yy);
             if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-            float kk = g[xx + 1] * g[yy + 1];
-            gv += kk * src.data[uint(q.y) * uint(size.x) + uint(q.x)].w;
+            // HDR step rule: a neighbour's variance counts only where its
+            // own noise explains the luminance step to p.
+            vec4 sq = src.data[uint(q.y) * uint(size.x) + uint(q.x)];
+            bool same = (xx == 0 && yy == 0) || abs(cl[k] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w);
+            float kk = same ? g[xx + 1] * g[yy + 1] : 0.0;
+            gv += kk * sq.w;
             gw += kk;
           }
         }

@@ -1,6 +1,7 @@
 #version 450
-// svgf_reproject: sanitize, demodulate, luminance moments and temporal
-// integration of colour and moments (docs/pipelines.md, "svgf in detail", 1).
+// svgf_reproject: sanitize, demodulate, luminance moments, history clipping
+// (CLIP) and temporal integration of colour and moments (docs/pipelines.md,
+// "svgf in detail", 1).
 // One invocation per pixel.
 //
 // Resources: passes/svgf_reproject.pass (binding 0 FrameConstants); the
@@ -15,6 +16,35 @@
 #include "passes/svgf_reproject.pass"
 
 #include "svgf.glsl"
+#include "svgf_signal.glsl"
+#include "clip.glsl"
+
+// History clipping (CLIP): the per-channel min/max of the prefiltered current
+// signal (svgf_clip_prefilter) over the 5x5 foreground pixels around p (the
+// caller adds p's own current value, so a highlight keeps its peak).
+// False when no pixel of the window is foreground (then nothing is clipped).
+bool clip_box(ivec2 pos, out vec3 lo, out vec3 hi) {
+  lo = vec3(1e38);
+  hi = vec3(-1e38);
+  bool any = false;
+  for (int yy = -2; yy <= 2; ++yy)
+    for (int xx = -2; xx <= 2; ++xx) {
+      ivec2 q = pos + ivec2(xx, yy);
+      if (!dn_inside(q, frame.size.xy)) continue;
+      vec4 v = neighbourhood.data[uint(q.y) * frame.size.x + uint(q.x)];
+      if (v.w == 0.0) continue;
+      lo = min(lo, v.rgb);
+      hi = max(hi, v.rgb);
+      any = true;
+    }
+  return any;
+}
+
+// Whether p's history is clipped: roughness below clip_roughness (NaN
+// counts as a mirror).
+bool clipped_here(uint p) {
+  return CLIP && !(DN_LOAD1(roughness, ROUGHNESS_HALF, p) >= DN_PARAM_VALUE(svgf, clip_roughness));
+}
 
 // Falcor's consistency test of a previous pixel q (the previous pixel must
 // have left history: stored depth > 0).
@@ -46,10 +76,7 @@ void main() {
   uvec2 size = frame.size.xy;
   ivec2 pos = ivec2(p % size.x, p / size.x);
 
-  vec3 c = dn_svgf_sanitize(DN_LOAD3(signal, SIGNAL_HALF, p));
-  if (SUBTRACT_EMISSION) c = max(c - dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
-  vec3 a = DEMODULATE ? dn_svgf_albedo(DN_LOAD3(modulator, MODULATOR_HALF, p)) : vec3(1.0);
-  vec3 d = c / a;
+  vec3 d = dn_svgf_current(p);
   float l = dn_luminance(d);
   vec2 m = vec2(l, l * l);
   float z = dn_svgf_depth(p);
@@ -95,6 +122,39 @@ void main() {
       prev = sc / sw;
       prev_m = sm / sw;
       prev_len = floor(sl / sw + 0.5);  // integral lengths: no fp32 vs exact flips of the len < 4 test
+    }
+  }
+  // Clipped signals (highlights and reflections): reject a history the
+  // current frame contradicts, else clip it to the current neighbourhood.
+  if (valid && clipped_here(p)) {
+    vec4 pre = neighbourhood.data[p];
+    if (pre.w > 0.0 && dn_history_contradicted(dn_luminance(pre.rgb), dn_luminance(prev), prev_m)) valid = false;
+    vec3 lo, hi;
+    if (valid && clip_box(pos, lo, hi)) {
+      // The prefiltered box narrowed by the raw 3x3 range of the current
+      // signal (a small highlight's blur widens the first beyond it), where
+      // the two overlap; then widened to p's own current value.
+      vec3 raw_lo = d, raw_hi = d;
+      for (int yy = -1; yy <= 1; ++yy)
+        for (int xx = -1; xx <= 1; ++xx) {
+          ivec2 q = pos + ivec2(xx, yy);
+          if (!dn_inside(q, frame.size.xy) || (xx == 0 && yy == 0)) continue;
+          vec3 dq = dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x));
+          raw_lo = min(raw_lo, dq);
+          raw_hi = max(raw_hi, dq);
+        }
+      vec3 nlo = max(lo, raw_lo), nhi = min(hi, raw_hi);
+      bvec3 overlap = lessThanEqual(nlo, nhi);
+      lo = mix(raw_lo, nlo, overlap);
+      hi = mix(raw_hi, nhi, overlap);
+      vec3 clipped = dn_clip_to_box(prev, min(lo, d), max(hi, d));
+      // A clipped history's luminance moments restart from its clipped
+      // colour: the old ones still hold the light the clip removed.
+      if (clipped != prev) {
+        float lc = dn_luminance(clipped);
+        prev_m = vec2(lc, lc * lc);
+      }
+      prev = clipped;
     }
   }
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;

@@ -7,10 +7,12 @@
 //   len < 4:    Falcor's 7x7 estimate: moments averaged over the foreground
 //               pixels q of the 7x7 box with weight 1 for p itself and
 //               exp(-|z_p - z_q| / (phi_depth * max(dz_p, 1e-8) * 3 * |q - p|)
-//                   - |l_p - l_q| / (phi_colour * l_p + 1e-20)) * max(0, n_p.n_q)^phi_normal
+//                   - |l_p - l_q| / (phi_colour * min(l_p, l_q) + 1e-20)) * max(0, n_p.n_q)^phi_normal
 //               else; variance = max(0, m2 - m1^2) * 4 / len.
-// The luminance term is relative to l_p here (Falcor divides by phi_colour
-// alone, in absolute units), so the filter stays scale-equivariant. Normals
+// The luminance term is relative (Falcor divides by phi_colour alone, in
+// absolute units), so the filter stays scale-equivariant, and relative to the
+// darker of the two (HDR step rule): a highlight does not average its dark
+// surroundings into its variance, nor they it. Normals
 // are the guide's octahedral snorm16x2 ones (unit length).
 // History: this pass runs after every read of the (single-copy) history by
 // svgf_reproject, and writes it for the next frame: colour vec4(temporal rgb,
@@ -45,7 +47,7 @@ void main() {
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
-  float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B], len[B * B], var[B * B], sw[B * B];
+  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B];
   vec3 cn[B * B];
   vec2 sm[B * B];
   bool inside[B * B], act[B * B];
@@ -74,7 +76,6 @@ void main() {
       cn[k] = dn_svgf_unpack_normal(gd.y);
       cl[k] = t.w;
       ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
-      ipl[k] = 1.0 / (phi_c * t.w + DN_SVGF_LUMINANCE_EPS);
       sm[k] = t.xy;  // p itself, weight 1
       sw[k] = 1.0;
     }
@@ -100,7 +101,7 @@ void main() {
             int k = j * B + i;
             float cos_n = dot(cn[k], nq);
             float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
-            float w_l = abs(cl[k] - tq.w) * ipl[k];
+            float w_l = abs(cl[k] - tq.w) / (phi_c * min(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
             float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
             w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
             sm[k] += w * tq.xy;

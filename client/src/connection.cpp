@@ -5,6 +5,7 @@
 #include <random>
 #include <sstream>
 
+#include "channel_check.hpp"
 #include "connection_state.hpp"
 #include "dn/client/endpoint.hpp"
 #include "dn/client/parameters.hpp"
@@ -101,6 +102,7 @@ Session Connection::open_session(const SessionDesc& desc) {
   // With the server's parameter tables (protocol 1.1) a misspelt name or a
   // value out of range fails here, naming the valid names and the range.
   check_parameters(state_->welcome(), desc);
+  detail::check_channels(state_->welcome(), desc);
   protocol::OpenSession open;
   open.width = desc.width;
   open.height = desc.height;

@@ -340,6 +340,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
     LoadedFrame lf = load_frame(exr, plan, frames[i]);
     cameras.apply(exr, frames[i], lf.camera);
+    camera_normals_to_world(lf, plan);
     return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));

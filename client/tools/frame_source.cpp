@@ -1,6 +1,8 @@
 #include "frame_source.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "args.hpp"
 
@@ -81,18 +83,25 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
     names.push_back(n);
     return names.size() - 1;
   };
-  std::vector<std::vector<std::vector<size_t>>> idx(plan.size());
+  // Per channel, per term: the component indices into `names`, and the
+  // factor's (empty when the term has none).
+  std::vector<std::vector<std::vector<size_t>>> idx(plan.size()), fidx(plan.size());
   for (size_t c = 0; c < plan.size(); ++c) {
     const auto& ch = plan[c];
-    for (const auto& term : ch.terms) {
-      idx[c].emplace_back();
-      for (const auto& name : term) {
+    auto indices = [&](const std::vector<std::string>& channels) {
+      std::vector<size_t> out;
+      for (const auto& name : channels) {
         if (!exr.has_channel(name))
           throw ChannelMapError("channel '" + std::string(protocol::find_channel(ch.id)->name) + "': " +
                                 exr.path() + " has no EXR channel '" + name + "' (mapped from " + ch.describe() +
                                 ")");
-        idx[c].back().push_back(index_of(name));
+        out.push_back(index_of(name));
       }
+      return out;
+    };
+    for (size_t t = 0; t < ch.terms.size(); ++t) {
+      idx[c].push_back(indices(ch.terms[t]));
+      fidx[c].push_back(t < ch.factors.size() ? indices(ch.factors[t]) : std::vector<size_t>{});
     }
   }
   const std::vector<float> all = exr.read(names);
@@ -102,14 +111,42 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
     const auto& ch = plan[c];
     const size_t n = idx[c].front().size();
     LoadedPlane p{ch.id, std::vector<float>(pixels * n, 0.0f)};
-    for (const auto& term : idx[c])
+    for (size_t t = 0; t < idx[c].size(); ++t) {
+      const auto& term = idx[c][t];
+      const auto& factor = fidx[c][t];
       for (size_t i = 0; i < pixels; ++i)
-        for (size_t k = 0; k < n; ++k) p.data[i * n + k] += all[i * stride + term[k]];
+        for (size_t k = 0; k < n; ++k)
+          p.data[i * n + k] += all[i * stride + term[k]] * (factor.empty() ? 1.0f : all[i * stride + factor[k]]);
+    }
     if (ch.convert == Convert::CyclesDepth) convert_cycles_depth(p.data);
+    if (ch.convert == Convert::CyclesAlbedo) convert_cycles_albedo(p.data);
     if (ch.convert == Convert::CyclesVector) convert_cycles_vector(p.data);
     f.planes.push_back(std::move(p));
   }
   return f;
+}
+
+void camera_normals_to_world(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan) {
+  for (const auto& ch : plan) {
+    if (ch.convert != Convert::CyclesCameraNormal) continue;
+    if (!frame.camera.view)
+      throw std::runtime_error(frame.path + ": " + ch.describe() +
+                               " is in camera space and needs the frame's camera: give the Position pass "
+                               "(View Layer Properties > Passes > Data > Position) or --camera FILE, or map the "
+                               "world-space normal with --channel normal=Normal");
+    const auto& m = *frame.camera.view;  // world -> view, column-major: R(row j, col i) = m[4 i + j]
+    for (auto& p : frame.planes) {
+      if (p.id != ch.id) continue;
+      for (size_t k = 0; k + 2 < p.data.size(); k += 3) {
+        // Cycles camera space has z forward, the protocol's view space z backward.
+        const float v[3] = {p.data[k], p.data[k + 1], -p.data[k + 2]};
+        float w[3];
+        for (int i = 0; i < 3; ++i) w[i] = m[4 * i] * v[0] + m[4 * i + 1] * v[1] + m[4 * i + 2] * v[2];
+        const float len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        for (int i = 0; i < 3; ++i) p.data[k + i] = len > 0.0f ? w[i] / len : 0.0f;
+      }
+    }
+  }
 }
 
 }  // namespace dn::cli

@@ -35,4 +35,10 @@ struct LoadedFrame {
 // channel is missing in this frame.
 LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& plan, long long number);
 
+// Turns the planes the plan marks as camera-space normals (Cycles' Denoising
+// Normal: x right, y up, z forward) into world space with the frame's view
+// (camera.view, set by FrameCameras::apply). Throws std::runtime_error naming
+// the frame when such a plane exists and the frame has no camera.
+void camera_normals_to_world(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan);
+
 }  // namespace dn::cli

@@ -130,21 +130,71 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
     return p;
   }
   if (name == "cycles") {
+    // docs/client.md, "Blender Cycles": Cycles' lighting passes are already
+    // divided by their colour passes, Combined = (DiffDir + DiffInd) x DiffCol
+    // + (GlossDir + GlossInd) x GlossCol + (TransDir + TransInd) x TransCol
+    // + Emit + Env + VolumeDir + VolumeInd.
     p.layer_prefix = detected.empty() ? "ViewLayer" : detected;
     const std::string P = p.layer_prefix + ".";
+    auto times = [&](const std::string& layer, const std::string& colour, bool optional = false) {
+      return TermSpec{{}, P + layer, P + colour, optional};
+    };
+    auto opt = [&](const std::string& layer) { return TermSpec{{}, P + layer, {}, true}; };
     p.channels = {
         spec(ChannelId::Radiance, {{{L(P + "Combined")}}}),
-        spec(ChannelId::Diffuse, {{{L(P + "DiffDir"), L(P + "DiffInd")}}}),
-        spec(ChannelId::Specular, {{{L(P + "GlossDir"), L(P + "GlossInd")}}}),
+        spec(ChannelId::DiffuseLighting, {{{L(P + "DiffDir"), L(P + "DiffInd")}}}),
+        spec(ChannelId::SpecularLighting, {{{L(P + "GlossDir"), L(P + "GlossInd")}}}),
+        spec(ChannelId::SpecularAlbedo, {{{L(P + "GlossCol")}}}),
+        // Radiance forms, for pipelines that demodulate themselves (svgf-fb's F_beta).
+        spec(ChannelId::Diffuse, {{{times("DiffDir", "DiffCol"), times("DiffInd", "DiffCol")}}}),
+        spec(ChannelId::Specular, {{{times("GlossDir", "GlossCol"), times("GlossInd", "GlossCol")}}}),
         spec(ChannelId::Albedo, {{{L(P + "DiffCol")}}}),
-        spec(ChannelId::SpecularF0, {{{L(P + "GlossCol")}}}),
-        // No built-in Cycles pass; a value AOV named "Roughness" is picked up.
+        // No built-in Cycles passes: shader AOVs named "SpecularF0" (colour) and "Roughness" (value).
+        spec(ChannelId::SpecularF0, {{{L(P + "SpecularF0")}}}),
         spec(ChannelId::Roughness, {{{L(P + "Roughness")}}}),
         spec(ChannelId::Normal, {{{L(P + "Normal")}}}),
         spec(ChannelId::Depth, {{{L(P + "Depth")}, Convert::CyclesDepth}}),
         spec(ChannelId::Motion, {{{TermSpec{{P + "Vector.X", P + "Vector.Y"}, {}}}, Convert::CyclesVector}}),
-        spec(ChannelId::Emission, {{{L(P + "Emit"), L(P + "Env")}}, {{L(P + "Emit")}}}),
+        spec(ChannelId::Emission, {{{L(P + "Emit"), opt("Env")}}}),
         spec(ChannelId::Position, {{{L(P + "Position")}}}),
+    };
+    // Radiance mode: the Denoising Data passes follow near-specular bounces
+    // (a mirror's albedo and normal are those of what it reflects), which
+    // keeps reflections apart in the edge-stopping functions.
+    p.radiance_mode = {
+        spec(ChannelId::Albedo, {{{L(P + "Denoising Albedo")}, Convert::CyclesAlbedo}, {{L(P + "DiffCol")}}}),
+        spec(ChannelId::Normal, {{{L(P + "Denoising Normal")}, Convert::CyclesCameraNormal}, {{L(P + "Normal")}}}),
+    };
+    // Split mode filters only diffuse and glossy: transmission and volume go
+    // with what is added back unfiltered, so the output still sums to Combined.
+    p.split_mode = {
+        spec(ChannelId::Emission, {{{L(P + "Emit"), opt("Env"), times("TransDir", "TransCol", true),
+                                     times("TransInd", "TransCol", true), opt("VolumeDir"), opt("VolumeInd")}}}),
+    };
+    const std::string passes = "View Layer Properties > Passes > ";
+    p.settings = {
+        {"Combined", passes + "Data > Combined"},
+        {"Depth", passes + "Data > Z"},
+        {"Normal", passes + "Data > Normal"},
+        {"Position", passes + "Data > Position"},
+        {"Vector", passes + "Data > Vector (with Render Properties > Motion Blur off)"},
+        {"Denoising Albedo", passes + "Data > Denoising Data"},
+        {"Denoising Normal", passes + "Data > Denoising Data"},
+        {"DiffDir", passes + "Light > Diffuse: Direct"},
+        {"DiffInd", passes + "Light > Diffuse: Indirect"},
+        {"DiffCol", passes + "Light > Diffuse: Color"},
+        {"GlossDir", passes + "Light > Glossy: Direct"},
+        {"GlossInd", passes + "Light > Glossy: Indirect"},
+        {"GlossCol", passes + "Light > Glossy: Color"},
+        {"TransDir", passes + "Light > Transmission: Direct"},
+        {"TransInd", passes + "Light > Transmission: Indirect"},
+        {"TransCol", passes + "Light > Transmission: Color"},
+        {"VolumeDir", passes + "Light > Volume: Direct"},
+        {"VolumeInd", passes + "Light > Volume: Indirect"},
+        {"Emit", passes + "Light > Other: Emission"},
+        {"Env", passes + "Light > Other: Environment"},
+        {"Roughness", passes + "Shader AOV: a Value AOV named Roughness, written by an AOV Output node in each material"},
+        {"SpecularF0", passes + "Shader AOV: a Color AOV named SpecularF0, written by an AOV Output node in each material"},
     };
     return p;
   }
@@ -194,29 +244,38 @@ ChannelSpec parse_channel_override(const std::string& assignment) {
   return ChannelSpec{info->id, {std::move(r)}, true};
 }
 
+namespace {
+
+// One term's channels: "layer.{R,G,B}" when they share a layer prefix.
+std::string describe_channels(const std::vector<std::string>& t) {
+  if (t.size() == 1) return t[0];
+  const size_t dot = t[0].rfind('.');
+  const std::string pre = dot == std::string::npos ? std::string() : t[0].substr(0, dot + 1);
+  bool common = !pre.empty();
+  for (const auto& c : t) common = common && c.rfind(pre, 0) == 0 && c.find('.', pre.size()) == std::string::npos;
+  std::string out;
+  if (common) {
+    out += pre + "{";
+    for (size_t i = 0; i < t.size(); ++i) out += (i ? "," : "") + t[i].substr(pre.size());
+    return out + "}";
+  }
+  for (size_t i = 0; i < t.size(); ++i) out += (i ? "," : "") + t[i];
+  return out;
+}
+
+}  // namespace
+
 std::string ResolvedChannel::describe() const {
   std::string out;
-  for (const auto& t : terms) {
+  for (size_t i = 0; i < terms.size(); ++i) {
     if (!out.empty()) out += " + ";
-    if (t.size() == 1) {
-      out += t[0];
-      continue;
-    }
-    // Common "layer." prefix -> "layer.{R,G,B}"
-    const size_t dot = t[0].rfind('.');
-    const std::string pre = dot == std::string::npos ? std::string() : t[0].substr(0, dot + 1);
-    bool common = !pre.empty();
-    for (const auto& c : t) common = common && c.rfind(pre, 0) == 0 && c.find('.', pre.size()) == std::string::npos;
-    if (common) {
-      out += pre + "{";
-      for (size_t i = 0; i < t.size(); ++i) out += (i ? "," : "") + t[i].substr(pre.size());
-      out += "}";
-    } else {
-      for (size_t i = 0; i < t.size(); ++i) out += (i ? "," : "") + t[i];
-    }
+    out += describe_channels(terms[i]);
+    if (i < factors.size() && !factors[i].empty()) out += " x " + describe_channels(factors[i]);
   }
   if (convert == Convert::CyclesDepth) out += " (Cycles depth)";
   if (convert == Convert::CyclesVector) out += " (Cycles vector)";
+  if (convert == Convert::CyclesAlbedo) out += " (clamped to 1)";
+  if (convert == Convert::CyclesCameraNormal) out += " (camera to world space)";
   return out;
 }
 
@@ -224,17 +283,24 @@ std::optional<ResolvedChannel> resolve(const ChannelSpec& s, const std::vector<s
                                        const std::string& prefix) {
   const uint32_t n = components(s.id);
   for (const auto& alt : s.alternatives) {
-    ResolvedChannel r{s.id, {}, alt.convert};
+    ResolvedChannel r{s.id, {}, {}, alt.convert};
     bool ok = !alt.terms.empty();
     for (const auto& t : alt.terms) {
       auto term = resolve_term(t, n, chans, prefix);
+      std::optional<std::vector<std::string>> factor;
+      if (term && !t.times.empty()) {
+        factor = resolve_term(TermSpec{{}, t.times, {}, false}, n, chans, prefix);
+        if (!factor) term.reset();
+      }
       if (!term) {
+        if (t.optional) continue;
         ok = false;
         break;
       }
       r.terms.push_back(std::move(*term));
+      r.factors.push_back(factor.value_or(std::vector<std::string>{}));
     }
-    if (ok) return r;
+    if (ok && !r.terms.empty()) return r;
   }
   return std::nullopt;
 }
@@ -249,7 +315,10 @@ std::string describe_tried(const ChannelSpec& s, const std::string& prefix) {
         for (size_t i = 0; i < t.channels.size(); ++i) one += (i ? "," : "") + t.channels[i];
       } else {
         const auto cands = layer_candidates(t.layer, prefix);
-        for (size_t i = 0; i < cands.size(); ++i) one += (i ? "|" : "") + cands[i];
+        std::string term;
+        for (size_t i = 0; i < cands.size(); ++i) term += (i ? "|" : "") + cands[i];
+        if (!t.times.empty()) term += " x " + t.times;
+        one += t.optional ? "[" + term + "]" : term;
       }
     }
     out += (out.empty() ? "" : "; ") + one;
@@ -275,23 +344,60 @@ std::vector<ChannelId> parse_channel_list(const std::string& list) {
   return out;
 }
 
+namespace {
+
+bool is_split(ChannelId id) {
+  return id == ChannelId::Diffuse || id == ChannelId::Specular || id == ChannelId::DiffuseLighting ||
+         id == ChannelId::SpecularLighting || id == ChannelId::SpecularAlbedo;
+}
+
+// The renderer settings that make the layers a spec tries ("; in Blender: ...").
+std::string settings_hint(const Preset& preset, const ChannelSpec& s) {
+  std::vector<std::string> hints;
+  for (const auto& alt : s.alternatives)
+    for (const auto& t : alt.terms)
+      for (const std::string& layer : {t.layer, t.times})
+        for (const auto& [name, where] : preset.settings) {
+          const bool match = layer == name || (layer.size() > name.size() &&
+                                               layer.compare(layer.size() - name.size(), name.size(), name) == 0 &&
+                                               layer[layer.size() - name.size() - 1] == '.');
+          if (match && std::find(hints.begin(), hints.end(), where) == hints.end()) hints.push_back(where);
+        }
+  if (hints.empty()) return {};
+  std::string out = "; in Blender turn on ";
+  for (size_t i = 0; i < hints.size(); ++i) out += (i ? (i + 1 == hints.size() ? " or " : ", ") : "") + hints[i];
+  return out;
+}
+
+}  // namespace
+
 std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vector<ChannelSpec>& overrides,
                                            const protocol::PipelineInfo* pipeline,
                                            const std::optional<std::vector<ChannelId>>& only,
                                            const std::vector<std::string>& chans, const std::string& file) {
-  // The spec used for each channel: an override replaces the preset's.
+  // The spec used for each channel: an override replaces the preset's, and
+  // the preset's mode-specific spec its common one. The mode is known once
+  // radiance is decided (radiance_sent below).
+  bool radiance_mode = false;
   auto spec_for = [&](ChannelId id) -> std::optional<ChannelSpec> {
     for (const auto& o : overrides)
       if (o.id == id) return o;
+    for (const auto& s : radiance_mode ? preset.radiance_mode : preset.split_mode)
+      if (s.id == id) return s;
     for (const auto& s : preset.channels)
       if (s.id == id) return s;
     return std::nullopt;
+  };
+  auto resolvable = [&](ChannelId id) {
+    auto s = spec_for(id);
+    return s && resolve(*s, chans, preset.layer_prefix).has_value();
   };
   auto missing = [&](ChannelId id, const std::string& why) -> ChannelMapError {
     auto s = spec_for(id);
     std::string tried = s ? describe_tried(*s, preset.layer_prefix) : "nothing (no mapping in preset '" + preset.name + "')";
     return ChannelMapError(why + " channel '" + cname(id) + "', but " + file + " has none of the EXR layers tried: " +
-                           tried + "; map it with --channel " + cname(id) + "=LAYER");
+                           tried + "; map it with --channel " + cname(id) + "=LAYER" +
+                           (s ? settings_hint(preset, *s) : std::string()));
   };
 
   std::vector<ChannelId> wanted;
@@ -300,31 +406,47 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
     if (std::find(wanted.begin(), wanted.end(), id) == wanted.end()) wanted.push_back(id);
     if (required) must.insert(id);
   };
+  auto wants = [&](ChannelId id) { return std::find(wanted.begin(), wanted.end(), id) != wanted.end(); };
   const std::string pname = pipeline ? "pipeline '" + pipeline->name + "' requires" : "this run needs";
 
   if (only) {
     for (auto id : *only) want(id, true);
+    radiance_mode = wants(ChannelId::Radiance);
   } else {
     for (const auto& o : overrides) want(o.id, true);
     if (pipeline) {
+      auto takes = [&](ChannelId id) { return (pipeline->optional_channels & protocol::channel_bit(id)) != 0; };
       for (const auto& c : protocol::kChannels)
         if (pipeline->required_channels & protocol::channel_bit(c.id)) want(c.id, true);
-      const bool radiance_sent = std::find(wanted.begin(), wanted.end(), ChannelId::Radiance) != wanted.end() ||
-                                 ((pipeline->optional_channels & protocol::channel_bit(ChannelId::Radiance)) &&
-                                  spec_for(ChannelId::Radiance) && resolve(*spec_for(ChannelId::Radiance), chans,
-                                                                           preset.layer_prefix));
+      radiance_mode = wants(ChannelId::Radiance) || (takes(ChannelId::Radiance) && resolvable(ChannelId::Radiance));
+      // Split mode: one form per signal, the lighting form where the pipeline
+      // takes it and the file has it (with its modulator), unless the
+      // radiance form is required or overridden; specular_albedo only as the
+      // modulator of specular_lighting.
+      const bool diffuse_lighting = !wants(ChannelId::Diffuse) && (wants(ChannelId::DiffuseLighting) ||
+                                    (takes(ChannelId::DiffuseLighting) && resolvable(ChannelId::DiffuseLighting)));
+      const bool specular_lighting =
+          !wants(ChannelId::Specular) &&
+          (wants(ChannelId::SpecularLighting) ||
+           (takes(ChannelId::SpecularLighting) && resolvable(ChannelId::SpecularLighting) &&
+            takes(ChannelId::SpecularAlbedo) && resolvable(ChannelId::SpecularAlbedo)));
+      auto skip = [&](ChannelId id) {
+        if (!is_split(id)) return false;
+        if (radiance_mode) return true;
+        if (id == ChannelId::Diffuse) return diffuse_lighting;
+        if (id == ChannelId::DiffuseLighting) return !diffuse_lighting;
+        if (id == ChannelId::Specular) return specular_lighting;
+        return !specular_lighting;  // SpecularLighting, SpecularAlbedo
+      };
       for (const auto& c : protocol::kChannels) {
-        if (!(pipeline->optional_channels & protocol::channel_bit(c.id))) continue;
-        if (radiance_sent && (c.id == ChannelId::Diffuse || c.id == ChannelId::Specular)) continue;
-        auto s = spec_for(c.id);
-        if (s && resolve(*s, chans, preset.layer_prefix)) want(c.id, false);
+        if (!takes(c.id) || skip(c.id)) continue;
+        if (resolvable(c.id)) want(c.id, false);
       }
     } else {
+      radiance_mode = true;
       for (ChannelId id : {ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth,
-                           ChannelId::Motion}) {
-        auto s = spec_for(id);
-        if (s && resolve(*s, chans, preset.layer_prefix)) want(id, id == ChannelId::Radiance);
-      }
+                           ChannelId::Motion})
+        if (resolvable(id)) want(id, id == ChannelId::Radiance);
       if (wanted.empty() || wanted.front() != ChannelId::Radiance) want(ChannelId::Radiance, true);
     }
   }
@@ -350,6 +472,10 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
 void convert_cycles_depth(std::span<float> depth) {
   for (float& d : depth)
     if (!std::isfinite(d) || d >= 1e9f) d = std::numeric_limits<float>::infinity();
+}
+
+void convert_cycles_albedo(std::span<float> rgb) {
+  for (float& a : rgb) a = std::min(a, 1.0f);
 }
 
 void convert_cycles_vector(std::span<float> xy) {

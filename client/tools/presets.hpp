@@ -25,13 +25,19 @@ enum class Convert {
   None,
   CyclesDepth,   // Depth.Z: view-axis distance; background 1e10 -> +inf
   CyclesVector,  // Vector.XY: (p_prev - p) in raster space, +y up -> PixelsToPrevious, y down
+  CyclesAlbedo,  // Denoising Albedo: components above 1 (an emitter a specular path reached) -> 1
+  CyclesCameraNormal,  // Denoising Normal: camera space (x right, y up, z forward) -> world, needs the frame's view
 };
 
 // One summand: either explicit EXR channels (one per component) or a layer
-// whose component channels are found in the file (LAYER.R/G/B, LAYER.X/Y/Z, ...).
+// whose component channels are found in the file (LAYER.R/G/B, LAYER.X/Y/Z, ...),
+// optionally multiplied component-wise by another layer (Cycles' lighting
+// passes times their colour pass: TransDir x TransCol).
 struct TermSpec {
   std::vector<std::string> channels;  // explicit
   std::string layer;                  // or a layer name
+  std::string times;                  // a layer to multiply by (empty: none)
+  bool optional = false;              // left out when the file lacks it (the others still make the channel)
 };
 // One way to make a channel: the sum of its terms, then a conversion.
 struct RecipeSpec {
@@ -49,6 +55,13 @@ struct Preset {
   std::string name;  // "dnrender" or "cycles"
   std::string layer_prefix;  // cycles: detected view layer, e.g. "ViewLayer"
   std::vector<ChannelSpec> channels;
+  // Replace a channel's spec when radiance is sent (radiance mode) or not
+  // (split mode): Cycles guides radiance with the Denoising Data passes, and
+  // its split mode needs the colour of the lighting passes it does not filter.
+  std::vector<ChannelSpec> radiance_mode, split_mode;
+  // Where a missing layer is turned on in the renderer, by layer name
+  // ("DiffCol" -> "View Layer Properties > Passes > Light > Diffuse: Color").
+  std::vector<std::pair<std::string, std::string>> settings;
 };
 
 // The preset for `name` ("dnrender", "cycles" or "auto": cycles when the file
@@ -63,10 +76,12 @@ Preset make_preset(const std::string& name, const std::vector<std::string>& exr_
 // motion). Throws UsageError-like ChannelMapError on syntax errors.
 ChannelSpec parse_channel_override(const std::string& assignment);
 
-// A concrete recipe: per term, one EXR channel name per component.
+// A concrete recipe: per term, one EXR channel name per component, and per
+// term the channels of its factor (empty: none).
 struct ResolvedChannel {
   protocol::ChannelId id = protocol::ChannelId::Radiance;
   std::vector<std::vector<std::string>> terms;
+  std::vector<std::vector<std::string>> factors;  // one per term
   Convert convert = Convert::None;
   std::string describe() const;  // "ViewLayer.DiffDir.{R,G,B} + ViewLayer.DiffInd.{R,G,B}"
 };
@@ -97,5 +112,10 @@ std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);
 void convert_cycles_depth(std::span<float> depth);
 // Vector: xy = (V.x, -V.y), in place on 2-component data.
 void convert_cycles_vector(std::span<float> xy);
+// Denoising Albedo: Cycles writes the radiance of the light a near-specular
+// path reaches (up to 181 on the fixtures) where an albedo would be; the
+// protocol's albedo is in [0, 1], so components above 1 become 1 and the light
+// stays in the radiance the server filters (under its HDR step rule).
+void convert_cycles_albedo(std::span<float> rgb);
 
 }  // namespace dn::cli

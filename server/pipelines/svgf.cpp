@@ -2,14 +2,14 @@
 // Falcor's defaults (shaders/svgf_*.comp, docs/pipelines.md "svgf in detail"),
 // as a variant description for the SVGF chain builder (svgf_chain.hpp):
 // radiance mode (one signal, demodulated by albedo, emission subtracted when
-// declared) or split mode (Diffuse + Specular declared instead of Radiance:
-// diffuse demodulated by albedo, specular filtered as sent; pass names
-// suffixed _diffuse / _specular).
-#include <algorithm>
+// declared) or split mode (diffuse + specular, each in radiance or lighting
+// form, split_signals.hpp: diffuse by albedo, specular by specular_albedo
+// when declared, else filtered as sent; pass names suffixed _diffuse /
+// _specular).
 #include <optional>
-#include <string>
 
 #include "pipelines/definitions.hpp"
+#include "pipelines/split_signals.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -19,16 +19,14 @@ using protocol::ChannelId;
 
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v = svgf_variant_from(config, p);
-  const Modulator albedo{"albedo", ChannelId::Albedo};
-  // validate() guarantees Diffuse and Specular together, without Radiance.
-  if (has_channel(config, ChannelId::Diffuse)) {
-    v.signals.push_back({ChannelId::Diffuse, "diffuse", "_diffuse", "svgf", albedo});
-    v.signals.push_back({ChannelId::Specular, "specular", "_specular", "svgf_spec", Modulator{}});
+  if (has_split_signals(config)) {
+    v.signals = split_signals(config, Modulator{});
   } else {
     // Radiance includes what the primary hit emits (docs/protocol.md); the
     // emitted part is added back unfiltered, so it is not filtered as well.
-    SvgfSignal radiance{ChannelId::Radiance, "radiance", "", "svgf", albedo};
+    SvgfSignal radiance{ChannelId::Radiance, "radiance", "", "svgf", Modulator{"albedo", ChannelId::Albedo}};
     radiance.subtract_emission = v.emission;
+    radiance.clip = true;  // it carries the highlights and reflections
     v.signals.push_back(radiance);
   }
   return v;
@@ -44,33 +42,8 @@ GraphSpec build(const SessionConfig& config) {
   return g;
 }
 
-// The either/or rule of the lighting channels (validate() has checked each
-// channel on its own and the required ones).
 std::optional<ConfigError> check_channels(const SessionConfig& config) {
-  using protocol::ErrorCode;
-  int radiance = -1, diffuse = -1, specular = -1;
-  for (size_t i = 0; i < config.channels.size(); ++i) {
-    if (config.channels[i].id == ChannelId::Radiance) radiance = static_cast<int>(i);
-    if (config.channels[i].id == ChannelId::Diffuse) diffuse = static_cast<int>(i);
-    if (config.channels[i].id == ChannelId::Specular) specular = static_cast<int>(i);
-  }
-  if (radiance >= 0 && (diffuse >= 0 || specular >= 0)) {
-    const int other = diffuse >= 0 ? diffuse : specular;
-    return ConfigError{ErrorCode::InvalidChannel,
-                       "OPEN_SESSION.channels[" + std::to_string(std::max(radiance, other)) + "].id",
-                       "pipeline svgf takes either radiance or diffuse + specular, not both (radiance and " +
-                           std::string(diffuse >= 0 ? "diffuse" : "specular") + " declared)"};
-  }
-  if (diffuse >= 0 && specular < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
-                       "pipeline svgf requires channel specular together with diffuse"};
-  if (specular >= 0 && diffuse < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
-                       "pipeline svgf requires channel diffuse together with specular"};
-  if (radiance < 0 && diffuse < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
-                       "pipeline svgf requires channel radiance, or diffuse and specular"};
-  return std::nullopt;
+  return check_split_channels(config, "svgf", /*radiance_allowed=*/true);
 }
 
 }  // namespace
@@ -82,14 +55,13 @@ PipelineDefinition svgf_definition() {
       "Spatiotemporal variance-guided filtering (Schied 2017, Falcor defaults): albedo demodulation, temporal "
       "integration of colour and luminance moments, variance-guided a-trous wavelet filter; Emission is added back "
       "unfiltered.";
-  // Radiance, or Diffuse + Specular (check_channels): both forms are optional in the masks.
+  // Radiance, or the split pair in either form (check_channels): all optional in the masks.
   d.description.required_channels = protocol::channel_bit(ChannelId::Albedo) |
                                      protocol::channel_bit(ChannelId::Normal) |
                                      protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
-  d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) |
-                                     protocol::channel_bit(ChannelId::Diffuse) |
-                                     protocol::channel_bit(ChannelId::Specular) |
-                                     protocol::channel_bit(ChannelId::Emission);
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) | split_channel_bits() |
+                                     protocol::channel_bit(ChannelId::Emission) |
+                                     protocol::channel_bit(ChannelId::Roughness);
   d.parameter_groups = {"svgf"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;

@@ -38,9 +38,38 @@ constexpr const char* kIllumC = "svgf_illum_c";
 constexpr const char* kGuide = "svgf_guide";
 constexpr const char* kTemporal = "svgf_temporal";
 constexpr const char* kTaaHistory = "svgf_taa";
+// History clipping scratch, per pixel, shared by the clipped signals (each
+// chain's reprojection reads it before the next chain's prefilter rewrites
+// it): the horizontal pass's vec4(sum w c, sum w) and the box source
+// vec4(prefiltered rgb, foreground), fp32.
+constexpr const char* kClipPartial = "svgf_clip_partial";
+constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
+constexpr uint64_t kClipBytes = 16;
 
 uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
   return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
+}
+
+// The two passes of the separable 7x7 prefilter history clipping takes its box from.
+void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfSignal& s, bool demodulate) {
+  PassSpec& rows = g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter");
+  rows.bind("signal", s.input)
+      .bind("depth", "depth")
+      .bind("dst", kClipPartial)
+      .set("SIGNAL_HALF", is_half(channel_format(config, s.channel)))
+      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+      .set("DEMODULATE", demodulate)
+      .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
+      .set("SUBTRACT_EMISSION", s.subtract_emission);
+  if (demodulate) rows.bind("modulator", s.modulator.buffer);
+  if (s.subtract_emission)
+    rows.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  rows.pixels_per_invocation = 1;
+  g.add_pass("svgf_clip_prefilter_y" + s.suffix, "svgf_clip_prefilter")
+      .bind("src", kClipPartial)
+      .bind("dst", kClipNeighbourhood)
+      .set("VERTICAL", 1u)
+      .pixels_per_invocation = 1;
 }
 
 // One reproject / variance / a-trous chain; returns the buffer holding its
@@ -52,6 +81,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
   const uint32_t normal_half = is_half(channel_format(config, ChannelId::Normal));
   const uint32_t depth_half = is_half(channel_format(config, ChannelId::Depth));
+  const bool clip = v.clip && s.clip;
+  if (clip) add_clip_prefilter(g, config, s, demodulate);
 
   PassSpec& reproject = g.add_pass("svgf_reproject" + s.suffix, "svgf_reproject");
   reproject.bind("signal", s.input)
@@ -74,6 +105,11 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  if (clip)
+    reproject.bind("neighbourhood", kClipNeighbourhood)
+        .bind("roughness", "roughness")
+        .set("CLIP", 1u)
+        .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)));
   reproject.pixels_per_invocation = 1;
 
   PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
@@ -113,6 +149,10 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
   v.taa = p.svgf_taa_alpha > 0.0f;
   v.emission = has_channel(config, protocol::ChannelId::Emission);
+  // Clipping needs to know the glossy pixels: without a roughness plane it
+  // would clip diffuse noise too (and bias sparse samples toward black).
+  v.roughness = has_channel(config, protocol::ChannelId::Roughness);
+  v.clip = p.svgf_clip_roughness > 0.0f && v.roughness;
   return v;
 }
 
@@ -142,6 +182,7 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   if (v.emission) g.add_input(config, ChannelId::Emission, "emission");
+  if (v.roughness && !g.find("roughness")) g.add_input(config, ChannelId::Roughness, "roughness");
 }
 
 void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
@@ -157,6 +198,11 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   // has read temporal before the next chain's reprojection rewrites it.
   g.add_scratch(kGuide, kGuideBytes);
   g.add_scratch(kTemporal, kTemporalBytes);
+  const bool clips = v.clip && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; });
+  if (clips) {
+    g.add_scratch(kClipPartial, kClipBytes);
+    g.add_scratch(kClipNeighbourhood, kClipBytes);
+  }
 }
 
 void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
@@ -184,11 +230,10 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   if (v.signals.size() > 1) {
     remodulate.bind("specular", results[1]);
     const Modulator& second = v.signals[1].modulator;
-    if (!second.empty()) {
-      if (modulator_half(config, second))
-        throw std::logic_error("svgf variant: svgf_remodulate reads the second signal's modulator as fp32");
-      remodulate.bind("specular_factor", second.buffer).set("SPECULAR_FACTOR", 1u);
-    }
+    if (!second.empty())
+      remodulate.bind("specular_factor", second.buffer)
+          .set("SPECULAR_FACTOR", 1u)
+          .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
   }
   if (v.taa)
     remodulate.bind("depth", "depth")

@@ -58,6 +58,7 @@ struct SvgfSignal {
   Modulator modulator;
   MotionSource motion = MotionSource::Primary;
   bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
+  bool clip = false;               // its history is clipped (highlights and reflections: radiance, specular)
 };
 
 struct SvgfVariant {
@@ -70,6 +71,8 @@ struct SvgfVariant {
   std::optional<protocol::ChannelId> validity_mask;  // pixels without a sample this frame (PSVGF); not implemented
   bool taa = false;                  // final svgf_taa pass
   bool emission = false;             // add the Emission plane back after filtering
+  bool roughness = false;            // the session has a Roughness plane (an input)
+  bool clip = false;                 // clip the signals marked clip where roughness < clip_roughness (needs roughness)
 };
 
 // The svgf parameter group's part of a variant (iterations, feedback tap,

@@ -3,8 +3,12 @@
 // docs/pipelines.md "svgf-fb"): one pass in front, svgf_fb_factor, computes
 // F_beta = F0 * A + B per pixel from the context's F_beta table, and the SVGF
 // chain (svgf_chain.hpp) runs with that factor as the specular modulator.
+// Diffuse in either form (split_signals.hpp); specular as radiance only: the
+// factor is this pipeline's point (a client with its own F_beta sends
+// specular_lighting + specular_albedo to svgf instead).
 #include "pipelines/definitions.hpp"
 #include "pipelines/fb_lut.hpp"
+#include "pipelines/split_signals.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -20,11 +24,7 @@ const SharedResourceDecl kFbLut{"fb_lut", fb_lut_buffer};
 
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v = svgf_variant_from(config, p);
-  v.signals.push_back({ChannelId::Diffuse, "diffuse", "_diffuse", "svgf", Modulator{"albedo", ChannelId::Albedo}});
-  // specular_demodulated = 1: the client sent L_W = specular / F_beta, so the
-  // server only remodulates.
-  Modulator fb{kFactor, std::nullopt, p.svgf_fb_specular_demodulated != 0.0f};
-  v.signals.push_back({ChannelId::Specular, "specular", "_specular", "svgf_spec", fb});
+  v.signals = split_signals(config, Modulator{kFactor, std::nullopt});
   return v;
 }
 
@@ -33,7 +33,7 @@ GraphSpec build(const SessionConfig& config) {
   const SvgfVariant v = variant(config, g.parameters);
   add_svgf_inputs(g, config, v);
   g.add_input(config, ChannelId::SpecularF0, "specular_f0");
-  g.add_input(config, ChannelId::Roughness, "roughness");
+  // roughness: add_svgf_inputs added it (history clipping reads it too).
   g.add_shared(kFbLut.name, kFbLut.resource);
   add_svgf_buffers(g, v);
   g.add_scratch(kFactor, kFbFactorBytes);
@@ -55,6 +55,10 @@ GraphSpec build(const SessionConfig& config) {
   return g;
 }
 
+std::optional<ConfigError> check_channels(const SessionConfig& config) {
+  return check_split_channels(config, "svgf-fb", /*radiance_allowed=*/false);
+}
+
 }  // namespace
 
 PipelineDefinition svgf_fb_definition() {
@@ -63,17 +67,19 @@ PipelineDefinition svgf_fb_definition() {
   d.description.summary =
       "svgf on split lighting with BRDF pre-integration demodulation (paper 000): diffuse divided by albedo, "
       "specular by F_beta = F0 * A + B from a GGX table computed on the device at start-up; both filtered as "
-      "svgf and remodulated. Parameter specular_demodulated = 1 takes L_W (Eq. 11) in the specular channel.";
+      "svgf and remodulated. Diffuse may come as diffuse_lighting (already divided by albedo).";
   d.description.required_channels =
-      protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular) |
-      protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
+      protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
       protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
       protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
-  d.description.optional_channels = protocol::channel_bit(ChannelId::Emission);
-  d.parameter_groups = {"svgf", "svgf_fb"};
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Diffuse) |
+                                     protocol::channel_bit(ChannelId::DiffuseLighting) |
+                                     protocol::channel_bit(ChannelId::Emission);
+  d.parameter_groups = {"svgf"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLut};
   d.build = build;
+  d.check_channels = check_channels;
   return d;
 }
 

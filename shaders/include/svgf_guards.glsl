@@ -16,6 +16,11 @@ const float DN_SVGF_MAX_RADIANCE = 1e12;
 const float DN_SVGF_VARIANCE_EPS = 1e-20;
 // Relative luminance guard of the 7x7 variance estimate (see svgf_variance.comp).
 const float DN_SVGF_LUMINANCE_EPS = 1e-20;
+// HDR step rule of the a-trous variance prefilter: a neighbour's variance
+// counts for p only when |l_p - l_q| <= DN_SVGF_STEP_SIGMAS * sqrt(v_q), so a
+// bright pixel's variance does not open a dark neighbour's luminance
+// edge-stopping to it (docs/pipelines.md, "svgf in detail").
+const float DN_SVGF_STEP_SIGMAS = 3.0;
 
 vec3 dn_svgf_sanitize(vec3 c) {
   c = dn_sanitize_radiance(c);

@@ -124,10 +124,10 @@ TEST(CyclesPreset, VectorAndDepthConversionOnSyntheticMotion) {
   const auto plan = plan_channels(preset, {}, &p, std::nullopt, cur.channels(), cur_path);
   std::vector<ChannelId> ids;
   for (const auto& c : plan) ids.push_back(c.id);
-  // Diffuse/specular split is left out because radiance is sent; no roughness pass in the file.
-  EXPECT_EQ(ids, (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::SpecularF0,
-                                         ChannelId::Normal, ChannelId::Depth, ChannelId::Motion,
-                                         ChannelId::Emission}));
+  // Diffuse/specular split is left out because radiance is sent; no roughness
+  // or SpecularF0 AOV in the file (GlossCol is not F0, docs/client.md).
+  EXPECT_EQ(ids, (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal,
+                                         ChannelId::Depth, ChannelId::Motion, ChannelId::Emission}));
 
   const LoadedFrame fc = load_frame(cur, plan, 2);
   const LoadedFrame fp = load_frame(prev, plan, 1);

@@ -68,7 +68,8 @@ std::map<ChannelId, std::vector<float>> scene(int t) {
   const float vx = 1.37f, vy = -0.61f;
   std::map<ChannelId, std::vector<float>> c;
   for (ChannelId id : {ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular, ChannelId::Albedo,
-                       ChannelId::SpecularF0, ChannelId::Normal, ChannelId::Emission})
+                       ChannelId::SpecularF0, ChannelId::Normal, ChannelId::Emission, ChannelId::DiffuseLighting,
+                       ChannelId::SpecularLighting, ChannelId::SpecularAlbedo})
     c[id].assign(3 * n, 0.0f);
   c[ChannelId::Roughness].assign(n, 0.0f);
   c[ChannelId::Depth].assign(n, 0.0f);
@@ -120,6 +121,10 @@ std::map<ChannelId, std::vector<float>> scene(int t) {
         c[ChannelId::Albedo][3 * i + k] = albedo[k];
         c[ChannelId::SpecularF0][3 * i + k] = f0[k];
         c[ChannelId::Normal][3 * i + k] = nrm[k];
+        // Lighting forms: diffuse without its albedo, specular over a colour.
+        c[ChannelId::DiffuseLighting][3 * i + k] = static_cast<float>(pattern * (0.2 + 1.6 * noise(ui, ti, kk)));
+        c[ChannelId::SpecularLighting][3 * i + k] = static_cast<float>(specular / (0.5f + f0[k]));
+        c[ChannelId::SpecularAlbedo][3 * i + k] = 0.5f + f0[k];
       }
       c[ChannelId::Roughness][i] = rough;
       c[ChannelId::Depth][i] = z;
@@ -127,12 +132,14 @@ std::map<ChannelId, std::vector<float>> scene(int t) {
       c[ChannelId::Motion][2 * i + 1] = vy + 0.4f * (noise(ui, ti, 11) - 0.5f);
       if (noise(ui, ti, 20) < 0.02f) {
         const float s = specials[static_cast<uint32_t>(noise(ui, ti, 21) * 5) % 5];
-        for (ChannelId id : {ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular})
+        for (ChannelId id : {ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular, ChannelId::DiffuseLighting,
+                             ChannelId::SpecularLighting})
           c[id][3 * i + (i % 3)] = s;
       }
       if (noise(ui, ti, 22) < 0.005f) c[ChannelId::Normal][3 * i] = NAN;
       if (noise(ui, ti, 23) < 0.005f) c[ChannelId::Motion][2 * i] = NAN;
       if (noise(ui, ti, 24) < 0.005f) c[ChannelId::SpecularF0][3 * i + 1] = NAN;
+      if (noise(ui, ti, 26) < 0.005f) c[ChannelId::SpecularAlbedo][3 * i + 2] = NAN;
       if (noise(ui, ti, 25) < 0.005f) c[ChannelId::Roughness][i] = NAN;
     }
   return c;
@@ -184,6 +191,9 @@ std::vector<Case> cases() {
   const std::vector<C> svgf_e = {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission};
   const std::vector<C> split = {C::Diffuse, C::Specular, C::Albedo, C::Normal, C::Depth, C::Motion};
   const std::vector<C> split_e = {C::Diffuse, C::Specular, C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission};
+  const std::vector<C> lighting = {C::DiffuseLighting, C::SpecularLighting, C::SpecularAlbedo, C::Albedo,
+                                   C::Normal,          C::Depth,            C::Motion,         C::Emission};
+  const std::vector<C> split_sa = {C::Diffuse, C::Specular, C::SpecularAlbedo, C::Albedo, C::Normal, C::Depth, C::Motion};
   const std::vector<C> fb = {C::Diffuse, C::Specular, C::Albedo, C::SpecularF0, C::Roughness,
                              C::Normal,  C::Depth,    C::Motion};
   std::vector<C> fb_e = fb;
@@ -215,9 +225,11 @@ std::vector<Case> cases() {
       {"svgf_split", "svgf", split, F32, F32, {}},
       {"svgf_split_f16_emission_taa", "svgf", split_e, F16, F16, {{"taa_alpha", 0.1}}},
       {"svgf_split_iter0", "svgf", split, F32, F32, {{"atrous_iterations", 0}}},
+      {"svgf_split_lighting", "svgf", lighting, F32, F32, {}},
+      {"svgf_split_lighting_f16", "svgf", lighting, F16, F16, {{"taa_alpha", 0.1}}},
+      {"svgf_split_specular_albedo", "svgf", split_sa, F32, F32, {}},
       {"svgf_fb_f32", "svgf-fb", fb, F32, F32, {}},
       {"svgf_fb_emission_taa", "svgf-fb", fb_e, F32, F32, {{"taa_alpha", 0.1}}},
-      {"svgf_fb_demodulated", "svgf-fb", fb, F32, F32, {{"specular_demodulated", 1}}},
       {"svgf_fb_f16_paper", "svgf-fb", fb_e, F16, F16, paper, MotionConvention::UvToPrevious},
       {"svgf_fb_iter0", "svgf-fb", fb, F32, F16, {{"atrous_iterations", 0}}},
   };

@@ -31,9 +31,8 @@ TEST(ParameterTable, GroupsAreDeclaredPerPipeline) {
     SCOPED_TRACE(def.description.name);
     EXPECT_EQ(pipelines::parameters_of(def.parameter_groups).size(), def.description.parameters.size());
   }
-  const std::string_view fb[] = {"svgf", "svgf_fb"};
-  const auto block = pipelines::parameter_block(fb, {{"specular_demodulated", 1}, {"phi_colour", 4}});
-  EXPECT_EQ(block.svgf_fb_specular_demodulated, 1.0f);
+  const std::string_view fb[] = {"svgf"};
+  const auto block = pipelines::parameter_block(fb, {{"phi_colour", 4}});
   EXPECT_EQ(block.svgf_phi_colour, 4.0f);
   EXPECT_EQ(block.svgf_atrous_iterations, 4.0f);  // default
   EXPECT_EQ(block.accumulate_max_history, 0.0f);  // not a group svgf-fb takes

@@ -51,13 +51,13 @@ pipelines::SessionConfig fb_config(int w, int h, std::vector<protocol::Parameter
   return test::make_config(pipeline, w, h, channels, Format::F32, std::move(params));
 }
 
-test::HostFrame host(const FbFrame& f, bool reset, const std::vector<float>* specular = nullptr) {
+test::HostFrame host(const FbFrame& f, bool reset) {
   test::HostFrame h;
   h.info.flags = reset ? protocol::kFrameReset : 0u;
   h.info.view = to_array(f.view);
   h.info.projection = to_array(f.projection);
   h.add(ChannelId::Diffuse, Format::F32, f.diffuse);
-  h.add(ChannelId::Specular, Format::F32, specular ? *specular : f.specular);
+  h.add(ChannelId::Specular, Format::F32, f.specular);
   h.add(ChannelId::Albedo, Format::F32, f.albedo);
   h.add(ChannelId::Normal, Format::F32, f.normal);
   h.add(ChannelId::Depth, Format::F32, f.depth);
@@ -137,19 +137,18 @@ class HostFactor {
   std::vector<float> table_;
 };
 
-test::SvgfFrame reference_input(const FbFrame& f, bool reset, const std::vector<double>& factor,
-                                const std::vector<float>* specular = nullptr, bool demodulated = false) {
+test::SvgfFrame reference_input(const FbFrame& f, bool reset, const std::vector<double>& factor) {
   auto d = [](const std::vector<float>& v) { return std::vector<double>(v.begin(), v.end()); };
   test::SvgfFrame r;
   r.diffuse = d(f.diffuse);
-  r.specular = d(specular ? *specular : f.specular);
+  r.specular = d(f.specular);
   r.albedo = d(f.albedo);
   r.normal = d(f.normal);
   r.depth = d(f.depth);
   r.motion = d(f.motion);
   r.emission = d(f.emission);
   r.specular_factor = factor;
-  r.specular_demodulated = demodulated;
+  r.roughness = d(f.roughness);
   r.reset = reset;
   return r;
 }
@@ -185,31 +184,56 @@ TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) {
               worst_factor, worst_output);
 }
 
-// Paper 000 Eq. 11: a renderer that sends L_W = specular / F_beta (same
-// floor) with specular_demodulated = 1 gets the same output.
-TEST_F(SvgfFbTest, LwInputAgreesWithServerDemodulation) {
+// Paper 000 Eq. 11: a renderer that computes F_beta itself sends
+// L_W = specular / F_beta (same floor) as specular_lighting with F_beta as
+// specular_albedo, to svgf (the lighting form, docs/protocol.md §7.4), and
+// gets svgf-fb's output.
+TEST_F(SvgfFbTest, LightingFormAgreesWithServerDemodulation) {
   const int w = 80, h = 45;
   auto server_side = pipelines::create(ctx(), fb_config(w, h));
-  auto client_side = pipelines::create(ctx(), fb_config(w, h, {{"specular_demodulated", 1}}));
+  auto client_side = pipelines::create(
+      ctx(), test::make_config("svgf", w, h,
+                               {{ChannelId::Diffuse, Format::F32},
+                                {ChannelId::SpecularLighting, Format::F32},
+                                {ChannelId::SpecularAlbedo, Format::F32},
+                                {ChannelId::Albedo, Format::F32},
+                                {ChannelId::Normal, Format::F32},
+                                {ChannelId::Depth, Format::F32},
+                                {ChannelId::Motion, Format::F32},
+                                {ChannelId::Emission, Format::F32},
+                                {ChannelId::Roughness, Format::F32}},
+                               Format::F32, {}));
   const HostFactor host_factor(ctx());
   RenderedFrames frames(w, h);
   double worst = 0.0;
   for (int t = 0; t < 4; ++t) {
     const FbFrame f = frames.frame(t);
     const auto factor = host_factor.factor(f);
-    std::vector<float> lw(f.specular.size());
+    std::vector<float> lw(f.specular.size()), fb(f.specular.size());
     for (size_t i = 0; i < lw.size(); ++i) {
       const double g = factor[i] >= static_cast<double>(1e-3f) ? factor[i] : 1.0;
       lw[i] = static_cast<float>(f.specular[i] / g);
+      fb[i] = static_cast<float>(factor[i]);
     }
+    test::HostFrame lighting;
+    lighting.info = host(f, t == 0).info;
+    lighting.add(ChannelId::Diffuse, Format::F32, f.diffuse);
+    lighting.add(ChannelId::SpecularLighting, Format::F32, lw);
+    lighting.add(ChannelId::SpecularAlbedo, Format::F32, fb);
+    lighting.add(ChannelId::Albedo, Format::F32, f.albedo);
+    lighting.add(ChannelId::Normal, Format::F32, f.normal);
+    lighting.add(ChannelId::Depth, Format::F32, f.depth);
+    lighting.add(ChannelId::Motion, Format::F32, f.motion);
+    lighting.add(ChannelId::Emission, Format::F32, f.emission);
+    lighting.add(ChannelId::Roughness, Format::F32, f.roughness);
     const auto a = run(*server_side, host(f, t == 0));
-    const auto b = run(*client_side, host(f, t == 0, &lw));
+    const auto b = run(*client_side, lighting);
     std::vector<double> ad(a.begin(), a.end());
     const double rms = test::relative_rms(b, ad);
     worst = std::max(worst, rms);
     EXPECT_LE(rms, 1e-4) << "frame " << t;
   }
-  std::printf("[ info     ] L_W path vs server demodulation: worst relative RMS %.2g\n", worst);
+  std::printf("[ info     ] lighting form vs server demodulation: worst relative RMS %.2g\n", worst);
 }
 
 // F0 = 0 and no specular light (a purely diffuse scene): svgf-fb is svgf's split mode exactly.
@@ -267,8 +291,10 @@ TEST_F(SvgfFbTest, MirrorsAndGrazingNormals) {
   const auto factor = host_factor.factor(f);
   for (double v : factor) ASSERT_TRUE(std::isfinite(v) && v >= 0.0 && v <= 1.0 + 1e-3) << v;  // A + B <= 1 up to the table's sampling noise
 
-  auto temporal_only = pipelines::create(ctx(), fb_config(w, h, {{"atrous_iterations", 0}}));
-  auto full = pipelines::create(ctx(), fb_config(w, h));
+  auto temporal_only = pipelines::create(ctx(), fb_config(w, h, {{"atrous_iterations", 0}, {"clip_roughness", 0}}));
+  // History clipping off: its box decisions are not part of what this test
+  // checks (the F_beta guards), and they would change a constant L_W's history.
+  auto full = pipelines::create(ctx(), fb_config(w, h, {{"clip_roughness", 0}}));
   auto* graph = dynamic_cast<pipelines::GraphPipeline*>(full.get());
   ASSERT_NE(graph, nullptr);
   graph->set_capture(true);
@@ -291,11 +317,11 @@ TEST_F(SvgfFbTest, OutputScalesWithInput) {
   for (int t = 0; t < 4; ++t) seq.push_back(frames.frame(t));
   std::vector<std::vector<float>> base;
   {
-    auto pipe = pipelines::create(ctx(), fb_config(w, h));
+    auto pipe = pipelines::create(ctx(), fb_config(w, h, {{"clip_roughness", 0}}));
     for (int t = 0; t < 4; ++t) base.push_back(run(*pipe, host(seq[t], t == 0)));
   }
   for (double k : {1e-6, 1e-3, 1e3, 1e4}) {
-    auto pipe = pipelines::create(ctx(), fb_config(w, h));
+    auto pipe = pipelines::create(ctx(), fb_config(w, h, {{"clip_roughness", 0}}));
     double worst = 0.0;
     for (int t = 0; t < 4; ++t) {
       FbFrame f = seq[t];
@@ -330,10 +356,11 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
 }
 
 // Split mode's 216 B/px (fp32, no emission) + emission 12 + F0 12 + roughness 4
-// + the F_beta factor scratch 12 = 256 B/px; the table itself is the context's.
+// + the F_beta factor scratch 12 + history clipping's two scratch buffers
+// 2 x 16 = 288 B/px; the table itself is the context's.
 TEST_F(SvgfFbTest, DeviceBytesAreAsDocumented) {
   const auto config = fb_config(64, 48);
-  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 256 + 160);
+  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 288 + 160);
   EXPECT_EQ(pipelines::create(ctx(), config)->device_bytes(), pipelines::estimate_device_bytes(config));
 }
 

@@ -123,17 +123,66 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
 
   // Passes 1-3 over one signal c (sanitized) demodulated by demod; returns the
   // last a-trous result (rgb, variance) and updates the chain's history.
-  auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod) {
+  // History clipping (pass 1, clipped chains): the box is the per-channel
+  // min/max over the 5x5 pixels around p (inside) of the 7x7 binomial
+  // Gaussian of the demodulated current signal over foreground pixels, where
+  // that Gaussian has a foreground tap.
+  auto clip_boxes = [&](const std::vector<double>& d, std::vector<double>& lo, std::vector<double>& hi,
+                        std::vector<bool>& has, std::vector<double>& g, std::vector<bool>& gv) {
+    static const double b[7] = {1, 6, 15, 20, 15, 6, 1};
+    g.assign(3 * n, 0.0);
+    gv.assign(n, false);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        double s[3] = {0, 0, 0}, sw = 0;
+        for (int yy = -3; yy <= 3; ++yy)
+          for (int xx = -3; xx <= 3; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx]) continue;
+            const double wt = b[xx + 3] * b[yy + 3];
+            for (int k = 0; k < 3; ++k) s[k] += wt * d[3 * (qy * w + qx) + k];
+            sw += wt;
+          }
+        const int i = y * w + x;
+        gv[i] = sw > 0.0;
+        for (int k = 0; k < 3; ++k) g[3 * i + k] = sw > 0.0 ? s[k] / sw : 0.0;
+      }
+    lo.assign(3 * n, 1e300);
+    hi.assign(3 * n, -1e300);
+    has.assign(n, false);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int i = y * w + x;
+        for (int yy = -2; yy <= 2; ++yy)
+          for (int xx = -2; xx <= 2; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || !gv[qy * w + qx]) continue;
+            const int q = qy * w + qx;
+            has[i] = true;
+            for (int k = 0; k < 3; ++k) {
+              lo[3 * i + k] = std::min(lo[3 * i + k], g[3 * q + k]);
+              hi[3 * i + k] = std::max(hi[3 * i + k], g[3 * q + k]);
+            }
+          }
+      }
+  };
+  auto clipped_here = [&](int i) { return !(f.roughness[i] >= p_.clip_roughness); };
+
+  auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod, bool clip) {
   const std::vector<double>& colour_ = ch.colour;
   const std::vector<double>& length_ = ch.length;
   const std::vector<double>& m1_ = ch.m1;
   const std::vector<double>& m2_ = ch.m2;
-  // Pass 1: reprojection and temporal integration.
+  // Pass 1: reprojection, history clipping and temporal integration.
   std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n);
+  for (int i = 0; i < 3 * n; ++i) d[i] = c[i] / demod[i];
+  std::vector<double> lo, hi, pre;
+  std::vector<bool> has_box, has_pre;
+  clip = clip && p_.clip_roughness > 0.0 && !f.roughness.empty();
+  if (clip) clip_boxes(d, lo, hi, has_box, pre, has_pre);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const int i = y * w + x;
-      for (int k = 0; k < 3; ++k) d[3 * i + k] = c[3 * i + k] / demod[3 * i + k];
       const double l = luminance(&d[3 * i]);
       if (!fg[i]) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = d[3 * i + k];
@@ -184,6 +233,47 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           plen = std::floor(sl / sw + 0.5);
         }
       }
+      // Clipped chains: reject a history the prefiltered current contradicts
+      // (beyond 4 sigma of its own moments plus half the larger luminance).
+      if (valid && clip && clipped_here(i) && has_pre[i]) {
+        // A threshold decision: made in single precision, as the device makes
+        // it, so rounding does not flip it (m2 - m1^2 cancels in fp32).
+        const float lp = float(luminance(&pre[3 * i])), lh = float(luminance(pc)), larger = std::max(lp, lh);
+        const float m1 = float(pm1), m2 = float(pm2);
+        const float sigma = std::min(std::sqrt(std::max(0.0f, m2 - m1 * m1)), 0.125f * larger);
+        if (std::fabs(lp - lh) > 4.0f * sigma + 0.5f * larger) valid = false;
+      }
+      if (valid && clip && clipped_here(i) && has_box[i]) {
+        // Toward the box centre until inside (clip.glsl).
+        // The prefiltered box narrowed by the raw 3x3 range of the current
+        // signal where the two overlap (else the raw range), then widened to
+        // p's own current value (a highlight keeps its peak).
+        double v[3], m = 0.0, blo[3], bhi[3];
+        for (int k = 0; k < 3; ++k) {
+          double rlo = d[3 * i + k], rhi = d[3 * i + k];
+          for (int yy = -1; yy <= 1; ++yy)
+            for (int xx = -1; xx <= 1; ++xx) {
+              const int qx = x + xx, qy = y + yy;
+              if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+              rlo = std::min(rlo, d[3 * (qy * w + qx) + k]);
+              rhi = std::max(rhi, d[3 * (qy * w + qx) + k]);
+            }
+          const double nlo = std::max(lo[3 * i + k], rlo), nhi = std::min(hi[3 * i + k], rhi);
+          blo[k] = std::min(nlo <= nhi ? nlo : rlo, d[3 * i + k]);
+          bhi[k] = std::max(nlo <= nhi ? nhi : rhi, d[3 * i + k]);
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double centre = 0.5 * (blo[k] + bhi[k]);
+          const double extent = std::max(0.5 * (bhi[k] - blo[k]), 1e-30);
+          v[k] = pc[k] - centre;
+          m = std::max(m, std::fabs(v[k]) / extent);
+        }
+        if (m > 1.0) {
+          for (int k = 0; k < 3; ++k) pc[k] = 0.5 * (blo[k] + bhi[k]) + v[k] / m;
+          pm1 = luminance(pc);  // the moments restart from the clipped colour
+          pm2 = pm1 * pm1;
+        }
+      }
       len[i] = valid ? std::min(plen + 1.0, p_.max_history) : 1.0;
       const double ac = valid ? std::max(1.0 / len[i], p_.alpha_colour) : 1.0;
       const double am = valid ? std::max(1.0 / len[i], p_.alpha_moments) : 1.0;
@@ -200,7 +290,10 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       const int i = y * w + x;
       if (!fg[i]) continue;
       if (len[i] >= 4.0) {
-        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]);
+        // m2 - m1^2 cancels; in single precision as on the device, which
+        // decides the HDR step gate and the edge-stopping of sharp pixels.
+        const float f1 = float(m1[i]), f2 = float(m2[i]);
+        var[i] = std::max(0.0f, f2 - f1 * f1);
         continue;
       }
       const double l = luminance(&colour[3 * i]);
@@ -215,7 +308,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           if (q != i) {
             const double dist = std::sqrt(double(xx * xx + yy * yy));
             const double wz = std::fabs(z[i] - z[q]) / (p_.phi_depth * std::max(dz[i], 1e-8) * 3.0 * dist);
-            const double wl = std::fabs(l - luminance(&colour[3 * q])) / (p_.phi_colour * l + 1e-20);
+            const double lq = luminance(&colour[3 * q]);
+            const double wl = std::fabs(l - lq) / (p_.phi_colour * std::min(l, lq) + 1e-20);
             wt = std::exp(-wz - wl) * normal_weight(i, q);
           }
           s1 += wt * m1[q];
@@ -224,7 +318,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         }
       s1 /= sw;
       s2 /= sw;
-      var[i] = std::max(0.0, s2 - s1 * s1) * 4.0 / len[i];
+      var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i];  // cancels: fp32 as on the device
     }
   ch.variance = var;
 
@@ -247,17 +341,24 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           for (int k = 0; k < 4; ++k) next[4 * i + k] = cur[4 * i + k];
           continue;
         }
+        // 3x3 Gaussian of the variance over the neighbours whose own noise
+        // explains their luminance step to p (HDR step rule, 3 sigmas).
+        const double l = luminance(&cur[4 * i]);
         double gv = 0, gw = 0;
         for (int yy = -1; yy <= 1; ++yy)
           for (int xx = -1; xx <= 1; ++xx) {
             const int qx = x + xx, qy = y + yy;
             if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+            const double* cq = &cur[4 * (qy * w + qx)];
+            // A threshold decision: in single precision, as on the device.
+            if (!(xx == 0 && yy == 0) &&
+                !(std::fabs(float(l) - float(luminance(cq))) <= 3.0f * std::sqrt(float(cq[3]))))
+              continue;
             const double k = (xx == 0 ? 0.5 : 0.25) * (yy == 0 ? 0.5 : 0.25);
-            gv += k * cur[4 * (qy * w + qx) + 3];
+            gv += k * cq[3];
             gw += k;
           }
         const double phi_l = p_.phi_colour * std::sqrt(gv / gw + 1e-20);
-        const double l = luminance(&cur[4 * i]);
         double sc[3] = {0, 0, 0}, sv = 0, sw = 0;
         for (int yy = -2; yy <= 2; ++yy)
           for (int xx = -2; xx <= 2; ++xx) {
@@ -304,13 +405,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     }
   std::vector<double> cur, spec;
   if (split) {
-    cur = filter(chains_[0], sanitize(f.diffuse), a);
-    spec = filter(chains_[1], sanitize(f.specular), f.specular_demodulated ? std::vector<double>(3 * n, 1.0) : sf);
+    const std::vector<double> one(3 * n, 1.0);
+    cur = filter(chains_[0], sanitize(f.diffuse), f.diffuse_lighting ? one : a, false);
+    spec = filter(chains_[1], sanitize(f.specular), f.specular_lighting ? one : sf, true);
   } else {
     // Radiance includes what the primary hit emits: filter radiance - emission (>= 0).
     std::vector<double> c = sanitize(f.radiance);
     for (int i = 0; i < 3 * n; ++i) c[i] = std::max(c[i] - e[i], 0.0);
-    cur = filter(chains_[0], c, a);
+    cur = filter(chains_[0], c, a, true);
   }
 
   // Pass 4: remodulate (+ specular, + emission).

@@ -18,6 +18,7 @@ struct SvgfParams {
   double phi_normal = 128.0;
   double phi_depth = 1.0;
   double taa_alpha = 0.0;  // > 0: the final TAA blend (pass 5)
+  double clip_roughness = 0.9;  // > 0: history clipping of the radiance / specular chain (pass 1)
 };
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
@@ -28,13 +29,15 @@ struct SvgfParams {
 // specular + emission.
 // svgf-fb: specular_factor holds F_beta per pixel (3 per pixel; empty = 1),
 // guarded like albedo; the specular chain is divided by it unless
-// specular_demodulated (the signal is L_W already), and its result is
-// multiplied by it at remodulation.
+// specular_lighting (the signal is L_W already, the lighting form), and its
+// result is multiplied by it at remodulation. diffuse_lighting: the diffuse
+// signal is divided by albedo already.
 struct SvgfFrame {
   std::vector<double> radiance, albedo, normal, depth, motion, emission;
   std::vector<double> diffuse, specular;
   std::vector<double> specular_factor;
-  bool specular_demodulated = false;
+  std::vector<double> roughness;  // empty: the session has none (then nothing is clipped)
+  bool diffuse_lighting = false, specular_lighting = false;
   bool reset = false;
 };
 

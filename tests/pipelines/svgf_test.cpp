@@ -55,6 +55,7 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
     if (p.name == "phi_normal") params.phi_normal = p.value;
     if (p.name == "phi_depth") params.phi_depth = p.value;
     if (p.name == "taa_alpha") params.taa_alpha = p.value;
+    if (p.name == "clip_roughness") params.clip_roughness = p.value;
   }
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
@@ -96,7 +97,10 @@ INSTANTIATE_TEST_SUITE_P(
         Variant{"taa", 128, 72, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
                 {{"taa_alpha", 0.1}}},
         Variant{"taa_fp16_uv", 97, 61, Format::F16, Format::F16, MotionConvention::UvToPrevious, false,
-                {{"taa_alpha", 0.25}, {"atrous_iterations", 2}}}),
+                {{"taa_alpha", 0.25}, {"atrous_iterations", 2}}},
+        // History clipping off (clip_roughness 0): Falcor's svgf.
+        Variant{"no_clip", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
+                {{"clip_roughness", 0}}}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 // A static geometry description: one plane, unit normals, zero motion.
@@ -560,6 +564,41 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
     auto c = svgf_config(16, 16);
     c.channels.erase(c.channels.begin());
     expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance, or diffuse and specular");
+  }
+  // Lighting forms (docs/protocol.md §7.4): one form per signal, specular_lighting needs specular_albedo.
+  auto lighting = [] {
+    auto c = svgf_split_config(16, 16);
+    c.channels[0].id = ChannelId::DiffuseLighting;
+    c.channels[1].id = ChannelId::SpecularLighting;
+    c.channels.push_back({ChannelId::SpecularAlbedo, Format::F32});
+    return c;
+  };
+  EXPECT_FALSE(pipelines::validate(lighting()).has_value());
+  {  // both forms of diffuse
+    auto c = lighting();
+    c.channels.push_back({ChannelId::Diffuse, Format::F32});
+    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[7].id", "diffuse or diffuse_lighting");
+  }
+  {  // specular_lighting without its modulator
+    auto c = lighting();
+    c.channels.pop_back();
+    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "specular_albedo");
+  }
+  {  // specular_albedo with radiance: nothing to modulate
+    auto c = svgf_config(16, 16);
+    c.channels.push_back({ChannelId::SpecularAlbedo, Format::F32});
+    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "specular_albedo");
+  }
+  {  // svgf-fb computes its own specular modulator: specular_lighting is refused
+    auto c = lighting();
+    c.pipeline = "svgf-fb";
+    c.channels.pop_back();
+    c.channels.push_back({ChannelId::SpecularF0, Format::F32});
+    c.channels.push_back({ChannelId::Roughness, Format::F32});
+    const auto err = pipelines::validate(c);
+    ASSERT_TRUE(err.has_value());
+    EXPECT_EQ(err->code, ErrorCode::InvalidChannel);
+    EXPECT_NE(err->message.find("does not use channel specular_lighting"), std::string::npos) << err->message;
   }
   // Other pipelines keep their rules: passthrough takes diffuse + specular alongside radiance, and still
   // requires radiance.

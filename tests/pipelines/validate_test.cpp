@@ -36,27 +36,29 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfAndSvgfFb) {
                                           protocol::channel_bit(ChannelId::Normal) |
                                           protocol::channel_bit(ChannelId::Depth) |
                                           protocol::channel_bit(ChannelId::Motion));
-  // Radiance, or Diffuse + Specular (the either/or rule is checked by validate()).
+  // Radiance, or the split pair in either form (the either/or rule is checked by validate()).
   EXPECT_EQ(all[2].optional_channels,
             protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Diffuse) |
-                protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::Emission));
+                protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::DiffuseLighting) |
+                protocol::channel_bit(ChannelId::SpecularLighting) | protocol::channel_bit(ChannelId::SpecularAlbedo) |
+                protocol::channel_bit(ChannelId::Emission) | protocol::channel_bit(ChannelId::Roughness));
   std::vector<std::string> svgf_names;
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
-                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha"}));
-  // svgf-fb: split lighting with F0 and roughness; svgf's parameters plus its own.
+                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha",
+                                                  "clip_roughness"}));
+  // svgf-fb: split lighting with F0 and roughness (diffuse in either form); svgf's parameters.
   EXPECT_EQ(all[3].name, "svgf-fb");
   EXPECT_EQ(all[3].required_channels,
-            protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular) |
-                protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
+            protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
                 protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
                 protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
-  EXPECT_EQ(all[3].optional_channels, protocol::channel_bit(ChannelId::Emission));
+  EXPECT_EQ(all[3].optional_channels, protocol::channel_bit(ChannelId::Diffuse) |
+                                          protocol::channel_bit(ChannelId::DiffuseLighting) |
+                                          protocol::channel_bit(ChannelId::Emission));
   std::vector<std::string> fb_names;
   for (const auto& p : all[3].parameters) fb_names.push_back(p.name);
-  std::vector<std::string> want_fb = svgf_names;
-  want_fb.push_back("specular_demodulated");
-  EXPECT_EQ(fb_names, want_fb);
+  EXPECT_EQ(fb_names, svgf_names);
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
   EXPECT_TRUE(all[0].parameters.empty());

@@ -75,7 +75,7 @@ TEST(PayloadRules, OpenSessionChannelFormatOutOfRange) {
 TEST(PayloadRules, OpenSessionChannelIds) {
   const std::vector<ChannelDecl> ch = {{ChannelId::Radiance, Format::F32}, {ChannelId::Depth, Format::F32}};
   // Unknown id.
-  for (int bad : {12, 31, 33, 63, 64, 255}) {
+  for (int bad : {15, 31, 33, 63, 64, 255}) {  // 12-14: the lighting forms (docs/protocol.md §7.4)
     auto bytes = encode(open_session(ch));
     bytes[P + kOsChannels + 2] = static_cast<uint8_t>(bad);
     auto e = expect_error(bytes);

@@ -33,6 +33,11 @@ enum class ChannelId : uint8_t {
   Emission = 9,        // rgb  emitted radiance at the primary hit (never filtered)
   Position = 10,       // xyz  world-space position of the primary hit
   SampleCount = 11,    // r    samples taken this frame (0 = none, < 1 spp rendering)
+  // Lighting forms (1.2): a split signal already divided by its modulator,
+  // which the session declares as a channel; the server only remodulates.
+  DiffuseLighting = 12,   // rgb  diffuse radiance / albedo (Cycles DiffDir + DiffInd)
+  SpecularLighting = 13,  // rgb  specular radiance / specular_albedo (Cycles GlossDir + GlossInd)
+  SpecularAlbedo = 14,    // rgb  directional albedo of the specular lobes (Cycles GlossCol)
   Output = 32,         // rgb  denoised radiance, only in RESULT
 };
 
@@ -51,6 +56,8 @@ inline constexpr ChannelInfo kChannels[] = {
     {ChannelId::Normal, "normal", 3},       {ChannelId::Depth, "depth", 1},
     {ChannelId::Motion, "motion", 2},       {ChannelId::Emission, "emission", 3},
     {ChannelId::Position, "position", 3},   {ChannelId::SampleCount, "sample_count", 1},
+    {ChannelId::DiffuseLighting, "diffuse_lighting", 3}, {ChannelId::SpecularLighting, "specular_lighting", 3},
+    {ChannelId::SpecularAlbedo, "specular_albedo", 3},
     {ChannelId::Output, "output", 3},
 };
 

@@ -1,0 +1,41 @@
+#version 450
+// svgf_clip_prefilter: the 7x7 Gaussian prefilter of the current signal that
+// history clipping takes its box from (paper 001 §4.2.3: clipping to the
+// min/max of the raw 1-spp neighbourhood would follow its noise). Weights:
+// the binomial {1, 6, 15, 20, 15, 6, 1} / 64 per axis (sigma 1.22 px), over
+// the foreground pixels inside the image, renormalised. One invocation per
+// pixel; the two specializations (VERTICAL) make it separable.
+//
+// Resources: passes/svgf_clip_prefilter.pass (binding 0 FrameConstants).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+#include "plane.glsl"
+#include "sanitize.glsl"
+#include "svgf_guards.glsl"
+#include "pass.glsl"
+#include "passes/svgf_clip_prefilter.pass"
+
+#include "svgf_signal.glsl"
+
+const float kBinomial[7] = float[7](1.0, 6.0, 15.0, 20.0, 15.0, 6.0, 1.0);
+
+void main() {
+  uint p = dn_invocation_index();
+  if (p >= frame.size.z) return;
+  ivec2 size = ivec2(frame.size.xy);
+  ivec2 pos = ivec2(int(p % frame.size.x), int(p / frame.size.x));
+  vec4 sum = vec4(0.0);
+  for (int t = -3; t <= 3; ++t) {
+    ivec2 q = VERTICAL ? pos + ivec2(0, t) : pos + ivec2(t, 0);
+    if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+    uint qi = uint(q.y) * frame.size.x + uint(q.x);
+    float w = kBinomial[t + 3];
+    if (VERTICAL) {
+      sum += w * src.data[qi];
+    } else if (dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, qi))) {
+      sum += vec4(w * dn_svgf_current(qi), w);
+    }
+  }
+  if (VERTICAL) dst.data[p] = sum.w > 0.0 ? vec4(sum.rgb / sum.w, 1.0) : vec4(0.0);
+  else dst.data[p] = sum;
+}
