@@ -26,6 +26,7 @@
 # says so and exits with status 77 (skipped).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/lib/bench_server.sh
 
 frames=8
 size=320x180
@@ -111,16 +112,7 @@ ref="$out/render/ref/frame_%04d.exr"
 ref2="$out/render/ref2/frame_%04d.exr"
 
 # --- server ----------------------------------------------------------------
-socket="/tmp/dnserver-cycles-$$.sock"
-"$bin/server/dnserver" --listen "unix://$socket" --log-level warn 2> "$out/dnserver.log" &
-server=$!
-trap 'kill -TERM $server 2>/dev/null || true; wait $server 2>/dev/null || true' EXIT
-for _ in $(seq 1 300); do [ -S "$socket" ] && break; sleep 0.1; done
-[ -S "$socket" ] || { echo "cycles: dnserver did not start:" >&2; cat "$out/dnserver.log" >&2; exit 1; }
-server_url="unix://$socket"
-# Time nothing while the server's warm-up compiles in the background (docs/server.md).
-for _ in $(seq 1 3000); do "$dn" stats --server "$server_url" 2>/dev/null | grep -Eq '^warm_up_done +1$' && break; sleep 0.1; done
-device=$("$dn" ping --server "$server_url" --count 1 | sed -n '1s/.* on //p')
+start_bench_server cycles "$bin" "$dn" "$out/dnserver.log"
 
 # Rows: "label pipeline [NAME=VALUE | channels=LIST ...]": the noisy input,
 # every pipeline the server offers (new ones are picked up without changes),
@@ -132,7 +124,6 @@ for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" {
 done
 rows+=("svgf-split svgf channels=diffuse_lighting,specular_lighting,specular_albedo,albedo,normal,depth,motion,emission,roughness")
 
-column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 
 # Why dn failed, on one line: its last non-empty output line (dn's error), or its exit status.
 failure() {  # log status

@@ -18,6 +18,7 @@
 # skips scripts/setup.sh (the tests run this on a build they just made).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/lib/bench_server.sh
 
 scenes="1 2 3 4 5"
 frames=12        # moving-camera frames per scene
@@ -61,16 +62,7 @@ dnrender=$bin/examples/renderer/dnrender
 dn=$bin/client/dn
 mkdir -p "$out"
 
-socket="/tmp/dnserver-bench-$$.sock"
-"$bin/server/dnserver" --listen "unix://$socket" --log-level warn 2> "$out/dnserver.log" &
-server=$!
-trap 'kill -TERM $server 2>/dev/null || true; wait $server 2>/dev/null || true' EXIT
-for _ in $(seq 1 300); do [ -S "$socket" ] && break; sleep 0.1; done
-[ -S "$socket" ] || { echo "speed_error: dnserver did not start:" >&2; cat "$out/dnserver.log" >&2; exit 1; }
-server_url="unix://$socket"
-# Time nothing while the server's warm-up compiles in the background (docs/server.md).
-for _ in $(seq 1 3000); do "$dn" stats --server "$server_url" 2>/dev/null | grep -Eq '^warm_up_done +1$' && break; sleep 0.1; done
-device=$("$dn" ping --server "$server_url" --count 1 | sed -n '1s/.* on //p')
+start_bench_server bench "$bin" "$dn" "$out/dnserver.log"
 
 # Rows: "label pipeline [NAME=VALUE | channels=LIST ...]". The baselines
 # first, then every other pipeline the server offers (new ones are picked up
@@ -82,7 +74,6 @@ done
 rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emission")
 
 # Column NAME of a `dn denoise --summary` file.
-column() { awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 { print $c }' "$1"; }
 
 # The roughness values of each scene's roughness-mapped surfaces (dnrender
 # scenes.cpp); region_metrics adds glossy surfaces, highlights and

@@ -19,24 +19,38 @@
 #include "svgf_signal.glsl"
 #include "clip.glsl"
 
-// History clipping (CLIP): the per-channel min/max of the prefiltered current
-// signal (svgf_clip_prefilter) over the 5x5 foreground pixels around p (the
-// caller adds p's own current value, so a highlight keeps its peak).
-// False when no pixel of the window is foreground (then nothing is clipped).
-bool clip_box(ivec2 pos, out vec3 lo, out vec3 hi) {
-  lo = vec3(1e38);
-  hi = vec3(-1e38);
+// History clipping (CLIP): the box a history is clipped to. Paper 001's
+// box, the per-channel min/max of the prefiltered current signal
+// (svgf_clip_prefilter) over the 5x5 foreground pixels around p, narrowed to
+// the raw 3x3 range of the current signal where the two overlap (the raw
+// range where they do not: a small highlight's blur widens the first beyond
+// the highlight's surroundings and cuts its peak), then widened to p's own
+// current value d. False when no pixel of the 5x5 window is foreground (then
+// nothing is clipped).
+bool clip_box(ivec2 pos, vec3 d, out vec3 lo, out vec3 hi) {
+  vec3 pre_lo = vec3(1e38), pre_hi = vec3(-1e38), raw_lo = d, raw_hi = d;
   bool any = false;
   for (int yy = -2; yy <= 2; ++yy)
     for (int xx = -2; xx <= 2; ++xx) {
       ivec2 q = pos + ivec2(xx, yy);
       if (!dn_inside(q, frame.size.xy)) continue;
-      vec4 v = neighbourhood.data[uint(q.y) * frame.size.x + uint(q.x)];
-      if (v.w == 0.0) continue;
-      lo = min(lo, v.rgb);
-      hi = max(hi, v.rgb);
-      any = true;
+      uint qi = uint(q.y) * frame.size.x + uint(q.x);
+      vec4 v = neighbourhood.data[qi];
+      if (v.w != 0.0) {
+        pre_lo = min(pre_lo, v.rgb);
+        pre_hi = max(pre_hi, v.rgb);
+        any = true;
+      }
+      if (abs(xx) <= 1 && abs(yy) <= 1 && (xx != 0 || yy != 0)) {
+        vec3 dq = dn_svgf_current(qi);
+        raw_lo = min(raw_lo, dq);
+        raw_hi = max(raw_hi, dq);
+      }
     }
+  vec3 nlo = max(pre_lo, raw_lo), nhi = min(pre_hi, raw_hi);
+  bvec3 overlap = lessThanEqual(nlo, nhi);
+  lo = min(mix(raw_lo, nlo, overlap), d);
+  hi = max(mix(raw_hi, nhi, overlap), d);
   return any;
 }
 
@@ -130,24 +144,8 @@ void main() {
     vec4 pre = neighbourhood.data[p];
     if (pre.w > 0.0 && dn_history_contradicted(dn_luminance(pre.rgb), dn_luminance(prev), prev_m)) valid = false;
     vec3 lo, hi;
-    if (valid && clip_box(pos, lo, hi)) {
-      // The prefiltered box narrowed by the raw 3x3 range of the current
-      // signal (a small highlight's blur widens the first beyond it), where
-      // the two overlap; then widened to p's own current value.
-      vec3 raw_lo = d, raw_hi = d;
-      for (int yy = -1; yy <= 1; ++yy)
-        for (int xx = -1; xx <= 1; ++xx) {
-          ivec2 q = pos + ivec2(xx, yy);
-          if (!dn_inside(q, frame.size.xy) || (xx == 0 && yy == 0)) continue;
-          vec3 dq = dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x));
-          raw_lo = min(raw_lo, dq);
-          raw_hi = max(raw_hi, dq);
-        }
-      vec3 nlo = max(lo, raw_lo), nhi = min(hi, raw_hi);
-      bvec3 overlap = lessThanEqual(nlo, nhi);
-      lo = mix(raw_lo, nlo, overlap);
-      hi = mix(raw_hi, nhi, overlap);
-      vec3 clipped = dn_clip_to_box(prev, min(lo, d), max(hi, d));
+    if (valid && clip_box(pos, d, lo, hi)) {
+      vec3 clipped = dn_clip_to_box(prev, lo, hi);
       // A clipped history's luminance moments restart from its clipped
       // colour: the old ones still hold the light the clip removed.
       if (clipped != prev) {

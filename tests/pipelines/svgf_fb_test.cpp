@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -191,18 +192,14 @@ TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) {
 TEST_F(SvgfFbTest, LightingFormAgreesWithServerDemodulation) {
   const int w = 80, h = 45;
   auto server_side = pipelines::create(ctx(), fb_config(w, h));
-  auto client_side = pipelines::create(
-      ctx(), test::make_config("svgf", w, h,
-                               {{ChannelId::Diffuse, Format::F32},
-                                {ChannelId::SpecularLighting, Format::F32},
-                                {ChannelId::SpecularAlbedo, Format::F32},
-                                {ChannelId::Albedo, Format::F32},
-                                {ChannelId::Normal, Format::F32},
-                                {ChannelId::Depth, Format::F32},
-                                {ChannelId::Motion, Format::F32},
-                                {ChannelId::Emission, Format::F32},
-                                {ChannelId::Roughness, Format::F32}},
-                               Format::F32, {}));
+  // svgf-fb's channels with the specular part in the lighting form, without F0.
+  auto lighting_config = fb_config(w, h);
+  std::erase_if(lighting_config.channels, [](const auto& c) { return c.id == ChannelId::SpecularF0; });
+  for (auto& c : lighting_config.channels)
+    if (c.id == ChannelId::Specular) c.id = ChannelId::SpecularLighting;
+  lighting_config.channels.push_back({ChannelId::SpecularAlbedo, Format::F32});
+  lighting_config.pipeline = "svgf";
+  auto client_side = pipelines::create(ctx(), lighting_config);
   const HostFactor host_factor(ctx());
   RenderedFrames frames(w, h);
   double worst = 0.0;
@@ -215,17 +212,12 @@ TEST_F(SvgfFbTest, LightingFormAgreesWithServerDemodulation) {
       lw[i] = static_cast<float>(f.specular[i] / g);
       fb[i] = static_cast<float>(factor[i]);
     }
-    test::HostFrame lighting;
-    lighting.info = host(f, t == 0).info;
-    lighting.add(ChannelId::Diffuse, Format::F32, f.diffuse);
+    test::HostFrame lighting = host(f, t == 0);
+    std::erase_if(lighting.planes, [](const auto& p) {
+      return p.id == ChannelId::Specular || p.id == ChannelId::SpecularF0;
+    });
     lighting.add(ChannelId::SpecularLighting, Format::F32, lw);
     lighting.add(ChannelId::SpecularAlbedo, Format::F32, fb);
-    lighting.add(ChannelId::Albedo, Format::F32, f.albedo);
-    lighting.add(ChannelId::Normal, Format::F32, f.normal);
-    lighting.add(ChannelId::Depth, Format::F32, f.depth);
-    lighting.add(ChannelId::Motion, Format::F32, f.motion);
-    lighting.add(ChannelId::Emission, Format::F32, f.emission);
-    lighting.add(ChannelId::Roughness, Format::F32, f.roughness);
     const auto a = run(*server_side, host(f, t == 0));
     const auto b = run(*client_side, lighting);
     std::vector<double> ad(a.begin(), a.end());
