@@ -31,7 +31,7 @@ cd "$(dirname "$0")/.."
 frames=8
 size=320x180
 spp=1
-ref_spp=32
+ref_spp=256
 out=out/cycles
 docs=0
 threads=0

@@ -214,6 +214,7 @@ int run_denoise(const std::vector<std::string>& argv) {
                              "' (it offers: " + names + ")");
   }
   const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
+  const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
 
   client::SessionDesc desc;
   desc.width = uint32_t(width);
@@ -228,8 +229,15 @@ int run_denoise(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "dn: %s (%s), %dx%d, pipeline %s, preset %s, %zu frame%s\n", conn.endpoint().c_str(),
                  conn.welcome().device_name.c_str(), width, height, pipeline_name.c_str(), preset.name.c_str(),
                  frames.size(), frames.size() == 1 ? "" : "s");
-    for (const auto& ch : plan)
-      std::fprintf(stderr, "dn:   %-12s <- %s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str());
+    for (const auto& ch : plan) {
+      std::string where;
+      if (rough_guides)
+        for (const auto& r : rough_guides->channels)
+          if (r.id == ch.id)
+            where = " where " + rough_guides->key.describe() + fmt(" < %g, else ", rough_guides->from) + r.describe();
+      std::fprintf(stderr, "dn:   %-12s <- %s%s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str(),
+                   where.c_str());
+    }
   }
   client::Session session = conn.open_session(desc);
   if (!quiet)
@@ -340,7 +348,15 @@ int run_denoise(const std::vector<std::string>& argv) {
     image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
     LoadedFrame lf = load_frame(exr, plan, frames[i]);
     cameras.apply(exr, frames[i], lf.camera);
-    camera_normals_to_world(lf, plan);
+    apply_camera_conversions(lf, plan, exr);
+    if (rough_guides) {
+      std::vector<ResolvedChannel> rough_plan{rough_guides->key};
+      rough_plan.insert(rough_plan.end(), rough_guides->channels.begin(), rough_guides->channels.end());
+      LoadedFrame rough = load_frame(exr, rough_plan, frames[i]);
+      rough.camera = lf.camera;
+      apply_camera_conversions(rough, rough_plan, exr);
+      apply_rough_guides(lf, rough, *rough_guides);
+    }
     return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));

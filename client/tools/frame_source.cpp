@@ -1,5 +1,7 @@
 #include "frame_source.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -118,7 +120,7 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
         for (size_t k = 0; k < n; ++k)
           p.data[i * n + k] += all[i * stride + term[k]] * (factor.empty() ? 1.0f : all[i * stride + factor[k]]);
     }
-    if (ch.convert == Convert::CyclesDepth) convert_cycles_depth(p.data);
+    if (ch.convert == Convert::CyclesDepth || ch.convert == Convert::CyclesVirtualDepth) convert_cycles_depth(p.data);
     if (ch.convert == Convert::CyclesAlbedo) convert_cycles_albedo(p.data);
     if (ch.convert == Convert::CyclesVector) convert_cycles_vector(p.data);
     f.planes.push_back(std::move(p));
@@ -126,25 +128,86 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
   return f;
 }
 
-void camera_normals_to_world(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan) {
+namespace {
+
+std::runtime_error no_camera(const LoadedFrame& frame, const ResolvedChannel& ch) {
+  return std::runtime_error(frame.path + ": " + ch.describe() +
+                            " needs the frame's camera: give the Position pass (View Layer Properties > Passes > "
+                            "Data > Position) or --camera FILE, or map the primary hit's depth with --channel "
+                            "depth=Depth@cycles");
+}
+
+// cos of the angle between pixel (x, y)'s centre ray and the view axis. The
+// ray's view-space direction (vx, vy, -1) solves the projection's x/y rows at
+// the pixel centre's ndc (OpenGL, column-major, perspective: m[11] = -1,
+// m[15] = 0; an orthographic projection, m[15] != 0, has cos 1).
+double view_axis_cos(int x, int y, int width, int height, const std::array<float, 16>& m) {
+  if (m[15] != 0.0f) return 1.0;
+  const double det = double(m[0]) * m[5] - double(m[4]) * m[1];
+  const double nx = 2.0 * (x + 0.5) / width - 1.0 + m[8] - m[12];
+  const double ny = 1.0 - 2.0 * (y + 0.5) / height + m[9] - m[13];
+  const double vx = (nx * m[5] - ny * m[4]) / det, vy = (ny * m[0] - nx * m[1]) / det;
+  return 1.0 / std::sqrt(vx * vx + vy * vy + 1.0);
+}
+
+// Cycles' Denoising Depth: the path length to the first non-specular hit,
+// measured from the near clipping plane (camera rays start there), to the
+// view depth of that point: length x cos + clip start. The clip start is not
+// in the file: on every pixel whose path stops at the primary hit,
+// Depth.Z - length x cos is exactly it, so it is the median of that over the
+// pixels that have both (0 when the file has no Depth pass).
+void path_length_to_view_depth(std::vector<float>& depth, int width, int height, const std::array<float, 16>& m,
+                               const std::vector<float>& camera_z) {
+  std::vector<float> offsets;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = size_t(y) * width + x;
+      depth[i] = float(depth[i] * view_axis_cos(x, y, width, height, m));
+      if (!camera_z.empty() && std::isfinite(depth[i]) && std::isfinite(camera_z[i]) && camera_z[i] > 0.0f)
+        offsets.push_back(camera_z[i] - depth[i]);
+    }
+  float clip_start = 0.0f;
+  if (!offsets.empty()) {
+    std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 2, offsets.end());
+    clip_start = std::max(0.0f, offsets[offsets.size() / 2]);
+  }
+  for (float& d : depth) d += clip_start;
+}
+
+}  // namespace
+
+void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
+                              const dn::image::ExrReader& exr) {
   for (const auto& ch : plan) {
-    if (ch.convert != Convert::CyclesCameraNormal) continue;
-    if (!frame.camera.view)
-      throw std::runtime_error(frame.path + ": " + ch.describe() +
-                               " is in camera space and needs the frame's camera: give the Position pass "
-                               "(View Layer Properties > Passes > Data > Position) or --camera FILE, or map the "
-                               "world-space normal with --channel normal=Normal");
-    const auto& m = *frame.camera.view;  // world -> view, column-major: R(row j, col i) = m[4 i + j]
+    if (ch.convert != Convert::CyclesVirtualDepth) continue;
+    if (!frame.camera.projection) throw no_camera(frame, ch);
+    // The Depth pass of the same layer: "L.Denoising Depth.Z" -> "L.Depth.Z".
+    std::string z = ch.terms.front().front();
+    const std::string from = "Denoising Depth";
+    if (const size_t at = z.rfind(from); at != std::string::npos) z.replace(at, from.size(), "Depth");
+    const std::vector<float> camera_z = exr.has_channel(z) ? exr.read_channel(z) : std::vector<float>{};
+    for (auto& p : frame.planes)
+      if (p.id == ch.id)
+        path_length_to_view_depth(p.data, frame.width, frame.height, *frame.camera.projection, camera_z);
+  }
+}
+
+void apply_rough_guides(LoadedFrame& frame, const LoadedFrame& rough, const RoughGuidePlan& guides) {
+  auto find = [](const LoadedFrame& f, protocol::ChannelId id) -> const std::vector<float>* {
+    for (const auto& p : f.planes)
+      if (p.id == id) return &p.data;
+    return nullptr;
+  };
+  const std::vector<float>* key = find(rough, guides.key.id);
+  if (!key) throw std::logic_error("apply_rough_guides: the rough frame has no key plane");
+  for (const auto& ch : guides.channels) {
+    const std::vector<float>* from = find(rough, ch.id);
     for (auto& p : frame.planes) {
-      if (p.id != ch.id) continue;
-      for (size_t k = 0; k + 2 < p.data.size(); k += 3) {
-        // Cycles camera space has z forward, the protocol's view space z backward.
-        const float v[3] = {p.data[k], p.data[k + 1], -p.data[k + 2]};
-        float w[3];
-        for (int i = 0; i < 3; ++i) w[i] = m[4 * i] * v[0] + m[4 * i + 1] * v[1] + m[4 * i + 2] * v[2];
-        const float len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-        for (int i = 0; i < 3; ++i) p.data[k + i] = len > 0.0f ? w[i] / len : 0.0f;
-      }
+      if (p.id != ch.id || !from || from->size() != p.data.size()) continue;
+      const size_t n = p.data.size() / key->size();
+      for (size_t i = 0; i < key->size(); ++i)
+        if (!((*key)[i] < guides.from))  // rough, or NaN: the primary hit's guides
+          for (size_t k = 0; k < n; ++k) p.data[i * n + k] = (*from)[i * n + k];
     }
   }
 }

@@ -35,10 +35,17 @@ struct LoadedFrame {
 // channel is missing in this frame.
 LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& plan, long long number);
 
-// Turns the planes the plan marks as camera-space normals (Cycles' Denoising
-// Normal: x right, y up, z forward) into world space with the frame's view
-// (camera.view, set by FrameCameras::apply). Throws std::runtime_error naming
-// the frame when such a plane exists and the frame has no camera.
-void camera_normals_to_world(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan);
+// The conversion that needs the frame's camera (camera.projection, set by
+// FrameCameras::apply): Cycles' Denoising Depth (path length from the near
+// plane) to depth along the view axis, with the clip start measured against
+// `exr`'s Depth pass. Throws std::runtime_error naming the frame when the plan
+// has such a plane and the frame has no camera.
+void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
+                              const dn::image::ExrReader& exr);
+
+// Per-pixel guides: where `rough` (loaded with the plan {guides.key} +
+// guides.channels, camera conversions applied) has a key (roughness) at or
+// above guides.from or not finite, `frame`'s guide planes take rough's values.
+void apply_rough_guides(LoadedFrame& frame, const LoadedFrame& rough, const RoughGuidePlan& guides);
 
 }  // namespace dn::cli

@@ -153,18 +153,28 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         spec(ChannelId::SpecularF0, {{{L(P + "SpecularF0")}}}),
         spec(ChannelId::Roughness, {{{L(P + "Roughness")}}}),
         spec(ChannelId::Normal, {{{L(P + "Normal")}}}),
-        spec(ChannelId::Depth, {{{L(P + "Depth")}, Convert::CyclesDepth}}),
+        // Past a mirror, the depth of what it reflects (rough_guides below).
+        spec(ChannelId::Depth,
+             {{{L(P + "Denoising Depth")}, Convert::CyclesVirtualDepth, true}, {{L(P + "Depth")}, Convert::CyclesDepth}}),
         spec(ChannelId::Motion, {{{TermSpec{{P + "Vector.X", P + "Vector.Y"}, {}}}, Convert::CyclesVector}}),
         spec(ChannelId::Emission, {{{L(P + "Emit"), opt("Env")}}}),
         spec(ChannelId::Position, {{{L(P + "Position")}}}),
     };
     // Radiance mode: the Denoising Data passes follow near-specular bounces
-    // (a mirror's albedo and normal are those of what it reflects), which
-    // keeps reflections apart in the edge-stopping functions.
+    // (a mirror's albedo, normal and depth are those of what it reflects),
+    // which keeps reflections apart in the edge-stopping functions; with a
+    // Roughness AOV only on mirrors (rough_guides below).
     p.radiance_mode = {
-        spec(ChannelId::Albedo, {{{L(P + "Denoising Albedo")}, Convert::CyclesAlbedo}, {{L(P + "DiffCol")}}}),
-        spec(ChannelId::Normal, {{{L(P + "Denoising Normal")}, Convert::CyclesCameraNormal}, {{L(P + "Normal")}}}),
+        spec(ChannelId::Albedo,
+             {{{L(P + "Denoising Albedo")}, Convert::CyclesAlbedo, true}, {{L(P + "DiffCol")}}}),
     };
+    p.rough_guides = Preset::RoughGuides{
+        P + "Roughness",
+        kCyclesMirrorRoughness,
+        {
+            spec(ChannelId::Albedo, {{{L(P + "DiffCol")}}}),
+            spec(ChannelId::Depth, {{{L(P + "Depth")}, Convert::CyclesDepth}}),
+        }};
     // Split mode filters only diffuse and glossy: transmission and volume go
     // with what is added back unfiltered, so the output still sums to Combined.
     p.split_mode = {
@@ -179,7 +189,7 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         {"Position", passes + "Data > Position"},
         {"Vector", passes + "Data > Vector (with Render Properties > Motion Blur off)"},
         {"Denoising Albedo", passes + "Data > Denoising Data"},
-        {"Denoising Normal", passes + "Data > Denoising Data"},
+        {"Denoising Depth", passes + "Data > Denoising Data"},
         {"DiffDir", passes + "Light > Diffuse: Direct"},
         {"DiffInd", passes + "Light > Diffuse: Indirect"},
         {"DiffCol", passes + "Light > Diffuse: Color"},
@@ -275,7 +285,7 @@ std::string ResolvedChannel::describe() const {
   if (convert == Convert::CyclesDepth) out += " (Cycles depth)";
   if (convert == Convert::CyclesVector) out += " (Cycles vector)";
   if (convert == Convert::CyclesAlbedo) out += " (clamped to 1)";
-  if (convert == Convert::CyclesCameraNormal) out += " (camera to world space)";
+  if (convert == Convert::CyclesVirtualDepth) out += " (path length to view depth)";
   return out;
 }
 
@@ -283,7 +293,7 @@ std::optional<ResolvedChannel> resolve(const ChannelSpec& s, const std::vector<s
                                        const std::string& prefix) {
   const uint32_t n = components(s.id);
   for (const auto& alt : s.alternatives) {
-    ResolvedChannel r{s.id, {}, {}, alt.convert};
+    ResolvedChannel r{s.id, {}, {}, alt.convert, alt.past_specular};
     bool ok = !alt.terms.empty();
     for (const auto& t : alt.terms) {
       auto term = resolve_term(t, n, chans, prefix);
@@ -330,6 +340,23 @@ std::string describe_tried(const ChannelSpec& s, const std::string& prefix) {
     suffixes += (suffixes.empty() ? "" : " or ") + ("." + (set.size() > 1 ? "{" + a + "}" : a));
   }
   return out + " (layers with components " + suffixes + ")";
+}
+
+std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std::vector<ResolvedChannel>& plan,
+                                                const std::vector<std::string>& chans) {
+  if (!preset.rough_guides) return std::nullopt;
+  const auto& rg = *preset.rough_guides;
+  auto key = resolve(ChannelSpec{ChannelId::Roughness, {{{L(rg.key)}}}}, chans, preset.layer_prefix);
+  if (!key) return std::nullopt;
+  RoughGuidePlan out{*key, rg.from, {}};
+  for (const auto& c : plan) {
+    if (!c.past_specular) continue;
+    for (const auto& s : rg.channels)
+      if (s.id == c.id)
+        if (auto r = resolve(s, chans, preset.layer_prefix)) out.channels.push_back(std::move(*r));
+  }
+  if (out.channels.empty()) return std::nullopt;
+  return out;
 }
 
 std::vector<ChannelId> parse_channel_list(const std::string& list) {

@@ -26,7 +26,9 @@ enum class Convert {
   CyclesDepth,   // Depth.Z: view-axis distance; background 1e10 -> +inf
   CyclesVector,  // Vector.XY: (p_prev - p) in raster space, +y up -> PixelsToPrevious, y down
   CyclesAlbedo,  // Denoising Albedo: components above 1 (an emitter a specular path reached) -> 1
-  CyclesCameraNormal,  // Denoising Normal: camera space (x right, y up, z forward) -> world, needs the frame's view
+  CyclesVirtualDepth,  // Denoising Depth: length of the path to the first non-specular hit -> that point's depth
+                       // along the pixel's view ray (x cos of the ray's angle to the view axis; needs the frame's
+                       // projection); background (FLT_MAX) -> +inf
 };
 
 // One summand: either explicit EXR channels (one per component) or a layer
@@ -43,6 +45,10 @@ struct TermSpec {
 struct RecipeSpec {
   std::vector<TermSpec> terms;
   Convert convert = Convert::None;
+  // Cycles' Denoising Data passes: they describe the first non-specular hit
+  // of the path, which Preset::rough_guides replaces where the surface is not
+  // a mirror.
+  bool past_specular = false;
 };
 // All ways to make a protocol channel, tried in order.
 struct ChannelSpec {
@@ -62,7 +68,24 @@ struct Preset {
   // Where a missing layer is turned on in the renderer, by layer name
   // ("DiffCol" -> "View Layer Properties > Passes > Light > Diffuse: Color").
   std::vector<std::pair<std::string, std::string>> settings;
+  // Per-pixel guides (Cycles radiance mode): the past_specular recipes are
+  // exact only on perfect mirrors; on a glossy surface at 1 spp they describe
+  // one random reflection. Where the pixel's `key` layer (a Roughness AOV) is
+  // at or above `from`, or not finite, the guide channel takes its recipe
+  // from `channels` (the primary hit's) instead.
+  struct RoughGuides {
+    std::string key;
+    float from = 0.0f;
+    std::vector<ChannelSpec> channels;
+  };
+  std::optional<RoughGuides> rough_guides;
 };
+
+// Surfaces with a Roughness AOV below this are mirrors, whose Denoising Data
+// guides are exact at 1 spp (docs/client.md, "Mirrors and the Denoising Data
+// passes": on the bench scene 0.02 and 0.1 measure alike; 0.3 takes in the
+// gold sphere, roughness 0.2, and svgf's relMSE rises 2.6x).
+inline constexpr float kCyclesMirrorRoughness = 0.02f;
 
 // The preset for `name` ("dnrender", "cycles" or "auto": cycles when the file
 // has a "<layer>.Combined.R" channel). `view_layer` overrides the Cycles view
@@ -83,6 +106,7 @@ struct ResolvedChannel {
   std::vector<std::vector<std::string>> terms;
   std::vector<std::vector<std::string>> factors;  // one per term
   Convert convert = Convert::None;
+  bool past_specular = false;  // from a RecipeSpec with past_specular
   std::string describe() const;  // "ViewLayer.DiffDir.{R,G,B} + ViewLayer.DiffInd.{R,G,B}"
 };
 
@@ -103,6 +127,18 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
                                            const protocol::PipelineInfo* pipeline,
                                            const std::optional<std::vector<protocol::ChannelId>>& only,
                                            const std::vector<std::string>& exr_channels, const std::string& file);
+
+// Preset::rough_guides resolved for a plan: the key layer (as a roughness
+// channel) and, for each planned channel taken past_specular, the recipe that
+// replaces it on pixels that are not mirrors. Empty when the preset has none,
+// the file lacks the key, or no planned channel is past_specular.
+struct RoughGuidePlan {
+  ResolvedChannel key;
+  float from = 0.0f;
+  std::vector<ResolvedChannel> channels;
+};
+std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std::vector<ResolvedChannel>& plan,
+                                                const std::vector<std::string>& exr_channels);
 
 // Parses "radiance,albedo,..." (protocol channel names).
 std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);

@@ -2,13 +2,15 @@
 // by examples/blender/cycles_room.py with Debian's Blender 3.4.1): the
 // channels it sends rebuild Combined, in split mode (lighting forms with
 // their colour passes as modulators, docs/protocol.md §7.4) and in radiance
-// mode (Denoising Albedo as the guide albedo).
+// mode (Denoising Albedo as the guide albedo); mirrors take the albedo and
+// depth of what they reflect, and that depth is measured like Depth.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "camera_recovery.hpp"
 #include "dn/image/exr_io.hpp"
 #include "frame_source.hpp"
 #include "presets.hpp"
@@ -92,6 +94,104 @@ TEST(CyclesFixtures, RadianceModeTakesTheDenoisingAlbedo) {
     radiance = radiance || c.id == ChannelId::Radiance;
   }
   EXPECT_TRUE(radiance);
+}
+
+// Radiance mode's frame as dn denoise loads it: the plan, the camera
+// recovered from the Position pass, the camera conversions and, with
+// `rough_guides`, the per-pixel guides from the Roughness AOV.
+struct RadianceFrame {
+  LoadedFrame frame;
+  std::optional<RoughGuidePlan> guides;
+};
+RadianceFrame load_radiance_frame(const std::string& name, bool rough_guides) {
+  const dn::image::ExrReader exr(fixture(name));
+  const Preset preset = make_preset("cycles", exr.channels());
+  const auto p = svgf_like();
+  const auto plan = plan_channels(preset, {}, &p, std::nullopt, exr.channels(), fixture(name));
+  RadianceFrame r;
+  if (rough_guides) r.guides = plan_rough_guides(preset, plan, exr.channels());
+  r.frame = load_frame(exr, plan, 0);
+  const auto positions = exr.read({"ViewLayer.Position.X", "ViewLayer.Position.Y", "ViewLayer.Position.Z"});
+  const RecoveredCamera cam = recover_camera(positions, exr.width(), exr.height());
+  r.frame.camera.view = cam.view;
+  r.frame.camera.projection = cam.projection;
+  apply_camera_conversions(r.frame, plan, exr);
+  if (r.guides) {
+    std::vector<ResolvedChannel> rough_plan{r.guides->key};
+    rough_plan.insert(rough_plan.end(), r.guides->channels.begin(), r.guides->channels.end());
+    LoadedFrame rough = load_frame(exr, rough_plan, 0);
+    rough.camera = r.frame.camera;
+    apply_camera_conversions(rough, rough_plan, exr);
+    apply_rough_guides(r.frame, rough, *r.guides);
+  }
+  return r;
+}
+
+// Denoising Depth is the length of the path to the first non-specular hit,
+// from the near plane; converted, it is that point's depth along the view
+// axis. On surfaces where Cycles stops at the primary hit (roughness^4 above
+// 0.075^2, i.e. roughness > 0.27) it must equal the Depth pass (Cycles'
+// camera-space z). At 1 spp both come from the one sample, taken at a random
+// point of the pixel while the conversion uses the pixel centre's ray, which
+// bounds the agreement at about (1/2 px / focal length) x tan(angle off the
+// axis) ~ 0.5 % here; the raw path length is off by the clip start and by
+// 1/cos(angle) - 1, several % (the test checks that it would see that).
+TEST(CyclesFixtures, VirtualDepthIsTheViewDepthWhereCyclesStopsAtThePrimaryHit) {
+  const RadianceFrame r = load_radiance_frame("frame_0000.exr", false);
+  const dn::image::ExrReader exr(fixture("frame_0000.exr"));
+  const auto z = exr.read_channel("ViewLayer.Depth.Z");
+  const auto path = exr.read_channel("ViewLayer.Denoising Depth.Z");
+  const auto rough = exr.read_channel("ViewLayer.Roughness.X");
+  const auto& depth = plane(r.frame, ChannelId::Depth);
+  double worst = 0.0, worst_unconverted = 0.0;
+  size_t n = 0;
+  for (size_t i = 0; i < z.size(); ++i) {
+    if (!(rough[i] > 0.3f) || !(z[i] < 1e9f)) continue;
+    worst = std::max(worst, std::fabs(double(depth[i]) - z[i]) / z[i]);
+    worst_unconverted = std::max(worst_unconverted, std::fabs(double(path[i]) - z[i]) / z[i]);
+    ++n;
+  }
+  EXPECT_GT(n, z.size() / 4) << "rough foreground pixels";
+  EXPECT_LE(worst, 0.01) << "worst |virtual depth - Depth.Z| / Depth.Z";
+  EXPECT_GE(worst_unconverted, 0.05) << "the raw path length differs (the test would see a missing conversion)";
+}
+
+// Mirrors (Roughness AOV < kCyclesMirrorRoughness) take the albedo and depth
+// of what they reflect, so their depth lies beyond the mirror's own surface
+// (the path goes on from it);
+// every other pixel takes its primary hit's DiffCol and Depth.
+TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
+  const RadianceFrame r = load_radiance_frame("frame_0001.exr", true);
+  ASSERT_TRUE(r.guides.has_value()) << "the fixture has the Roughness AOV";
+  const dn::image::ExrReader exr(fixture("frame_0001.exr"));
+  const auto z = exr.read_channel("ViewLayer.Depth.Z");
+  const auto rough = exr.read_channel("ViewLayer.Roughness.X");
+  const auto diffcol = exr.read({"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B"});
+  const auto dalb =
+      exr.read({"ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B"});
+  const auto dnrm =
+      exr.read({"ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z"});
+  const auto& depth = plane(r.frame, ChannelId::Depth);
+  const auto& albedo = plane(r.frame, ChannelId::Albedo);
+  size_t mirrors = 0, beyond = 0, others = 0;
+  for (size_t i = 0; i < z.size(); ++i) {
+    if (!(z[i] < 1e9f)) continue;
+    if (rough[i] < kCyclesMirrorRoughness) {
+      // Where the mirror shows the world (Denoising Normal 0), Cycles 3.4
+      // leaves the depth at the mirror (later versions write FLT_MAX).
+      const bool world = dnrm[3 * i] == 0.0f && dnrm[3 * i + 1] == 0.0f && dnrm[3 * i + 2] == 0.0f;
+      ++mirrors;
+      beyond += world ? depth[i] >= z[i] * 0.9999f : depth[i] > z[i] * 1.0001f;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], std::min(dalb[3 * i + k], 1.0f)) << "pixel " << i;
+    } else {
+      ++others;
+      ASSERT_EQ(depth[i], z[i]) << "pixel " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], diffcol[3 * i + k]) << "pixel " << i;
+    }
+  }
+  EXPECT_GT(mirrors, 20u) << "the mirror sphere";
+  EXPECT_GT(others, mirrors);
+  EXPECT_EQ(beyond, mirrors) << "mirror pixels whose depth lies beyond the mirror";
 }
 
 // A missing pass names the Blender setting that makes it.
