@@ -309,11 +309,11 @@ TEST_F(SvgfFbTest, OutputScalesWithInput) {
   for (int t = 0; t < 4; ++t) seq.push_back(frames.frame(t));
   std::vector<std::vector<float>> base;
   {
-    auto pipe = pipelines::create(ctx(), fb_config(w, h, {{"clip_roughness", 0}}));
+    auto pipe = pipelines::create(ctx(), fb_config(w, h));
     for (int t = 0; t < 4; ++t) base.push_back(run(*pipe, host(seq[t], t == 0)));
   }
   for (double k : {1e-6, 1e-3, 1e3, 1e4}) {
-    auto pipe = pipelines::create(ctx(), fb_config(w, h, {{"clip_roughness", 0}}));
+    auto pipe = pipelines::create(ctx(), fb_config(w, h));
     double worst = 0.0;
     for (int t = 0; t < 4; ++t) {
       FbFrame f = seq[t];
