@@ -1,5 +1,6 @@
 #include "server/handshake.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -56,10 +57,14 @@ protocol::Welcome make_welcome(const ServerOptions& options, const std::string& 
   w.limits.max_width = options.max_width;
   w.limits.max_height = options.max_height;
   w.limits.max_frames_in_flight = options.max_frames_in_flight;
-  // A 1.0 client gets the 1.0 payload (docs/protocol.md §10).
+  // A 1.0 client gets the 1.0 payload, and every client only the channel ids
+  // its version defines (docs/protocol.md §10); a pipeline that requires one
+  // it does not know is not offered to it.
   w.has_parameters = client_minor >= 1;
+  const uint64_t known = protocol::channels_defined_in(std::min(client_minor, protocol::kVersionMinor));
   for (const auto& p : pipelines::available_pipelines()) {
-    protocol::PipelineInfo info{p.name, p.required_channels, p.optional_channels, {}};
+    if (p.required_channels & ~known) continue;
+    protocol::PipelineInfo info{p.name, p.required_channels, p.optional_channels & known, {}};
     if (w.has_parameters)
       for (const auto& q : p.parameters) info.parameters.push_back(to_wire(q));
     w.pipelines.push_back(std::move(info));

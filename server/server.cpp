@@ -1,5 +1,6 @@
 #include "server/server.hpp"
 
+#include <algorithm>
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -361,6 +362,7 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
   }
   if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", true);
   c.authenticated = true;
+  c.negotiated_minor = std::min(h.version_minor, protocol::kVersionMinor);
   protocol::Welcome w = make_welcome(options_, device_name_, h.version_minor);
   log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
   send(c, w, h.request_id);

@@ -24,6 +24,15 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                           std::to_string(options_.max_sessions) + ")",
                       false);
 
+  // Channel ids this connection's version does not define (docs/protocol.md §10).
+  for (size_t i = 0; i < m.channels.size(); ++i)
+    if (const auto* info = protocol::find_channel(m.channels[i].id); info && info->since_minor > c.negotiated_minor)
+      return send_error(c, h.request_id, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "]",
+                        "channel '" + std::string(info->name) + "' (id " + std::to_string(int(info->id)) +
+                            ") is defined from protocol 1." + std::to_string(int(info->since_minor)) +
+                            "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)),
+                        false);
+
   // Validation builds the pass graph (pure data, no device work); the builder reuses it.
   auto prepared = pipelines::prepare({m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters});
   if (auto* err = std::get_if<pipelines::ConfigError>(&prepared))

@@ -50,6 +50,9 @@ class Connection {
 
   // Connection lifecycle flags, owned by the server.
   bool authenticated = false;
+  // min(client's HELLO minor, ours), set with authenticated: what this
+  // connection may carry (docs/protocol.md §10).
+  uint8_t negotiated_minor = 0;
   bool close_after_flush = false;  // a fatal error was queued; stop reading, close once flushed
   bool reading_paused = false;
   Clock::time_point created = Clock::now();

@@ -228,17 +228,19 @@ TEST(PayloadRules, TrailingBytesNamedWithCount) {
 }
 
 TEST(PayloadRules, NewerMinorVersionMayAppendFields) {
-  // A HELLO with 3 appended bytes: trailing at minors 0 and 1, the 1.2 fields at minor 2.
+  // A HELLO with 3 appended bytes: trailing at this version's minor and
+  // below, the next minor's fields at kVersionMinor + 1.
+  const auto newer = static_cast<uint8_t>(kVersionMinor + 1);
   auto hello = encode(Hello{0, "x", ""});
   hello.insert(hello.end(), {9, 9, 9});
   put_u32(hello, 12, static_cast<uint32_t>(hello.size() - P));
   EXPECT_EQ(expect_error(hello).message, "HELLO: 3 trailing bytes");
   hello[5] = 0;  // minor 0
   EXPECT_EQ(expect_error(hello).message, "HELLO: 3 trailing bytes");
-  hello[5] = 2;  // minor 2
+  hello[5] = newer;
   expect_ok(hello);
   // A newer minor may also set capability bits this version does not know;
-  // they are dropped, so the decoded HELLO is a valid 1.1 message.
+  // they are dropped, so the decoded HELLO is a valid message of this version.
   put_u32(hello, P, 0x10);
   {
     Decoded d;
@@ -248,7 +250,7 @@ TEST(PayloadRules, NewerMinorVersionMayAppendFields) {
     EXPECT_EQ(std::get<Hello>(d.message).client_name, "x");
     EXPECT_NO_THROW(encode(d.message));
   }
-  for (int minor : {0, 1}) {
+  for (int minor = 0; minor <= kVersionMinor; ++minor) {
     hello[5] = static_cast<uint8_t>(minor);
     auto e = expect_error(hello);
     EXPECT_EQ(e.code, ErrorCode::ReservedFlags);

@@ -62,8 +62,10 @@ std::vector<uint8_t> golden_welcome_1_0(int header_minor) {
   return welcome_1_0_fields(b).v;
 }
 
-std::vector<uint8_t> golden_welcome_1_1() {
-  Bytes b = welcome_header(1, 125);
+// The 1.1 payload (1.2 appended nothing to WELCOME) under a header of
+// minor `header_minor` (the sender's own: 1 or 2).
+std::vector<uint8_t> golden_welcome_1_1(int header_minor = 1) {
+  Bytes b = welcome_header(header_minor, 125);
   welcome_1_0_fields(b);
   return pipeline_parameters(b).v;
 }
@@ -92,7 +94,7 @@ DecodeError expect_error(const std::vector<uint8_t>& bytes) {
 TEST(Welcome, GoldenOneOneBothWays) {
   const auto bytes = golden_welcome_1_1();
   ASSERT_EQ(bytes.size(), P + 125);
-  EXPECT_EQ(encode(expected_welcome(true), 5, 0), bytes);
+  EXPECT_EQ(encode(expected_welcome(true), 5, 0), golden_welcome_1_1(2));  // a 1.2 sender's header
   Decoded d;
   std::vector<uint8_t> storage;
   auto err = decode_message(bytes, kMaxMessage, d, storage);
@@ -112,10 +114,10 @@ TEST(Welcome, OneZeroServerStillDecodesWithoutParameters) {
   EXPECT_EQ(diff(expected_welcome(false), d.message), "");
 }
 
-TEST(Welcome, OneZeroClientGetsTheOneZeroPayloadUnderAOneOneHeader) {
-  // A 1.1 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
-  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(1));
-  // A 1.1 receiver (one that sent a 1.1 HELLO) requires the tables at minor 1.
+TEST(Welcome, OneZeroClientGetsTheOneZeroPayloadUnderANewerHeader) {
+  // A 1.2 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
+  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(2));
+  // A receiver that sent a HELLO of minor >= 1 requires the tables at minor 1.
   const auto e = expect_error(golden_welcome_1_0(1));
   EXPECT_EQ(e.code, ErrorCode::Malformed);
   EXPECT_EQ(e.field, "WELCOME.pipeline_parameters");
@@ -137,7 +139,7 @@ TEST(Welcome, NewerMinorMayAppendAfterTheTables) {
   bytes.insert(bytes.end(), {7, 7, 7});
   put_u32(bytes, 12, 128);
   EXPECT_EQ(expect_error(bytes).message, "WELCOME: 3 trailing bytes");
-  bytes[5] = 2;
+  bytes[5] = static_cast<uint8_t>(kVersionMinor + 1);
   Decoded d;
   std::vector<uint8_t> storage;
   ASSERT_FALSE(decode_message(bytes, kMaxMessage, d, storage));

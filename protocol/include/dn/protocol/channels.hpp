@@ -47,6 +47,7 @@ struct ChannelInfo {
   ChannelId id;
   std::string_view name;
   uint32_t components;
+  uint8_t since_minor = 0;  // the protocol minor version (1.x) that defines the id
 };
 
 inline constexpr ChannelInfo kChannels[] = {
@@ -56,8 +57,8 @@ inline constexpr ChannelInfo kChannels[] = {
     {ChannelId::Normal, "normal", 3},       {ChannelId::Depth, "depth", 1},
     {ChannelId::Motion, "motion", 2},       {ChannelId::Emission, "emission", 3},
     {ChannelId::Position, "position", 3},   {ChannelId::SampleCount, "sample_count", 1},
-    {ChannelId::DiffuseLighting, "diffuse_lighting", 3}, {ChannelId::SpecularLighting, "specular_lighting", 3},
-    {ChannelId::SpecularAlbedo, "specular_albedo", 3},
+    {ChannelId::DiffuseLighting, "diffuse_lighting", 3, 2}, {ChannelId::SpecularLighting, "specular_lighting", 3, 2},
+    {ChannelId::SpecularAlbedo, "specular_albedo", 3, 2},
     {ChannelId::Output, "output", 3},
 };
 
@@ -76,6 +77,16 @@ inline constexpr uint64_t channel_bit(ChannelId id) { return uint64_t{1} << stat
 // Bytes of one plane: width * height * components * bytes per component.
 inline constexpr uint64_t plane_bytes(const ChannelInfo& c, Format f, uint32_t width, uint32_t height) {
   return uint64_t{width} * height * c.components * bytes_per_component(f);
+}
+
+// The channel ids a peer of minor version `minor` knows, as a mask (bit i =
+// id i; `output` is not a mask channel). After the handshake a side sends
+// only ids of the negotiated minor (docs/protocol.md §10).
+inline constexpr uint64_t channels_defined_in(uint8_t minor) {
+  uint64_t mask = 0;
+  for (const auto& c : kChannels)
+    if (c.since_minor <= minor && uint32_t(c.id) < kChannelIdLimit) mask |= uint64_t(1) << uint32_t(c.id);
+  return mask;
 }
 
 }  // namespace dn::protocol
