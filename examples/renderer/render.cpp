@@ -99,12 +99,18 @@ struct PixelContext {
   int frame;
 };
 
-// The hits of the rays through the pixel corners of one tile, (tile + 1)^2,
-// traced once and shared by the pixels around each corner.
+// The hits through the pixel corners of one tile, (w + 1) x (h + 1), shared
+// by the pixels around each corner (built by build_tile_corners below).
 struct TileCorners {
   int x0 = 0, y0 = 0, stride = 0;
   std::vector<Hit> hits;
+  std::vector<uint8_t> known;  // build state: hits[i] is set
+  // Per pixel (w x h): 1 when the pixel lies in a block on one planar face
+  // whose four corners share one region of the material's maps, so its whole
+  // footprint has one material value (the region and the block are convex).
+  std::vector<uint8_t> plain;
   const Hit& at(int x, int y) const { return hits[size_t(y - y0) * stride + (x - x0)]; }
+  bool plain_at(int x, int y) const { return plain[size_t(y - y0) * (stride - 1) + (x - x0)] != 0; }
 };
 
 // Whether two hits lie on the same convex surface: one sphere, or one planar
@@ -114,6 +120,82 @@ bool same_surface(const Scene& scene, const Hit& a, const Hit& b) {
   if (scene.is_sphere(a)) return true;
   return glm::dot(a.normal, b.normal) > 0.9999f &&
          std::fabs(glm::dot(b.position - a.position, a.normal)) <= 1e-4f * (a.t + b.t);
+}
+
+// The tile's corner hits. A block of pixels whose four outer corners and
+// every pixel's sample-0 hit (`centres`, row-major over the tile) lie on one
+// convex surface lies on it entirely: the surface's screen projection is
+// convex, and an occluder in front of part of it would cover a pixel centre
+// unless it is smaller than a pixel (the case footprint_gbuffer misses too).
+// Its inner corners are then intersected with that surface analytically
+// instead of traced; a block that fails is split in four, down to single
+// pixels, whose corners are traced.
+void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, const std::vector<Hit>& centres,
+                        TileCorners& tc, TraceContext& ctx) {
+  const Scene& scene = pc.scene;
+  tc.x0 = x0, tc.y0 = y0, tc.stride = w + 1;
+  tc.hits.assign(size_t(w + 1) * (h + 1), Hit{});
+  tc.known.assign(tc.hits.size(), 0);
+  tc.plain.assign(size_t(w) * h, 0);
+  const glm::vec3 eye = pc.rays.eye();
+  auto traced = [&](int cx, int cy) -> const Hit& {
+    const size_t i = size_t(cy) * tc.stride + cx;
+    if (!tc.known[i]) {
+      tc.hits[i] = scene.intersect(eye, pc.rays.direction(float(x0 + cx), float(y0 + cy)), ctx);
+      tc.known[i] = 1;
+    }
+    return tc.hits[i];
+  };
+  // Blocks [bx0, bx1] x [by0, by1] in tile corner coordinates.
+  auto fill = [&](auto&& self, int bx0, int by0, int bx1, int by1) -> void {
+    const Hit& a = traced(bx0, by0);
+    const bool corners_agree = same_surface(scene, a, traced(bx1, by0)) &&
+                               same_surface(scene, a, traced(bx0, by1)) &&
+                               same_surface(scene, a, traced(bx1, by1));
+    if (bx1 - bx0 <= 1 && by1 - by0 <= 1) return;
+    bool uniform = corners_agree;
+    for (int py = by0; uniform && py < by1; ++py)
+      for (int px = bx0; uniform && px < bx1; ++px) uniform = same_surface(scene, a, centres[size_t(py) * w + px]);
+    if (uniform) {
+      const Hit surface = a;
+      if (!scene.is_sphere(a)) {
+        const Material& m = scene.material_of(a);
+        bool one_region = true;
+        for (const auto& [cx, cy] : {std::pair{bx1, by0}, std::pair{bx0, by1}, std::pair{bx1, by1}})
+          one_region = one_region && same_material_region(m, a.position, traced(cx, cy).position);
+        if (one_region)
+          for (int py = by0; py < by1; ++py)
+            for (int px = bx0; px < bx1; ++px) tc.plain[size_t(py) * w + px] = 1;
+      }
+      for (int cy = by0; cy <= by1; ++cy)
+        for (int cx = bx0; cx <= bx1; ++cx) {
+          const size_t i = size_t(cy) * tc.stride + cx;
+          if (tc.known[i]) continue;
+          const Hit hit = scene.intersect_surface(surface, eye, pc.rays.direction(float(x0 + cx), float(y0 + cy)));
+          if (hit.found) {
+            tc.hits[i] = hit;
+            tc.known[i] = 1;
+          } else {
+            traced(cx, cy);  // grazing rounding: trace it
+          }
+        }
+      return;
+    }
+    const int mx = (bx0 + bx1) / 2, my = (by0 + by1) / 2;
+    if (bx1 - bx0 > 1 && by1 - by0 > 1) {
+      self(self, bx0, by0, mx, my);
+      self(self, mx, by0, bx1, my);
+      self(self, bx0, my, mx, by1);
+      self(self, mx, my, bx1, by1);
+    } else if (bx1 - bx0 > 1) {
+      self(self, bx0, by0, mx, by1);
+      self(self, mx, by0, bx1, by1);
+    } else {
+      self(self, bx0, by0, bx1, my);
+      self(self, bx0, my, bx1, by1);
+    }
+  };
+  fill(fill, 0, 0, w, h);
 }
 
 // Area-weighted sums of the averaged channels over a pixel's footprint.
@@ -191,8 +273,10 @@ struct SurfaceFootprint {
 // G-buffers every frame (no flicker from them), and they are a stream of
 // their own, so the radiance samples are those of the point-sampled G-buffer.
 //
-// Two cases, by the rays through the pixel's four corners (traced once per
-// tile, shared by neighbouring pixels):
+// Three cases, by the hits through the pixel's four corners (shared by
+// neighbouring pixels, build_tile_corners):
+// - the pixel lies in a plain block (TileCorners::plain): one material
+//   evaluation;
 // - all four hit one convex surface (one sphere, or one face of a quad or
 //   box): the whole footprint lies on it, as its screen projection is convex.
 //   No more rays: sub-squares are intersected with the surface analytically
@@ -211,7 +295,13 @@ void footprint_gbuffer(const PixelContext& pc, int x, int y, const TileCorners& 
   const Hit(&c)[4] = {c00, corners.at(x + 1, y), corners.at(x, y + 1), corners.at(x + 1, y + 1)};
   Rng rng(pc.settings.seed ^ 0x6B0FF5E7u, 0x9B1D5EEDu, static_cast<uint32_t>(i));
   FootprintSum sum;
-  if (same_surface(scene, c00, c[1]) && same_surface(scene, c00, c[2]) && same_surface(scene, c00, c[3])) {
+  if (corners.plain_at(x, y)) {
+    // What SurfaceFootprint::square does for a square in one region, without its tests.
+    const glm::vec3 eye = pc.rays.eye();
+    const glm::vec3 n = facing_normal(c[0].normal, eye - c[0].position) + facing_normal(c[1].normal, eye - c[1].position) +
+                        facing_normal(c[2].normal, eye - c[2].position) + facing_normal(c[3].normal, eye - c[3].position);
+    sum.add(evaluate_material(scene.material_of(c00), c00.position), glm::normalize(n), 1.0f);
+  } else if (same_surface(scene, c00, c[1]) && same_surface(scene, c00, c[2]) && same_surface(scene, c00, c[3])) {
     int depth = 0;
     while ((1 << depth) < 4 * k) ++depth;
     SurfaceFootprint{pc, c00, scene.material_of(c00), depth, rng, ctx, sum}.square(float(x), float(y), 1.0f, c, 0);
@@ -237,8 +327,15 @@ void footprint_gbuffer(const PixelContext& pc, int x, int y, const TileCorners& 
   }
 }
 
-void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corners, FrameBuffers& fb,
-                  TraceContext& ctx) {
+// The ray through pixel (x, y)'s centre plus the frame's jitter: the
+// G-buffer ray and radiance sample 0.
+glm::vec3 centre_direction(const PixelContext& pc, int x, int y) {
+  return pc.rays.direction(x + 0.5f + pc.jitter.x, y + 0.5f + pc.jitter.y);
+}
+
+// `centre`: the hit of centre_direction if already traced (footprint tiles), else null.
+void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corners, const Hit* centre,
+                  FrameBuffers& fb, TraceContext& ctx) {
   const RenderSettings& st = pc.settings;
   const ChannelSet& want = st.channels;
   const Scene& scene = pc.scene;
@@ -249,8 +346,8 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
 
   // The G-buffer ray: pixel centre plus the frame's jitter. It is also sample 0.
   const glm::vec3 eye = pc.rays.eye();
-  const glm::vec3 dir0 = pc.rays.direction(x + 0.5f + pc.jitter.x, y + 0.5f + pc.jitter.y);
-  const Hit hit0 = scene.intersect(eye, dir0, ctx);
+  const glm::vec3 dir0 = centre_direction(pc, x, y);
+  const Hit hit0 = centre ? *centre : scene.intersect(eye, dir0, ctx);
   const glm::vec3 world = hit0.found ? hit0.position : eye + dir0 * kBackgroundDistance;
   SurfaceParams surface0;
   if (hit0.found) surface0 = evaluate_material(scene.material_of(hit0), hit0.position);
@@ -378,20 +475,22 @@ void render_frame_into(const Scene& scene, const Camera& camera, const Camera& p
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     TraceContext ctx;
     TileCorners corners;
+    std::vector<Hit> centres;
     const bool footprint = settings.channels.gbuffer && settings.gbuffer_grid > 0;
     for (int t = next_tile++; t < tiles_x * tiles_y; t = next_tile++) {
       const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, settings.width), y1 = std::min(y0 + tile, settings.height);
       if (footprint) {
-        corners.x0 = x0, corners.y0 = y0, corners.stride = x1 - x0 + 1;
-        corners.hits.resize(size_t(corners.stride) * (y1 - y0 + 1));
-        for (int y = y0; y <= y1; ++y)
-          for (int x = x0; x <= x1; ++x)
-            corners.hits[size_t(y - y0) * corners.stride + (x - x0)] =
-                scene.intersect(rays.eye(), rays.direction(float(x), float(y)), ctx);
+        centres.resize(size_t(x1 - x0) * (y1 - y0));
+        for (int y = y0; y < y1; ++y)
+          for (int x = x0; x < x1; ++x)
+            centres[size_t(y - y0) * (x1 - x0) + (x - x0)] = scene.intersect(rays.eye(), centre_direction(pc, x, y), ctx);
+        build_tile_corners(pc, x0, y0, x1 - x0, y1 - y0, centres, corners, ctx);
       }
       for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) render_pixel(pc, x, y, corners, fb, ctx);
+        for (int x = x0; x < x1; ++x)
+          render_pixel(pc, x, y, corners, footprint ? &centres[size_t(y - y0) * (x1 - x0) + (x - x0)] : nullptr, fb,
+                       ctx);
     }
     rays_traced += ctx.rays;
   };
