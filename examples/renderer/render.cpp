@@ -105,9 +105,10 @@ struct TileCorners {
   int x0 = 0, y0 = 0, stride = 0;
   std::vector<Hit> hits;
   std::vector<uint8_t> known;  // build state: hits[i] is set
-  // Per pixel (w x h): 1 when the pixel lies in a block on one planar face
-  // whose four corners share one region of the material's maps, so its whole
-  // footprint has one material value (the region and the block are convex).
+  // Per pixel (w x h): 1 when the pixel lies in a block on one surface whose
+  // material has no maps, or on one planar face whose four corners share one
+  // region of the material's maps, so its whole footprint has one material
+  // value (the region and the block are convex).
   std::vector<uint8_t> plain;
   const Hit& at(int x, int y) const { return hits[size_t(y - y0) * stride + (x - x0)]; }
   bool plain_at(int x, int y) const { return plain[size_t(y - y0) * (stride - 1) + (x - x0)] != 0; }
@@ -158,8 +159,9 @@ void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, co
       for (int px = bx0; uniform && px < bx1; ++px) uniform = same_surface(scene, a, centres[size_t(py) * w + px]);
     if (uniform) {
       const Hit surface = a;
-      if (!scene.is_sphere(a)) {
-        const Material& m = scene.material_of(a);
+      const Material& m = scene.material_of(a);
+      const bool unmapped = m.albedo_map == Pattern::None && m.roughness_map == Pattern::None;
+      if (unmapped || !scene.is_sphere(a)) {
         bool one_region = true;
         for (const auto& [cx, cy] : {std::pair{bx1, by0}, std::pair{bx0, by1}, std::pair{bx1, by1}})
           one_region = one_region && same_material_region(m, a.position, traced(cx, cy).position);
@@ -226,10 +228,66 @@ struct SurfaceFootprint {
 
   glm::vec3 facing(const Hit& h) const { return facing_normal(h.normal, pc.rays.eye() - h.position); }
 
+  // A square on a planar face whose corners fall in exactly two regions of
+  // the material's maps, one straight boundary between them: the boundary is
+  // a plane of the pattern meeting the face, so its screen image is a line.
+  // It crosses the two edges whose ends differ; each crossing is found by
+  // bisection along its edge (to 2^-12 of the edge), and the square's area
+  // splits exactly between the two regions. False (nothing added) when that
+  // shape does not hold: two diagonal corners alike, a third region met on an
+  // edge, or a sphere (its boundaries are curves on screen).
+  bool two_regions(float x0, float y0, float size, const Hit (&c)[4]) {
+    if (pc.scene.is_sphere(surface)) return false;
+    // Corners in cyclic order around the square, with their screen positions.
+    const int order[4] = {0, 1, 3, 2};
+    const glm::vec2 at[4] = {{x0, y0}, {x0 + size, y0}, {x0, y0 + size}, {x0 + size, y0 + size}};
+    bool in_a[4];
+    int b = -1;
+    for (int k = 0; k < 4; ++k) {
+      in_a[k] = same_material_region(material, c[0].position, c[k].position);
+      if (!in_a[k] && b < 0) b = k;
+    }
+    if (b < 0) return false;
+    for (int k = 0; k < 4; ++k)
+      if (!in_a[k] && !same_material_region(material, c[b].position, c[k].position)) return false;
+    // Region A as a polygon: its corners and the two crossings, in cyclic order.
+    glm::vec2 poly[6];
+    int n = 0, crossings = 0;
+    for (int e = 0; e < 4; ++e) {
+      const int i = order[e], j = order[(e + 1) % 4];
+      if (in_a[i]) poly[n++] = at[i];
+      if (in_a[i] == in_a[j]) continue;
+      if (++crossings > 2) return false;
+      // Bisection between the A end and the B end of the edge.
+      glm::vec2 lo = in_a[i] ? at[i] : at[j], hi = in_a[i] ? at[j] : at[i];
+      for (int it = 0; it < 12; ++it) {
+        const glm::vec2 mid = 0.5f * (lo + hi);
+        const Hit h = point(mid.x, mid.y);
+        if (!h.found) return false;
+        if (same_material_region(material, c[0].position, h.position)) lo = mid;
+        else if (same_material_region(material, c[b].position, h.position)) hi = mid;
+        else return false;  // a third region on this edge
+      }
+      poly[n++] = 0.5f * (lo + hi);
+    }
+    if (crossings != 2) return false;
+    double twice = 0.0;  // shoelace
+    for (int k = 0; k < n; ++k) {
+      const glm::vec2 p = poly[k], q = poly[(k + 1) % n];
+      twice += double(p.x) * q.y - double(q.x) * p.y;
+    }
+    const float area = size * size, area_a = std::min(area, float(0.5 * std::fabs(twice)));
+    const glm::vec3 nrm = glm::normalize(facing(c[0]) + facing(c[1]) + facing(c[2]) + facing(c[3]));
+    sum.add(evaluate_material(material, c[0].position), nrm, area_a);
+    sum.add(evaluate_material(material, c[b].position), nrm, area - area_a);
+    return true;
+  }
+
   // A square whose corners share one region of the material's maps is
   // constant (the region is convex, and so is the square's footprint on a
-  // face); otherwise split it in four, down to max_depth, where a square that
-  // still holds an edge takes one jittered sample.
+  // face); one cut by a single straight boundary splits exactly
+  // (two_regions); otherwise split it in four, down to max_depth, where a
+  // square that still holds an edge takes one jittered sample.
   void square(float x0, float y0, float size, const Hit (&c)[4], int depth) {
     const float area = size * size;
     bool found = true, same = true;
@@ -241,6 +299,7 @@ struct SurfaceFootprint {
       sum.add(evaluate_material(material, c[0].position), glm::normalize(n), area);
       return;
     }
+    if (found && two_regions(x0, y0, size, c)) return;
     if (depth == max_depth || !found) {
       const glm::vec2 u = rng.next2();
       const glm::vec3 dir = pc.rays.direction(x0 + u.x * size, y0 + u.y * size);
