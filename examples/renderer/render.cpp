@@ -105,13 +105,22 @@ struct TileCorners {
   int x0 = 0, y0 = 0, stride = 0;
   std::vector<Hit> hits;
   std::vector<uint8_t> known;  // build state: hits[i] is set
-  // Per pixel (w x h): 1 when the pixel lies in a block on one surface whose
-  // material has no maps, or on one planar face whose four corners share one
-  // region of the material's maps, so its whole footprint has one material
-  // value (the region and the block are convex).
-  std::vector<uint8_t> plain;
+  // A plain block: on one surface whose material has no maps, or on one
+  // planar face whose four corners share one region of the material's maps,
+  // so every pixel's footprint has the block's material values (the region
+  // and the block are convex); on a face, also one facing normal.
+  struct PlainBlock {
+    SurfaceParams params;
+    bool planar = false;
+    glm::vec3 normal{0.0f};  // planar: the face's normal towards the eye
+  };
+  std::vector<PlainBlock> blocks;
+  std::vector<int> plain;  // per pixel (w x h): index into blocks, or -1
   const Hit& at(int x, int y) const { return hits[size_t(y - y0) * stride + (x - x0)]; }
-  bool plain_at(int x, int y) const { return plain[size_t(y - y0) * (stride - 1) + (x - x0)] != 0; }
+  const PlainBlock* plain_at(int x, int y) const {
+    const int b = plain[size_t(y - y0) * (stride - 1) + (x - x0)];
+    return b < 0 ? nullptr : &blocks[size_t(b)];
+  }
 };
 
 // Whether two hits lie on the same convex surface: one sphere, or one planar
@@ -137,7 +146,8 @@ void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, co
   tc.x0 = x0, tc.y0 = y0, tc.stride = w + 1;
   tc.hits.assign(size_t(w + 1) * (h + 1), Hit{});
   tc.known.assign(tc.hits.size(), 0);
-  tc.plain.assign(size_t(w) * h, 0);
+  tc.plain.assign(size_t(w) * h, -1);
+  tc.blocks.clear();
   const glm::vec3 eye = pc.rays.eye();
   auto traced = [&](int cx, int cy) -> const Hit& {
     const size_t i = size_t(cy) * tc.stride + cx;
@@ -165,9 +175,13 @@ void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, co
         bool one_region = true;
         for (const auto& [cx, cy] : {std::pair{bx1, by0}, std::pair{bx0, by1}, std::pair{bx1, by1}})
           one_region = one_region && same_material_region(m, a.position, traced(cx, cy).position);
-        if (one_region)
+        if (one_region) {
+          const bool planar = !scene.is_sphere(a);
+          tc.blocks.push_back({evaluate_material(m, a.position), planar,
+                               planar ? facing_normal(a.normal, eye - a.position) : glm::vec3(0.0f)});
           for (int py = by0; py < by1; ++py)
-            for (int px = bx0; px < bx1; ++px) tc.plain[size_t(py) * w + px] = 1;
+            for (int px = bx0; px < bx1; ++px) tc.plain[size_t(py) * w + px] = int(tc.blocks.size() - 1);
+        }
       }
       for (int cy = by0; cy <= by1; ++cy)
         for (int cx = bx0; cx <= bx1; ++cx) {
@@ -354,12 +368,15 @@ void footprint_gbuffer(const PixelContext& pc, int x, int y, const TileCorners& 
   const Hit(&c)[4] = {c00, corners.at(x + 1, y), corners.at(x, y + 1), corners.at(x + 1, y + 1)};
   Rng rng(pc.settings.seed ^ 0x6B0FF5E7u, 0x9B1D5EEDu, static_cast<uint32_t>(i));
   FootprintSum sum;
-  if (corners.plain_at(x, y)) {
+  if (const auto* block = corners.plain_at(x, y)) {
     // What SurfaceFootprint::square does for a square in one region, without its tests.
-    const glm::vec3 eye = pc.rays.eye();
-    const glm::vec3 n = facing_normal(c[0].normal, eye - c[0].position) + facing_normal(c[1].normal, eye - c[1].position) +
-                        facing_normal(c[2].normal, eye - c[2].position) + facing_normal(c[3].normal, eye - c[3].position);
-    sum.add(evaluate_material(scene.material_of(c00), c00.position), glm::normalize(n), 1.0f);
+    glm::vec3 n = block->normal;
+    if (!block->planar) {
+      const glm::vec3 eye = pc.rays.eye();
+      n = glm::normalize(facing_normal(c[0].normal, eye - c[0].position) + facing_normal(c[1].normal, eye - c[1].position) +
+                         facing_normal(c[2].normal, eye - c[2].position) + facing_normal(c[3].normal, eye - c[3].position));
+    }
+    sum.add(block->params, n, 1.0f);
   } else if (same_surface(scene, c00, c[1]) && same_surface(scene, c00, c[2]) && same_surface(scene, c00, c[3])) {
     int depth = 0;
     while ((1 << depth) < 4 * k) ++depth;
