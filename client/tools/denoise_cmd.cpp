@@ -234,7 +234,7 @@ int run_denoise(const std::vector<std::string>& argv) {
       if (rough_guides)
         for (const auto& r : rough_guides->channels)
           if (r.id == ch.id)
-            where = " where " + rough_guides->key.describe() + fmt(" < %g, else ", rough_guides->from) + r.describe();
+            where = " where " + rough_guides->describe_rule() + ", else " + r.describe();
       std::fprintf(stderr, "dn:   %-12s <- %s%s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str(),
                    where.c_str());
     }
@@ -349,14 +349,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     LoadedFrame lf = load_frame(exr, plan, frames[i]);
     cameras.apply(exr, frames[i], lf.camera);
     apply_camera_conversions(lf, plan, exr);
-    if (rough_guides) {
-      std::vector<ResolvedChannel> rough_plan{rough_guides->key};
-      rough_plan.insert(rough_plan.end(), rough_guides->channels.begin(), rough_guides->channels.end());
-      LoadedFrame rough = load_frame(exr, rough_plan, frames[i]);
-      rough.camera = lf.camera;
-      apply_camera_conversions(rough, rough_plan, exr);
-      apply_rough_guides(lf, rough, *rough_guides);
-    }
+    if (rough_guides) apply_rough_guides(lf, exr, *rough_guides);
     return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));

@@ -192,23 +192,37 @@ void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChan
   }
 }
 
-void apply_rough_guides(LoadedFrame& frame, const LoadedFrame& rough, const RoughGuidePlan& guides) {
-  auto find = [](const LoadedFrame& f, protocol::ChannelId id) -> const std::vector<float>* {
-    for (const auto& p : f.planes)
+void apply_rough_guides(LoadedFrame& frame, const dn::image::ExrReader& exr, const RoughGuidePlan& guides) {
+  std::vector<ResolvedChannel> plan = guides.channels;
+  if (guides.key) plan.push_back(*guides.key);
+  LoadedFrame rough = load_frame(exr, plan, frame.number);
+  rough.camera = frame.camera;
+  apply_camera_conversions(rough, plan, exr);
+  auto find = [](LoadedFrame& f, protocol::ChannelId id) -> std::vector<float>* {
+    for (auto& p : f.planes)
       if (p.id == id) return &p.data;
     return nullptr;
   };
-  const std::vector<float>* key = find(rough, guides.key.id);
-  if (!key) throw std::logic_error("apply_rough_guides: the rough frame has no key plane");
+  const size_t pixels = size_t(frame.width) * size_t(frame.height);
+  std::vector<char> mirror(pixels, 0);
+  if (guides.key) {
+    const std::vector<float>& key = *find(rough, guides.key->id);
+    for (size_t i = 0; i < pixels; ++i) mirror[i] = key[i] < guides.from;  // NaN: not a mirror
+  } else {
+    const std::vector<float>* past = find(frame, protocol::ChannelId::Depth);
+    const std::vector<float>* primary = find(rough, protocol::ChannelId::Depth);
+    if (!past || !primary) throw std::logic_error("apply_rough_guides: no depth to compare");
+    for (size_t i = 0; i < pixels; ++i)
+      mirror[i] = std::isfinite((*primary)[i]) && (*past)[i] > (*primary)[i] * (1.0f + kPastPrimaryDepth);
+  }
   for (const auto& ch : guides.channels) {
     const std::vector<float>* from = find(rough, ch.id);
-    for (auto& p : frame.planes) {
-      if (p.id != ch.id || !from || from->size() != p.data.size()) continue;
-      const size_t n = p.data.size() / key->size();
-      for (size_t i = 0; i < key->size(); ++i)
-        if (!((*key)[i] < guides.from))  // rough, or NaN: the primary hit's guides
-          for (size_t k = 0; k < n; ++k) p.data[i * n + k] = (*from)[i * n + k];
-    }
+    std::vector<float>* to = find(frame, ch.id);
+    if (!from || !to || from->size() != to->size()) continue;
+    const size_t n = to->size() / pixels;
+    for (size_t i = 0; i < pixels; ++i)
+      if (!mirror[i])
+        for (size_t k = 0; k < n; ++k) (*to)[i * n + k] = (*from)[i * n + k];
   }
 }
 

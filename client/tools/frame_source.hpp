@@ -43,9 +43,11 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
 void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
                               const dn::image::ExrReader& exr);
 
-// Per-pixel guides: where `rough` (loaded with the plan {guides.key} +
-// guides.channels, camera conversions applied) has a key (roughness) at or
-// above guides.from or not finite, `frame`'s guide planes take rough's values.
-void apply_rough_guides(LoadedFrame& frame, const LoadedFrame& rough, const RoughGuidePlan& guides);
+// Per-pixel guides: loads guides.channels (and the key) from `exr` with
+// `frame`'s camera, and where a pixel is not a mirror by guides' rule — its
+// key (roughness) at or above guides.from or not finite; without a key, its
+// depth in `frame` (the Denoising Depth's) within kPastPrimaryDepth of the
+// primary depth — `frame`'s guide planes take the loaded values.
+void apply_rough_guides(LoadedFrame& frame, const dn::image::ExrReader& exr, const RoughGuidePlan& guides);
 
 }  // namespace dn::cli

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 
@@ -346,17 +347,27 @@ std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std:
                                                 const std::vector<std::string>& chans) {
   if (!preset.rough_guides) return std::nullopt;
   const auto& rg = *preset.rough_guides;
-  auto key = resolve(ChannelSpec{ChannelId::Roughness, {{{L(rg.key)}}}}, chans, preset.layer_prefix);
-  if (!key) return std::nullopt;
-  RoughGuidePlan out{*key, rg.from, {}};
+  RoughGuidePlan out{resolve(ChannelSpec{ChannelId::Roughness, {{{L(rg.key)}}}}, chans, preset.layer_prefix),
+                     rg.from, {}};
   for (const auto& c : plan) {
     if (!c.past_specular) continue;
     for (const auto& s : rg.channels)
       if (s.id == c.id)
         if (auto r = resolve(s, chans, preset.layer_prefix)) out.channels.push_back(std::move(*r));
   }
-  if (out.channels.empty()) return std::nullopt;
+  const bool has_depth = std::any_of(out.channels.begin(), out.channels.end(),
+                                     [](const ResolvedChannel& c) { return c.id == ChannelId::Depth; });
+  if (out.channels.empty() || (!out.key && !has_depth)) return std::nullopt;
   return out;
+}
+
+std::string RoughGuidePlan::describe_rule() const {
+  if (key) {
+    char bound[32];
+    std::snprintf(bound, sizeof bound, " < %g", double(from));
+    return key->describe() + bound;
+  }
+  return "the Denoising Depth lies beyond Depth";
 }
 
 std::vector<ChannelId> parse_channel_list(const std::string& list) {

@@ -86,6 +86,11 @@ struct Preset {
 // passes": on the bench scene 0.02 and 0.1 measure alike; 0.3 takes in the
 // gold sphere, roughness 0.2, and svgf's relMSE rises 2.6x).
 inline constexpr float kCyclesMirrorRoughness = 0.02f;
+// Without a Roughness AOV: a pixel's path went past its primary hit when the
+// Denoising Depth, as a view depth, exceeds Depth by more than this fraction
+// (where the path stops they agree to <= 1 % at 1 spp: the sample is not at
+// the pixel centre; CyclesFixtures.VirtualDepthIsTheViewDepth...).
+inline constexpr float kPastPrimaryDepth = 0.02f;
 
 // The preset for `name` ("dnrender", "cycles" or "auto": cycles when the file
 // has a "<layer>.Combined.R" channel). `view_layer` overrides the Cycles view
@@ -128,14 +133,19 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
                                            const std::optional<std::vector<protocol::ChannelId>>& only,
                                            const std::vector<std::string>& exr_channels, const std::string& file);
 
-// Preset::rough_guides resolved for a plan: the key layer (as a roughness
-// channel) and, for each planned channel taken past_specular, the recipe that
-// replaces it on pixels that are not mirrors. Empty when the preset has none,
-// the file lacks the key, or no planned channel is past_specular.
+// Preset::rough_guides resolved for a plan: for each planned channel taken
+// past_specular, the recipe that replaces it on pixels that are not mirrors,
+// and how a mirror is told: by the key layer (as a roughness channel) below
+// `from`, or, when the file has no key layer, by the path going past the
+// primary hit (the past_specular depth beyond the primary depth by more than
+// kPastPrimaryDepth; that needs depth among the channels). Empty when the
+// preset has none, no planned channel is past_specular, or neither way
+// applies.
 struct RoughGuidePlan {
-  ResolvedChannel key;
+  std::optional<ResolvedChannel> key;
   float from = 0.0f;
   std::vector<ResolvedChannel> channels;
+  std::string describe_rule() const;  // "ViewLayer.Roughness.X < 0.02", or the depth rule
 };
 std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std::vector<ResolvedChannel>& plan,
                                                 const std::vector<std::string>& exr_channels);

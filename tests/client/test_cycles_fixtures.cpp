@@ -103,27 +103,25 @@ struct RadianceFrame {
   LoadedFrame frame;
   std::optional<RoughGuidePlan> guides;
 };
-RadianceFrame load_radiance_frame(const std::string& name, bool rough_guides) {
+// `without`: EXR channels containing it are hidden from the plan (as if the
+// file lacked them).
+RadianceFrame load_radiance_frame(const std::string& name, bool rough_guides, const std::string& without = "") {
   const dn::image::ExrReader exr(fixture(name));
-  const Preset preset = make_preset("cycles", exr.channels());
+  std::vector<std::string> channels;
+  for (const auto& c : exr.channels())
+    if (without.empty() || c.find(without) == std::string::npos) channels.push_back(c);
+  const Preset preset = make_preset("cycles", channels);
   const auto p = svgf_like();
-  const auto plan = plan_channels(preset, {}, &p, std::nullopt, exr.channels(), fixture(name));
+  const auto plan = plan_channels(preset, {}, &p, std::nullopt, channels, fixture(name));
   RadianceFrame r;
-  if (rough_guides) r.guides = plan_rough_guides(preset, plan, exr.channels());
+  if (rough_guides) r.guides = plan_rough_guides(preset, plan, channels);
   r.frame = load_frame(exr, plan, 0);
   const auto positions = exr.read({"ViewLayer.Position.X", "ViewLayer.Position.Y", "ViewLayer.Position.Z"});
   const RecoveredCamera cam = recover_camera(positions, exr.width(), exr.height());
   r.frame.camera.view = cam.view;
   r.frame.camera.projection = cam.projection;
   apply_camera_conversions(r.frame, plan, exr);
-  if (r.guides) {
-    std::vector<ResolvedChannel> rough_plan{r.guides->key};
-    rough_plan.insert(rough_plan.end(), r.guides->channels.begin(), r.guides->channels.end());
-    LoadedFrame rough = load_frame(exr, rough_plan, 0);
-    rough.camera = r.frame.camera;
-    apply_camera_conversions(rough, rough_plan, exr);
-    apply_rough_guides(r.frame, rough, *r.guides);
-  }
+  if (r.guides) apply_rough_guides(r.frame, exr, *r.guides);
   return r;
 }
 
@@ -192,6 +190,48 @@ TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
   EXPECT_GT(mirrors, 20u) << "the mirror sphere";
   EXPECT_GT(others, mirrors);
   EXPECT_EQ(beyond, mirrors) << "mirror pixels whose depth lies beyond the mirror";
+}
+
+// Without a Roughness AOV, a mirror is told by its path going on past the
+// primary hit (the Denoising Depth beyond Depth). The file's AOV is the
+// oracle: mirror pixels that show a surface take the Denoising Albedo, and
+// pixels where Cycles stops at the primary hit (roughness > 0.27) DiffCol
+// and Depth.
+TEST(CyclesFixtures, WithoutTheRoughnessAovTheDepthTellsMirrors) {
+  const RadianceFrame r = load_radiance_frame("frame_0001.exr", true, ".Roughness.");
+  ASSERT_TRUE(r.guides.has_value());
+  EXPECT_FALSE(r.guides->key.has_value());
+  EXPECT_EQ(r.guides->describe_rule(), "the Denoising Depth lies beyond Depth");
+  const dn::image::ExrReader exr(fixture("frame_0001.exr"));
+  const auto z = exr.read_channel("ViewLayer.Depth.Z");
+  const auto rough = exr.read_channel("ViewLayer.Roughness.X");
+  const auto diffcol = exr.read({"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B"});
+  const auto dalb =
+      exr.read({"ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B"});
+  const auto dnrm =
+      exr.read({"ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z"});
+  const auto& depth = plane(r.frame, ChannelId::Depth);
+  const auto& albedo = plane(r.frame, ChannelId::Albedo);
+  size_t mirrors = 0, as_mirror = 0, rough_pixels = 0;
+  for (size_t i = 0; i < z.size(); ++i) {
+    if (!(z[i] < 1e9f)) continue;
+    const bool world = dnrm[3 * i] == 0.0f && dnrm[3 * i + 1] == 0.0f && dnrm[3 * i + 2] == 0.0f;
+    if (rough[i] < kCyclesMirrorRoughness && !world) {
+      ++mirrors;
+      bool same = depth[i] > z[i];
+      for (int k = 0; k < 3; ++k) same = same && albedo[3 * i + k] == std::min(dalb[3 * i + k], 1.0f);
+      as_mirror += same;
+    } else if (rough[i] > 0.3f) {
+      ++rough_pixels;
+      ASSERT_EQ(depth[i], z[i]) << "pixel " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], diffcol[3 * i + k]) << "pixel " << i;
+    }
+  }
+  EXPECT_GT(mirrors, 20u);
+  EXPECT_GT(rough_pixels, mirrors);
+  // A mirror pixel reflecting something within 2 % of its own depth (its
+  // contact with the floor) is taken as primary: allow a few.
+  EXPECT_GE(double(as_mirror), 0.9 * double(mirrors)) << as_mirror << " of " << mirrors;
 }
 
 // A missing pass names the Blender setting that makes it.
