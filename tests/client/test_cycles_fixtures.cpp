@@ -154,6 +154,21 @@ TEST(CyclesFixtures, VirtualDepthIsTheViewDepthWhereCyclesStopsAtThePrimaryHit) 
   EXPECT_GE(worst_unconverted, 0.05) << "the raw path length differs (the test would see a missing conversion)";
 }
 
+// The passes the guide tests compare against, straight from the file.
+struct GuidePasses {
+  std::vector<float> z, rough, diffcol, dalb, dnrm;
+  explicit GuidePasses(const std::string& name) {
+    const dn::image::ExrReader exr(fixture(name));
+    z = exr.read_channel("ViewLayer.Depth.Z");
+    rough = exr.read_channel("ViewLayer.Roughness.X");
+    diffcol = exr.read({"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B"});
+    dalb = exr.read({"ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B"});
+    dnrm = exr.read({"ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z"});
+  }
+  // Where a mirror shows the world: Denoising Normal 0.
+  bool shows_world(size_t i) const { return dnrm[3 * i] == 0.0f && dnrm[3 * i + 1] == 0.0f && dnrm[3 * i + 2] == 0.0f; }
+};
+
 // Mirrors (Roughness AOV < kCyclesMirrorRoughness) take the albedo and depth
 // of what they reflect, so their depth lies beyond the mirror's own surface
 // (the path goes on from it);
@@ -161,14 +176,8 @@ TEST(CyclesFixtures, VirtualDepthIsTheViewDepthWhereCyclesStopsAtThePrimaryHit) 
 TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
   const RadianceFrame r = load_radiance_frame("frame_0001.exr", true);
   ASSERT_TRUE(r.guides.has_value()) << "the fixture has the Roughness AOV";
-  const dn::image::ExrReader exr(fixture("frame_0001.exr"));
-  const auto z = exr.read_channel("ViewLayer.Depth.Z");
-  const auto rough = exr.read_channel("ViewLayer.Roughness.X");
-  const auto diffcol = exr.read({"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B"});
-  const auto dalb =
-      exr.read({"ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B"});
-  const auto dnrm =
-      exr.read({"ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z"});
+  const GuidePasses f("frame_0001.exr");
+  const auto &z = f.z, &rough = f.rough, &diffcol = f.diffcol, &dalb = f.dalb;
   const auto& depth = plane(r.frame, ChannelId::Depth);
   const auto& albedo = plane(r.frame, ChannelId::Albedo);
   size_t mirrors = 0, beyond = 0, others = 0;
@@ -177,7 +186,7 @@ TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
     if (rough[i] < kCyclesMirrorRoughness) {
       // Where the mirror shows the world (Denoising Normal 0), Cycles 3.4
       // leaves the depth at the mirror (later versions write FLT_MAX).
-      const bool world = dnrm[3 * i] == 0.0f && dnrm[3 * i + 1] == 0.0f && dnrm[3 * i + 2] == 0.0f;
+      const bool world = f.shows_world(i);
       ++mirrors;
       beyond += world ? depth[i] >= z[i] * 0.9999f : depth[i] > z[i] * 1.0001f;
       for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], std::min(dalb[3 * i + k], 1.0f)) << "pixel " << i;
@@ -202,21 +211,14 @@ TEST(CyclesFixtures, WithoutTheRoughnessAovTheDepthTellsMirrors) {
   ASSERT_TRUE(r.guides.has_value());
   EXPECT_FALSE(r.guides->key.has_value());
   EXPECT_EQ(r.guides->describe_rule(), "the Denoising Depth lies beyond Depth");
-  const dn::image::ExrReader exr(fixture("frame_0001.exr"));
-  const auto z = exr.read_channel("ViewLayer.Depth.Z");
-  const auto rough = exr.read_channel("ViewLayer.Roughness.X");
-  const auto diffcol = exr.read({"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.B"});
-  const auto dalb =
-      exr.read({"ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B"});
-  const auto dnrm =
-      exr.read({"ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z"});
+  const GuidePasses f("frame_0001.exr");
+  const auto &z = f.z, &rough = f.rough, &diffcol = f.diffcol, &dalb = f.dalb;
   const auto& depth = plane(r.frame, ChannelId::Depth);
   const auto& albedo = plane(r.frame, ChannelId::Albedo);
   size_t mirrors = 0, as_mirror = 0, rough_pixels = 0;
   for (size_t i = 0; i < z.size(); ++i) {
     if (!(z[i] < 1e9f)) continue;
-    const bool world = dnrm[3 * i] == 0.0f && dnrm[3 * i + 1] == 0.0f && dnrm[3 * i + 2] == 0.0f;
-    if (rough[i] < kCyclesMirrorRoughness && !world) {
+    if (rough[i] < kCyclesMirrorRoughness && !f.shows_world(i)) {
       ++mirrors;
       bool same = depth[i] > z[i];
       for (int k = 0; k < 3; ++k) same = same && albedo[3 * i + k] == std::min(dalb[3 * i + k], 1.0f);
