@@ -121,7 +121,6 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
           p.data[i * n + k] += all[i * stride + term[k]] * (factor.empty() ? 1.0f : all[i * stride + factor[k]]);
     }
     if (ch.convert == Convert::CyclesDepth || ch.convert == Convert::CyclesVirtualDepth) convert_cycles_depth(p.data);
-    if (ch.convert == Convert::CyclesAlbedo) convert_cycles_albedo(p.data);
     if (ch.convert == Convert::CyclesVector) convert_cycles_vector(p.data);
     f.planes.push_back(std::move(p));
   }

@@ -167,7 +167,7 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
     // Roughness AOV only on mirrors (rough_guides below).
     p.radiance_mode = {
         spec(ChannelId::Albedo,
-             {{{L(P + "Denoising Albedo")}, Convert::CyclesAlbedo, true}, {{L(P + "DiffCol")}}}),
+             {{{L(P + "Denoising Albedo")}, Convert::None, true}, {{L(P + "DiffCol")}}}),
     };
     p.rough_guides = Preset::RoughGuides{
         P + "Roughness",
@@ -285,7 +285,6 @@ std::string ResolvedChannel::describe() const {
   }
   if (convert == Convert::CyclesDepth) out += " (Cycles depth)";
   if (convert == Convert::CyclesVector) out += " (Cycles vector)";
-  if (convert == Convert::CyclesAlbedo) out += " (clamped to 1)";
   if (convert == Convert::CyclesVirtualDepth) out += " (path length to view depth)";
   return out;
 }
@@ -510,10 +509,6 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
 void convert_cycles_depth(std::span<float> depth) {
   for (float& d : depth)
     if (!std::isfinite(d) || d >= 1e9f) d = std::numeric_limits<float>::infinity();
-}
-
-void convert_cycles_albedo(std::span<float> rgb) {
-  for (float& a : rgb) a = std::min(a, 1.0f);
 }
 
 void convert_cycles_vector(std::span<float> xy) {

@@ -25,7 +25,6 @@ enum class Convert {
   None,
   CyclesDepth,   // Depth.Z: view-axis distance; background 1e10 -> +inf
   CyclesVector,  // Vector.XY: (p_prev - p) in raster space, +y up -> PixelsToPrevious, y down
-  CyclesAlbedo,  // Denoising Albedo: components above 1 (an emitter a specular path reached) -> 1
   CyclesVirtualDepth,  // Denoising Depth: length of the path to the first non-specular hit -> that point's depth
                        // along the pixel's view ray (x cos of the ray's angle to the view axis; needs the frame's
                        // projection); background (FLT_MAX) -> +inf
@@ -158,10 +157,5 @@ std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);
 void convert_cycles_depth(std::span<float> depth);
 // Vector: xy = (V.x, -V.y), in place on 2-component data.
 void convert_cycles_vector(std::span<float> xy);
-// Denoising Albedo: Cycles writes the radiance of the light a near-specular
-// path reaches (up to 181 on the fixtures) where an albedo would be; the
-// protocol's albedo is in [0, 1], so components above 1 become 1 and the light
-// stays in the radiance the server filters (under its HDR step rule).
-void convert_cycles_albedo(std::span<float> rgb);
 
 }  // namespace dn::cli

@@ -86,7 +86,7 @@ TEST(CyclesFixtures, RadianceModeTakesTheDenoisingAlbedo) {
   const auto plan = plan_channels(preset, {}, &p, std::nullopt, exr.channels(), fixture("frame_0001.exr"));
   bool radiance = false;
   for (const auto& c : plan) {
-    if (c.id == ChannelId::Albedo) EXPECT_EQ(c.describe(), "ViewLayer.Denoising Albedo.{R,G,B} (clamped to 1)");
+    if (c.id == ChannelId::Albedo) EXPECT_EQ(c.describe(), "ViewLayer.Denoising Albedo.{R,G,B}");
     if (c.id == ChannelId::Emission) EXPECT_EQ(c.describe(), "ViewLayer.Emit.{R,G,B} + ViewLayer.Env.{R,G,B}");
     EXPECT_NE(c.id, ChannelId::DiffuseLighting);
     EXPECT_NE(c.id, ChannelId::SpecularLighting);
@@ -189,7 +189,7 @@ TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
       const bool world = f.shows_world(i);
       ++mirrors;
       beyond += world ? depth[i] >= z[i] * 0.9999f : depth[i] > z[i] * 1.0001f;
-      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], std::min(dalb[3 * i + k], 1.0f)) << "pixel " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], dalb[3 * i + k]) << "pixel " << i;
     } else {
       ++others;
       ASSERT_EQ(depth[i], z[i]) << "pixel " << i;
@@ -221,7 +221,7 @@ TEST(CyclesFixtures, WithoutTheRoughnessAovTheDepthTellsMirrors) {
     if (rough[i] < kCyclesMirrorRoughness && !f.shows_world(i)) {
       ++mirrors;
       bool same = depth[i] > z[i];
-      for (int k = 0; k < 3; ++k) same = same && albedo[3 * i + k] == std::min(dalb[3 * i + k], 1.0f);
+      for (int k = 0; k < 3; ++k) same = same && albedo[3 * i + k] == dalb[3 * i + k];
       as_mirror += same;
     } else if (rough[i] > 0.3f) {
       ++rough_pixels;
