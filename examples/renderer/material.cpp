@@ -55,9 +55,12 @@ glm::ivec4 pattern_cell(Pattern pattern, const glm::vec3& p, float scale) {
 
 }  // namespace
 
+MaterialRegion material_region(const Material& m, const glm::vec3& p) {
+  return {pattern_cell(m.albedo_map, p, m.map_scale), pattern_cell(m.roughness_map, p, m.map_scale)};
+}
+
 bool same_material_region(const Material& m, const glm::vec3& a, const glm::vec3& b) {
-  return pattern_cell(m.albedo_map, a, m.map_scale) == pattern_cell(m.albedo_map, b, m.map_scale) &&
-         pattern_cell(m.roughness_map, a, m.map_scale) == pattern_cell(m.roughness_map, b, m.map_scale);
+  return material_region(m, a) == material_region(m, b);
 }
 
 SurfaceParams evaluate_material(const Material& m, const glm::vec3& p) {

@@ -47,8 +47,16 @@ struct SurfaceParams {
 
 SurfaceParams evaluate_material(const Material& m, const glm::vec3& world_position);
 
-// Whether a and b lie in one convex region over which m's maps are constant
-// (so is every point of a convex set with its corners in that region).
+// The convex region of m's maps that holds a point: the cell of each map.
+// Points with equal regions lie in one convex set over which the maps are
+// constant (so is every point of a convex set with its corners in it).
+struct MaterialRegion {
+  glm::ivec4 albedo{0}, roughness{0};
+  bool operator==(const MaterialRegion&) const = default;
+};
+MaterialRegion material_region(const Material& m, const glm::vec3& p);
+
+// Whether a and b lie in one convex region over which m's maps are constant.
 bool same_material_region(const Material& m, const glm::vec3& a, const glm::vec3& b);
 
 }  // namespace dn::render

@@ -157,6 +157,44 @@ void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, co
     }
     return tc.hits[i];
   };
+  // Splits block [bx0, bx1] x [by0, by1] (tile corner coordinates, more than
+  // one pixel) in four, or in two when it is one pixel thick, and calls f on
+  // each part.
+  auto for_parts = [](int bx0, int by0, int bx1, int by1, auto&& f) {
+    const int mx = (bx0 + bx1) / 2, my = (by0 + by1) / 2;
+    if (bx1 - bx0 > 1 && by1 - by0 > 1) {
+      f(bx0, by0, mx, my);
+      f(mx, by0, bx1, my);
+      f(bx0, my, mx, by1);
+      f(mx, my, bx1, by1);
+    } else if (bx1 - bx0 > 1) {
+      f(bx0, by0, mx, by1);
+      f(mx, by0, bx1, by1);
+    } else {
+      f(bx0, by0, bx1, my);
+      f(bx0, my, bx1, by1);
+    }
+  };
+  const auto at = [&](int cx, int cy) -> const Hit& { return tc.hits[size_t(cy) * tc.stride + cx]; };
+  // Within a block on one surface whose corners are all set: the largest
+  // parts whose four corners share one region of the material's maps are
+  // plain blocks (a material without maps: the whole block).
+  auto mark_plain = [&](auto&& self, const Material& m, int bx0, int by0, int bx1, int by1) -> void {
+    const Hit& a = at(bx0, by0);
+    const bool one_region = same_material_region(m, a.position, at(bx1, by0).position) &&
+                            same_material_region(m, a.position, at(bx0, by1).position) &&
+                            same_material_region(m, a.position, at(bx1, by1).position);
+    if (one_region) {
+      const bool planar = !scene.is_sphere(a);
+      tc.blocks.push_back({evaluate_material(m, a.position), planar,
+                           planar ? facing_normal(a.normal, eye - a.position) : glm::vec3(0.0f)});
+      for (int py = by0; py < by1; ++py)
+        for (int px = bx0; px < bx1; ++px) tc.plain[size_t(py) * w + px] = int(tc.blocks.size() - 1);
+      return;
+    }
+    if (bx1 - bx0 <= 1 && by1 - by0 <= 1) return;
+    for_parts(bx0, by0, bx1, by1, [&](int x0p, int y0p, int x1p, int y1p) { self(self, m, x0p, y0p, x1p, y1p); });
+  };
   // Blocks [bx0, bx1] x [by0, by1] in tile corner coordinates.
   auto fill = [&](auto&& self, int bx0, int by0, int bx1, int by1) -> void {
     const Hit& a = traced(bx0, by0);
@@ -167,49 +205,26 @@ void build_tile_corners(const PixelContext& pc, int x0, int y0, int w, int h, co
     bool uniform = corners_agree;
     for (int py = by0; uniform && py < by1; ++py)
       for (int px = bx0; uniform && px < bx1; ++px) uniform = same_surface(scene, a, centres[size_t(py) * w + px]);
-    if (uniform) {
-      const Hit surface = a;
-      const Material& m = scene.material_of(a);
-      const bool unmapped = m.albedo_map == Pattern::None && m.roughness_map == Pattern::None;
-      if (unmapped || !scene.is_sphere(a)) {
-        bool one_region = true;
-        for (const auto& [cx, cy] : {std::pair{bx1, by0}, std::pair{bx0, by1}, std::pair{bx1, by1}})
-          one_region = one_region && same_material_region(m, a.position, traced(cx, cy).position);
-        if (one_region) {
-          const bool planar = !scene.is_sphere(a);
-          tc.blocks.push_back({evaluate_material(m, a.position), planar,
-                               planar ? facing_normal(a.normal, eye - a.position) : glm::vec3(0.0f)});
-          for (int py = by0; py < by1; ++py)
-            for (int px = bx0; px < bx1; ++px) tc.plain[size_t(py) * w + px] = int(tc.blocks.size() - 1);
-        }
-      }
-      for (int cy = by0; cy <= by1; ++cy)
-        for (int cx = bx0; cx <= bx1; ++cx) {
-          const size_t i = size_t(cy) * tc.stride + cx;
-          if (tc.known[i]) continue;
-          const Hit hit = scene.intersect_surface(surface, eye, pc.rays.direction(float(x0 + cx), float(y0 + cy)));
-          if (hit.found) {
-            tc.hits[i] = hit;
-            tc.known[i] = 1;
-          } else {
-            traced(cx, cy);  // grazing rounding: trace it
-          }
-        }
+    if (!uniform) {
+      for_parts(bx0, by0, bx1, by1, [&](int x0p, int y0p, int x1p, int y1p) { self(self, x0p, y0p, x1p, y1p); });
       return;
     }
-    const int mx = (bx0 + bx1) / 2, my = (by0 + by1) / 2;
-    if (bx1 - bx0 > 1 && by1 - by0 > 1) {
-      self(self, bx0, by0, mx, my);
-      self(self, mx, by0, bx1, my);
-      self(self, bx0, my, mx, by1);
-      self(self, mx, my, bx1, by1);
-    } else if (bx1 - bx0 > 1) {
-      self(self, bx0, by0, mx, by1);
-      self(self, mx, by0, bx1, by1);
-    } else {
-      self(self, bx0, by0, bx1, my);
-      self(self, bx0, my, bx1, by1);
-    }
+    const Hit surface = a;
+    for (int cy = by0; cy <= by1; ++cy)
+      for (int cx = bx0; cx <= bx1; ++cx) {
+        const size_t i = size_t(cy) * tc.stride + cx;
+        if (tc.known[i]) continue;
+        const Hit hit = scene.intersect_surface(surface, eye, pc.rays.direction(float(x0 + cx), float(y0 + cy)));
+        if (hit.found) {
+          tc.hits[i] = hit;
+          tc.known[i] = 1;
+        } else {
+          traced(cx, cy);  // grazing rounding: trace it
+        }
+      }
+    const Material& m = scene.material_of(surface);
+    const bool unmapped = m.albedo_map == Pattern::None && m.roughness_map == Pattern::None;
+    if (unmapped || !scene.is_sphere(surface)) mark_plain(mark_plain, m, bx0, by0, bx1, by1);
   };
   fill(fill, 0, 0, w, h);
 }
@@ -246,7 +261,7 @@ struct SurfaceFootprint {
   // the material's maps, one straight boundary between them: the boundary is
   // a plane of the pattern meeting the face, so its screen image is a line.
   // It crosses the two edges whose ends differ; each crossing is found by
-  // bisection along its edge (to 2^-12 of the edge), and the square's area
+  // bisection along its edge (to 2^-8 of the edge), and the square's area
   // splits exactly between the two regions. False (nothing added) when that
   // shape does not hold: two diagonal corners alike, a third region met on an
   // edge, or a sphere (its boundaries are curves on screen).
@@ -255,15 +270,22 @@ struct SurfaceFootprint {
     // Corners in cyclic order around the square, with their screen positions.
     const int order[4] = {0, 1, 3, 2};
     const glm::vec2 at[4] = {{x0, y0}, {x0 + size, y0}, {x0, y0 + size}, {x0 + size, y0 + size}};
+    const MaterialRegion region_a = material_region(material, c[0].position);
+    MaterialRegion region_b;
     bool in_a[4];
     int b = -1;
     for (int k = 0; k < 4; ++k) {
-      in_a[k] = same_material_region(material, c[0].position, c[k].position);
-      if (!in_a[k] && b < 0) b = k;
+      const MaterialRegion r = material_region(material, c[k].position);
+      in_a[k] = r == region_a;
+      if (in_a[k]) continue;
+      if (b < 0) {
+        b = k;
+        region_b = r;
+      } else if (!(r == region_b)) {
+        return false;  // a third region at a corner
+      }
     }
     if (b < 0) return false;
-    for (int k = 0; k < 4; ++k)
-      if (!in_a[k] && !same_material_region(material, c[b].position, c[k].position)) return false;
     // Region A as a polygon: its corners and the two crossings, in cyclic order.
     glm::vec2 poly[6];
     int n = 0, crossings = 0;
@@ -274,12 +296,13 @@ struct SurfaceFootprint {
       if (++crossings > 2) return false;
       // Bisection between the A end and the B end of the edge.
       glm::vec2 lo = in_a[i] ? at[i] : at[j], hi = in_a[i] ? at[j] : at[i];
-      for (int it = 0; it < 12; ++it) {
+      for (int it = 0; it < 8; ++it) {
         const glm::vec2 mid = 0.5f * (lo + hi);
         const Hit h = point(mid.x, mid.y);
         if (!h.found) return false;
-        if (same_material_region(material, c[0].position, h.position)) lo = mid;
-        else if (same_material_region(material, c[b].position, h.position)) hi = mid;
+        const MaterialRegion r = material_region(material, h.position);
+        if (r == region_a) lo = mid;
+        else if (r == region_b) hi = mid;
         else return false;  // a third region on this edge
       }
       poly[n++] = 0.5f * (lo + hi);
