@@ -1,0 +1,120 @@
+#include "reflection_motion_reference.hpp"
+
+#include <cmath>
+
+namespace dn::test::reflect {
+
+double hit_distance(const HitField& current, const HitField& previous, int px, int py, int qx, int qy) {
+  if (!current.inside(px, py) || !previous.inside(qx, qy)) return kInvalid;
+  const size_t p = current.index(px, py), q = previous.index(qx, qy);
+  if (!current.valid[p] || !previous.valid[q]) return kInvalid;
+  const auto& a = current.position[p];
+  const auto& b = previous.position[q];
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+namespace {
+
+struct Search {
+  const HitField& current;
+  const HitField& previous;
+  int px, py;
+  IntegerMatch best;
+
+  // Strict improvement only: ties keep the earlier candidate.
+  bool consider(int qx, int qy) {
+    ++best.evaluations;
+    const double d = hit_distance(current, previous, px, py, qx, qy);
+    if (!(d < best.distance)) return false;
+    best.x = qx, best.y = qy, best.distance = d;
+    return true;
+  }
+};
+
+}  // namespace
+
+IntegerMatch diamond_search(const HitField& current, const HitField& previous, int px, int py,
+                            const std::array<double, 2>& motion, const SearchOptions& options) {
+  Search s{current, previous, px, py, {}};
+  s.best.x = px, s.best.y = py;
+  s.consider(px, py);  // start 1: the same pixel
+  if (std::isfinite(motion[0]) && std::isfinite(motion[1]))
+    s.consider(int(std::lround(px + motion[0])), int(std::lround(py + motion[1])));  // start 2: the primary motion
+  static constexpr int axes[4][2] = {{2, 0}, {-2, 0}, {0, 2}, {0, -2}};
+  static constexpr int diagonals[4][2] = {{1, 1}, {-1, 1}, {1, -1}, {-1, -1}};
+  const auto& large = options.large == LargeDiamond::Axes2 ? axes : diagonals;
+  int step = options.first_step;
+  int cx = s.best.x, cy = s.best.y;
+  for (int it = 0; it < options.max_iterations; ++it) {
+    for (const auto& o : large) s.consider(cx + o[0] * step, cy + o[1] * step);
+    if (s.best.x == cx && s.best.y == cy) {
+      if (step == 1) break;
+      step /= 2;
+    }
+    cx = s.best.x, cy = s.best.y;
+  }
+  // One final small diamond (SDSP) step.
+  for (const auto& o : {std::array{1, 0}, std::array{-1, 0}, std::array{0, 1}, std::array{0, -1}})
+    s.consider(cx + o[0], cy + o[1]);
+  return s.best;
+}
+
+IntegerMatch brute_force_search(const HitField& current, const HitField& previous, int px, int py, int radius) {
+  Search s{current, previous, px, py, {}};
+  s.best.x = px, s.best.y = py;
+  for (int dy = -radius; dy <= radius; ++dy)
+    for (int dx = -radius; dx <= radius; ++dx) s.consider(px + dx, py + dy);
+  return s.best;
+}
+
+SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous, int px, int py,
+                              const IntegerMatch& match) {
+  SubpixelMatch out;
+  out.x = match.x, out.y = match.y;
+  out.weights = {1.0, 0.0, 0.0, 0.0};
+  if (!std::isfinite(match.distance)) {
+    out.fell_back = true;
+    return out;
+  }
+  if (match.distance == 0.0) return out;  // exact: the pixel itself
+  // The four 2x2 blocks holding the match: origins (match + (ox, oy)), ox, oy in {-1, 0}.
+  double best_sum = kInvalid;
+  int bx = 0, by = 0;
+  std::array<double, 4> best_d{};
+  for (int oy = -1; oy <= 0; ++oy)
+    for (int ox = -1; ox <= 0; ++ox) {
+      std::array<double, 4> d;
+      double sum = 0.0;
+      for (int k = 0; k < 4; ++k) {
+        d[k] = hit_distance(current, previous, px, py, match.x + ox + (k & 1), match.y + oy + (k >> 1)) /
+               match.distance;
+        sum += d[k];
+      }
+      if (sum < best_sum) best_sum = sum, bx = match.x + ox, by = match.y + oy, best_d = d;
+    }
+  if (!std::isfinite(best_sum)) {  // every block has an invalid pixel
+    out.fell_back = true;
+    return out;
+  }
+  std::array<double, 4> w;
+  double total = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    w[k] = 1.0;
+    for (int j = 0; j < 4; ++j)
+      if (j != k) w[k] *= best_d[j];
+    total += w[k];
+  }
+  if (!(total > 0.0)) {  // two or more zero distances
+    out.fell_back = true;
+    return out;
+  }
+  out.x = out.y = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    out.weights[k] = w[k] / total;
+    out.x += out.weights[k] * (bx + (k & 1));
+    out.y += out.weights[k] * (by + (k >> 1));
+  }
+  return out;
+}
+
+}  // namespace dn::test::reflect

@@ -1,0 +1,74 @@
+// CPU reference of the reflection motion search of paper 001 (Voorhuis,
+// "Beyond SVGF", Alg. 1 and Eq. 1-3; ../shared/papers/IMPLEMENTATION-NOTES.md
+// C.2 R3, C.3, C.4), for pure-specular pixels: for pixel p, the pixel q of
+// the previous frame whose first non-specular hit position is closest to
+// p's, found by a diamond search from two starts (p itself and p + the
+// primary motion), then refined to sub-pixel precision. Double precision;
+// the groundwork of issue 12's `reflect` pipeline (its pass will be compared
+// with this).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace dn::test::reflect {
+
+// A per-pixel field of world positions (the first non-specular hit along the
+// mirror chain); pixels without one (not a mirror, background) are invalid.
+struct HitField {
+  int width = 0, height = 0;
+  std::vector<std::array<double, 3>> position;  // row-major, y down
+  std::vector<char> valid;
+  bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+  size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
+};
+
+inline constexpr double kInvalid = std::numeric_limits<double>::infinity();
+
+// Eq. 1: |W_p - PrevW_q|; +inf when q is off-screen or either has no hit.
+double hit_distance(const HitField& current, const HitField& previous, int px, int py, int qx, int qy);
+
+// The large diamond pattern (LDSP), scaled by the step size: the notes'
+// reading of Cheng et al. (centre + (+-2, 0), (0, +-2), so the final small
+// diamond at +-1 is not redundant), or the four diagonals (+-1, +-1).
+enum class LargeDiamond { Axes2, Diagonals };
+
+struct SearchOptions {
+  LargeDiamond large = LargeDiamond::Axes2;
+  int first_step = 4;       // 4 -> 2 -> 1
+  int max_iterations = 32;  // cap against ties (the search also stops on no strict improvement at step 1)
+};
+
+struct IntegerMatch {
+  int x = 0, y = 0;          // the best previous-frame pixel
+  double distance = kInvalid;
+  int evaluations = 0;       // distance evaluations (cost)
+};
+
+// Alg. 1 for pixel p. `motion` is p's primary motion in the service's
+// convention (PixelsToPrevious: p_prev = p + motion); the second start is
+// the pixel nearest to p + motion.
+IntegerMatch diamond_search(const HitField& current, const HitField& previous, int px, int py,
+                            const std::array<double, 2>& motion, const SearchOptions& options = {});
+
+// Every previous pixel within +-radius of p: the brute-force oracle.
+IntegerMatch brute_force_search(const HitField& current, const HitField& previous, int px, int py, int radius);
+
+struct SubpixelMatch {
+  double x = 0.0, y = 0.0;  // continuous previous-frame pixel position (pixel centres at integers)
+  std::array<double, 4> weights{};  // of the chosen 2x2 block, >= 0, summing to 1
+  bool fell_back = false;           // guards: no valid 2x2 block, or all weights 0
+};
+
+// Eq. 2-3 around the integer match: among the four 2x2 blocks that contain
+// it, the one with the smallest summed distance; each of its pixels weighted
+// by the product of the other three's distances (distances divided by the
+// match's distance first, so the products stay in range). One zero distance
+// returns that pixel exactly; two or more, or a block with an invalid pixel
+// only, fall back to the integer match.
+SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous, int px, int py,
+                              const IntegerMatch& match);
+
+}  // namespace dn::test::reflect
