@@ -1,6 +1,7 @@
 #include "reflection_motion_reference.hpp"
 
 #include <cmath>
+#include <functional>
 
 namespace dn::test::reflect {
 
@@ -13,29 +14,44 @@ double hit_distance(const HitField& current, const HitField& previous, int px, i
   return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
+double ray_distance(const RayField& current, const RayField& previous, int px, int py, int qx, int qy) {
+  if (!current.inside(px, py) || !previous.inside(qx, qy)) return kInvalid;
+  const size_t p = current.index(px, py), q = previous.index(qx, qy);
+  if (!current.valid[p] || !previous.valid[q] || !std::isfinite(current.depth[p]) || !std::isfinite(previous.depth[q]))
+    return kInvalid;
+  const bool p_near = current.depth[p] <= previous.depth[q];
+  const auto& no = p_near ? current.origin[p] : previous.origin[q];
+  const auto& nd = p_near ? current.direction[p] : previous.direction[q];
+  const double ndepth = p_near ? current.depth[p] : previous.depth[q];
+  const auto& fo = p_near ? previous.origin[q] : current.origin[p];
+  const auto& fd = p_near ? previous.direction[q] : current.direction[p];
+  const double v[3] = {no[0] + nd[0] * ndepth - fo[0], no[1] + nd[1] * ndepth - fo[1], no[2] + nd[2] * ndepth - fo[2]};
+  const double c[3] = {fd[1] * v[2] - fd[2] * v[1], fd[2] * v[0] - fd[0] * v[2], fd[0] * v[1] - fd[1] * v[0]};
+  return std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+}
+
 namespace {
 
+// Distance of p's feature to previous pixel q's.
+using Distance = std::function<double(int qx, int qy)>;
+
 struct Search {
-  const HitField& current;
-  const HitField& previous;
-  int px, py;
+  const Distance& distance;
   IntegerMatch best;
 
   // Strict improvement only: ties keep the earlier candidate.
   bool consider(int qx, int qy) {
     ++best.evaluations;
-    const double d = hit_distance(current, previous, px, py, qx, qy);
+    const double d = distance(qx, qy);
     if (!(d < best.distance)) return false;
     best.x = qx, best.y = qy, best.distance = d;
     return true;
   }
 };
 
-}  // namespace
-
-IntegerMatch diamond_search(const HitField& current, const HitField& previous, int px, int py,
-                            const std::array<double, 2>& motion, const SearchOptions& options) {
-  Search s{current, previous, px, py, {}};
+IntegerMatch diamond(const Distance& distance, int px, int py, const std::array<double, 2>& motion,
+                     const SearchOptions& options) {
+  Search s{distance, {}};
   s.best.x = px, s.best.y = py;
   s.consider(px, py);  // start 1: the same pixel
   if (std::isfinite(motion[0]) && std::isfinite(motion[1]))
@@ -59,16 +75,15 @@ IntegerMatch diamond_search(const HitField& current, const HitField& previous, i
   return s.best;
 }
 
-IntegerMatch brute_force_search(const HitField& current, const HitField& previous, int px, int py, int radius) {
-  Search s{current, previous, px, py, {}};
+IntegerMatch brute_force(const Distance& distance, int px, int py, int radius) {
+  Search s{distance, {}};
   s.best.x = px, s.best.y = py;
   for (int dy = -radius; dy <= radius; ++dy)
     for (int dx = -radius; dx <= radius; ++dx) s.consider(px + dx, py + dy);
   return s.best;
 }
 
-SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous, int px, int py,
-                              const IntegerMatch& match) {
+SubpixelMatch refine(const Distance& distance, const IntegerMatch& match) {
   SubpixelMatch out;
   out.x = match.x, out.y = match.y;
   out.weights = {1.0, 0.0, 0.0, 0.0};
@@ -86,8 +101,7 @@ SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous,
       std::array<double, 4> d;
       double sum = 0.0;
       for (int k = 0; k < 4; ++k) {
-        d[k] = hit_distance(current, previous, px, py, match.x + ox + (k & 1), match.y + oy + (k >> 1)) /
-               match.distance;
+        d[k] = distance(match.x + ox + (k & 1), match.y + oy + (k >> 1)) / match.distance;
         sum += d[k];
       }
       if (sum < best_sum) best_sum = sum, bx = match.x + ox, by = match.y + oy, best_d = d;
@@ -115,6 +129,33 @@ SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous,
     out.y += out.weights[k] * (by + (k >> 1));
   }
   return out;
+}
+
+}  // namespace
+
+IntegerMatch diamond_search(const HitField& current, const HitField& previous, int px, int py,
+                            const std::array<double, 2>& motion, const SearchOptions& options) {
+  return diamond([&](int qx, int qy) { return hit_distance(current, previous, px, py, qx, qy); }, px, py, motion,
+                 options);
+}
+IntegerMatch diamond_search(const RayField& current, const RayField& previous, int px, int py,
+                            const std::array<double, 2>& motion, const SearchOptions& options) {
+  return diamond([&](int qx, int qy) { return ray_distance(current, previous, px, py, qx, qy); }, px, py, motion,
+                 options);
+}
+IntegerMatch brute_force_search(const HitField& current, const HitField& previous, int px, int py, int radius) {
+  return brute_force([&](int qx, int qy) { return hit_distance(current, previous, px, py, qx, qy); }, px, py, radius);
+}
+IntegerMatch brute_force_search(const RayField& current, const RayField& previous, int px, int py, int radius) {
+  return brute_force([&](int qx, int qy) { return ray_distance(current, previous, px, py, qx, qy); }, px, py, radius);
+}
+SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous, int px, int py,
+                              const IntegerMatch& match) {
+  return refine([&](int qx, int qy) { return hit_distance(current, previous, px, py, qx, qy); }, match);
+}
+SubpixelMatch refine_subpixel(const RayField& current, const RayField& previous, int px, int py,
+                              const IntegerMatch& match) {
+  return refine([&](int qx, int qy) { return ray_distance(current, previous, px, py, qx, qy); }, match);
 }
 
 }  // namespace dn::test::reflect

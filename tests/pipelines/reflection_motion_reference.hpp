@@ -1,9 +1,10 @@
 // CPU reference of the reflection motion search of paper 001 (Voorhuis,
 // "Beyond SVGF", Alg. 1 and Eq. 1-3; ../shared/papers/IMPLEMENTATION-NOTES.md
-// C.2 R3, C.3, C.4), for pure-specular pixels: for pixel p, the pixel q of
-// the previous frame whose first non-specular hit position is closest to
-// p's, found by a diamond search from two starts (p itself and p + the
-// primary motion), then refined to sub-pixel precision. Double precision;
+// C.2 R3, C.3, C.4): for pixel p, the pixel q of the previous frame whose
+// first non-specular hit position (pure specular, Eq. 1) or representative
+// ray (glossy, Eq. 4-5) is closest to p's, found by a diamond search from
+// two starts (p itself and p + the primary motion), then refined to
+// sub-pixel precision. Double precision;
 // the groundwork of issue 12's `reflect` pipeline (its pass will be compared
 // with this).
 #pragma once
@@ -25,10 +26,28 @@ struct HitField {
   size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
 };
 
+// Glossy pixels (paper 001 §4.2.1): the representative ray (origin at the
+// primary hit, unit mirror direction) and the length of this frame's sampled
+// secondary segment.
+struct RayField {
+  int width = 0, height = 0;
+  std::vector<std::array<double, 3>> origin, direction;
+  std::vector<double> depth;
+  std::vector<char> valid;
+  bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+  size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
+};
+
 inline constexpr double kInvalid = std::numeric_limits<double>::infinity();
 
 // Eq. 1: |W_p - PrevW_q|; +inf when q is off-screen or either has no hit.
 double hit_distance(const HitField& current, const HitField& previous, int px, int py, int qx, int qy);
+
+// Eq. 4-5: approxhit(r) = r.o + r.d depth; of the two rays the one with the
+// smaller depth is r_near; the distance is that of approxhit(r_near) from
+// the line of r_far, |r_far.d x (approxhit(r_near) - r_far.o)|. +inf when q
+// is off-screen or either ray is missing (or has no finite depth).
+double ray_distance(const RayField& current, const RayField& previous, int px, int py, int qx, int qy);
 
 // The large diamond pattern (LDSP), scaled by the step size: the notes'
 // reading of Cheng et al. (centre + (+-2, 0), (0, +-2), so the final small
@@ -53,8 +72,12 @@ struct IntegerMatch {
 IntegerMatch diamond_search(const HitField& current, const HitField& previous, int px, int py,
                             const std::array<double, 2>& motion, const SearchOptions& options = {});
 
+IntegerMatch diamond_search(const RayField& current, const RayField& previous, int px, int py,
+                            const std::array<double, 2>& motion, const SearchOptions& options = {});
+
 // Every previous pixel within +-radius of p: the brute-force oracle.
 IntegerMatch brute_force_search(const HitField& current, const HitField& previous, int px, int py, int radius);
+IntegerMatch brute_force_search(const RayField& current, const RayField& previous, int px, int py, int radius);
 
 struct SubpixelMatch {
   double x = 0.0, y = 0.0;  // continuous previous-frame pixel position (pixel centres at integers)
@@ -69,6 +92,8 @@ struct SubpixelMatch {
 // returns that pixel exactly; two or more, or a block with an invalid pixel
 // only, fall back to the integer match.
 SubpixelMatch refine_subpixel(const HitField& current, const HitField& previous, int px, int py,
+                              const IntegerMatch& match);
+SubpixelMatch refine_subpixel(const RayField& current, const RayField& previous, int px, int py,
                               const IntegerMatch& match);
 
 }  // namespace dn::test::reflect

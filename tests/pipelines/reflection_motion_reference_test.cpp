@@ -214,6 +214,22 @@ TEST(ReflectionMotionReference, PlanarMirrorMatchesTheAnalyticMotion) {
   EXPECT_LT(double(surface_within), 0.5 * n) << "the scene must tell reflection motion from surface motion";
 }
 
+// Eq. 4-5 on rays whose answer is known: the point at the nearer ray's
+// depth, measured from the farther ray's line.
+TEST(ReflectionMotionReference, GlossyDistanceIsPointToRay) {
+  RayField a{1, 1, {{0, 0, 0}}, {{0, 0, -1}}, {2.0}, {1}};
+  RayField b{1, 1, {{1, 0, 0}}, {{0, 0, -1}}, {5.0}, {1}};
+  EXPECT_DOUBLE_EQ(ray_distance(a, b, 0, 0, 0, 0), 1.0);  // parallel rays 1 apart
+  b.origin[0] = {0, 3, -2};
+  b.direction[0] = {0, -1, 0};
+  EXPECT_DOUBLE_EQ(ray_distance(a, b, 0, 0, 0, 0), 0.0);  // b's line passes through a's point (0, 0, -2)
+  b.depth[0] = 1.0;                                        // now b is nearer: its point (0, 2, -2) from a's line
+  EXPECT_DOUBLE_EQ(ray_distance(a, b, 0, 0, 0, 0), std::sqrt(4.0 + 0.0));
+  b.depth[0] = kInvalid;  // a ray that hit nothing
+  EXPECT_EQ(ray_distance(a, b, 0, 0, 0, 0), kInvalid);
+  EXPECT_EQ(ray_distance(a, b, 0, 0, 1, 0), kInvalid);  // off-screen
+}
+
 // The sub-pixel step's guards and invariants (C.3).
 TEST(ReflectionMotionReference, SubpixelStepInvariants) {
   const Camera previous({0.0, 1.6, 2.0}, {0.0, 0.8, -4.0});
