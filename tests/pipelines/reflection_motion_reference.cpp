@@ -26,6 +26,10 @@ double ray_distance(const RayField& current, const RayField& previous, int px, i
   const auto& fo = p_near ? previous.origin[q] : current.origin[p];
   const auto& fd = p_near ? previous.direction[q] : current.direction[p];
   const double v[3] = {no[0] + nd[0] * ndepth - fo[0], no[1] + nd[1] * ndepth - fo[1], no[2] + nd[2] * ndepth - fo[2]};
+  // A ray, not a line: a point behind r_far's origin is measured from the
+  // origin (the line alone would also match points on the extension behind
+  // the mirror, other walls' hits).
+  if (v[0] * fd[0] + v[1] * fd[1] + v[2] * fd[2] < 0.0) return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   const double c[3] = {fd[1] * v[2] - fd[2] * v[1], fd[2] * v[0] - fd[0] * v[2], fd[0] * v[1] - fd[1] * v[0]};
   return std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
 }

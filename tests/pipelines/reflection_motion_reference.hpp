@@ -45,8 +45,10 @@ double hit_distance(const HitField& current, const HitField& previous, int px, i
 
 // Eq. 4-5: approxhit(r) = r.o + r.d depth; of the two rays the one with the
 // smaller depth is r_near; the distance is that of approxhit(r_near) from
-// the line of r_far, |r_far.d x (approxhit(r_near) - r_far.o)|. +inf when q
-// is off-screen or either ray is missing (or has no finite depth).
+// the ray r_far: |r_far.d x (approxhit(r_near) - r_far.o)|, or the distance
+// to r_far.o for a point behind it (the line's distance alone also matches
+// hits behind the mirror: docs/pipelines.md). +inf when q is off-screen or
+// either ray is missing (or has no finite depth).
 double ray_distance(const RayField& current, const RayField& previous, int px, int py, int qx, int qy);
 
 // The large diamond pattern (LDSP), scaled by the step size: the notes'
