@@ -87,6 +87,17 @@ std::optional<MirrorHit> floor_mirror(Vec o, Vec d) {
   return MirrorHit{p, {0, 1, 0}};
 }
 
+// Calls f(x, y, mirror hit, reflected direction) for every pixel whose
+// primary ray (through the pixel centre) hits the mirror.
+template <class F>
+void for_each_mirror_pixel(const Camera& cam, Mirror mirror, F&& f) {
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const Vec d = cam.ray(x + 0.5, y + 0.5);
+      if (const auto m = mirror(cam.eye, d)) f(x, y, *m, reflect(d, m->normal));
+    }
+}
+
 struct Frame {
   HitField hits;
   std::vector<std::optional<MirrorHit>> primary;  // for the primary motion
@@ -99,18 +110,12 @@ Frame render(const Camera& cam, Mirror mirror) {
   f.hits.position.resize(n);
   f.hits.valid.assign(n, 0);
   f.primary.resize(n);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
-      const Vec d = cam.ray(x + 0.5, y + 0.5);
-      const auto m = mirror(cam.eye, d);
-      if (!m) continue;
-      const Vec r = reflect(d, m->normal);
-      const double t = room_hit(m->position, r);
-      const size_t i = f.hits.index(x, y);
-      f.hits.position[i] = add(m->position, mul(r, t));
-      f.hits.valid[i] = 1;
-      f.primary[i] = m;
-    }
+  for_each_mirror_pixel(cam, mirror, [&](int x, int y, const MirrorHit& m, const Vec& r) {
+    const size_t i = f.hits.index(x, y);
+    f.hits.position[i] = add(m.position, mul(r, room_hit(m.position, r)));
+    f.hits.valid[i] = 1;
+    f.primary[i] = m;
+  });
   return f;
 }
 
@@ -246,22 +251,17 @@ RayField glossy_rays(const Camera& cam, double spread, int frame) {
   f.direction.resize(n);
   f.depth.assign(n, kInvalid);
   f.valid.assign(n, 0);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
-      const Vec d = cam.ray(x + 0.5, y + 0.5);
-      const auto m = sphere(cam.eye, d);
-      if (!m) continue;
-      const Vec r = reflect(d, m->normal);
-      uint32_t h = uint32_t(x) * 73856093u ^ uint32_t(y) * 19349663u ^ uint32_t(frame) * 83492791u;
-      h ^= h >> 13, h *= 0x5bd1e995u, h ^= h >> 15;
-      const double a = spread * ((h & 0xFFFF) / 65535.0 * 2.0 - 1.0), b = spread * ((h >> 16) / 65535.0 * 2.0 - 1.0);
-      const Vec t1 = unit(cross(r, std::fabs(r[1]) < 0.9 ? Vec{0, 1, 0} : Vec{1, 0, 0})), t2 = cross(r, t1);
-      const size_t i = f.index(x, y);
-      f.origin[i] = m->position;
-      f.direction[i] = r;
-      f.depth[i] = room_hit(m->position, unit(add(r, add(mul(t1, a), mul(t2, b)))));
-      f.valid[i] = 1;
-    }
+  for_each_mirror_pixel(cam, sphere, [&](int x, int y, const MirrorHit& m, const Vec& r) {
+    uint32_t h = uint32_t(x) * 73856093u ^ uint32_t(y) * 19349663u ^ uint32_t(frame) * 83492791u;
+    h ^= h >> 13, h *= 0x5bd1e995u, h ^= h >> 15;
+    const double a = spread * ((h & 0xFFFF) / 65535.0 * 2.0 - 1.0), b = spread * ((h >> 16) / 65535.0 * 2.0 - 1.0);
+    const Vec t1 = unit(cross(r, std::fabs(r[1]) < 0.9 ? Vec{0, 1, 0} : Vec{1, 0, 0})), t2 = cross(r, t1);
+    const size_t i = f.index(x, y);
+    f.origin[i] = m.position;
+    f.direction[i] = r;
+    f.depth[i] = room_hit(m.position, unit(add(r, add(mul(t1, a), mul(t2, b)))));
+    f.valid[i] = 1;
+  });
   return f;
 }
 
