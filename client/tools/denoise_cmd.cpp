@@ -346,10 +346,10 @@ int run_denoise(const std::vector<std::string>& argv) {
   auto load = [&](size_t i) {
     const std::string path = format_frame_path(input, frames[i]);
     image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
-    LoadedFrame lf = load_frame(exr, plan, frames[i]);
+    LoadedFrame lf = load_frame(exr, plan, frames[i], rough_guides ? &*rough_guides : nullptr);
     cameras.apply(exr, frames[i], lf.camera);
     apply_camera_conversions(lf, plan, exr);
-    if (rough_guides) apply_rough_guides(lf, exr, *rough_guides);
+    if (rough_guides) apply_rough_guides(lf, *rough_guides);
     return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));

@@ -69,7 +69,13 @@ std::string format_frame_path(const std::string& pattern, long long frame) {
   return out;
 }
 
-LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& plan, long long number) {
+LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& requested, long long number,
+                       const RoughGuidePlan* guides) {
+  std::vector<ResolvedChannel> plan = requested;
+  if (guides) {
+    plan.insert(plan.end(), guides->channels.begin(), guides->channels.end());
+    if (guides->key) plan.push_back(*guides->key);
+  }
   LoadedFrame f;
   f.number = number;
   f.path = exr.path();
@@ -122,7 +128,7 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
     }
     if (ch.convert == Convert::CyclesDepth || ch.convert == Convert::CyclesVirtualDepth) convert_cycles_depth(p.data);
     if (ch.convert == Convert::CyclesVector) convert_cycles_vector(p.data);
-    f.planes.push_back(std::move(p));
+    (c < requested.size() ? f.planes : f.primary_guides).push_back(std::move(p));
   }
   return f;
 }
@@ -191,32 +197,28 @@ void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChan
   }
 }
 
-void apply_rough_guides(LoadedFrame& frame, const dn::image::ExrReader& exr, const RoughGuidePlan& guides) {
-  std::vector<ResolvedChannel> plan = guides.channels;
-  if (guides.key) plan.push_back(*guides.key);
-  LoadedFrame rough = load_frame(exr, plan, frame.number);
-  rough.camera = frame.camera;
-  apply_camera_conversions(rough, plan, exr);
-  auto find = [](LoadedFrame& f, protocol::ChannelId id) -> std::vector<float>* {
-    for (auto& p : f.planes)
+void apply_rough_guides(LoadedFrame& frame, const RoughGuidePlan& guides) {
+  auto find_in = [](std::vector<LoadedPlane>& planes, protocol::ChannelId id) -> std::vector<float>* {
+    for (auto& p : planes)
       if (p.id == id) return &p.data;
     return nullptr;
   };
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
   std::vector<char> mirror(pixels, 0);
   if (guides.key) {
-    const std::vector<float>& key = *find(rough, guides.key->id);
-    for (size_t i = 0; i < pixels; ++i) mirror[i] = key[i] < guides.from;  // NaN: not a mirror
+    const std::vector<float>* key = find_in(frame.primary_guides, guides.key->id);
+    if (!key) throw std::logic_error("apply_rough_guides: the frame was not loaded with the guides");
+    for (size_t i = 0; i < pixels; ++i) mirror[i] = (*key)[i] < guides.from;  // NaN: not a mirror
   } else {
-    const std::vector<float>* past = find(frame, protocol::ChannelId::Depth);
-    const std::vector<float>* primary = find(rough, protocol::ChannelId::Depth);
+    const std::vector<float>* past = find_in(frame.planes, protocol::ChannelId::Depth);
+    const std::vector<float>* primary = find_in(frame.primary_guides, protocol::ChannelId::Depth);
     if (!past || !primary) throw std::logic_error("apply_rough_guides: no depth to compare");
     for (size_t i = 0; i < pixels; ++i)
       mirror[i] = std::isfinite((*primary)[i]) && (*past)[i] > (*primary)[i] * (1.0f + kPastPrimaryDepth);
   }
   for (const auto& ch : guides.channels) {
-    const std::vector<float>* from = find(rough, ch.id);
-    std::vector<float>* to = find(frame, ch.id);
+    const std::vector<float>* from = find_in(frame.primary_guides, ch.id);
+    std::vector<float>* to = find_in(frame.planes, ch.id);
     if (!from || !to || from->size() != to->size()) continue;
     const size_t n = to->size() / pixels;
     for (size_t i = 0; i < pixels; ++i)

@@ -28,12 +28,16 @@ struct LoadedFrame {
   int width = 0, height = 0;
   std::vector<LoadedPlane> planes;
   dn::image::ExrCamera camera;
+  // With a RoughGuidePlan: its channels (then its key), read in the same
+  // pass over the file, for apply_rough_guides.
+  std::vector<LoadedPlane> primary_guides;
 };
 
-// Reads the plan's channels from an open EXR, sums terms and applies the
-// conversions. Throws ChannelMapError naming the channel when a mapped EXR
-// channel is missing in this frame.
-LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& plan, long long number);
+// Reads the plan's channels (and `guides`' into primary_guides) from an
+// open EXR, sums terms and applies the conversions. Throws ChannelMapError
+// naming the channel when a mapped EXR channel is missing in this frame.
+LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& plan, long long number,
+                       const RoughGuidePlan* guides = nullptr);
 
 // The conversion that needs the frame's camera (camera.projection, set by
 // FrameCameras::apply): Cycles' Denoising Depth (path length from the near
@@ -43,11 +47,11 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
 void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
                               const dn::image::ExrReader& exr);
 
-// Per-pixel guides: loads guides.channels (and the key) from `exr` with
-// `frame`'s camera, and where a pixel is not a mirror by guides' rule — its
-// key (roughness) at or above guides.from or not finite; without a key, its
-// depth in `frame` (the Denoising Depth's) within kPastPrimaryDepth of the
-// primary depth — `frame`'s guide planes take the loaded values.
-void apply_rough_guides(LoadedFrame& frame, const dn::image::ExrReader& exr, const RoughGuidePlan& guides);
+// Per-pixel guides, after apply_camera_conversions: where a pixel is not a
+// mirror by guides' rule — its key (roughness) at or above guides.from or not
+// finite; without a key, its depth in `frame` (the Denoising Depth's) within
+// kPastPrimaryDepth of the primary depth — `frame`'s guide planes take the
+// values of frame.primary_guides (loaded with `guides` by load_frame).
+void apply_rough_guides(LoadedFrame& frame, const RoughGuidePlan& guides);
 
 }  // namespace dn::cli

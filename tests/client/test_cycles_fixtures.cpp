@@ -115,13 +115,13 @@ RadianceFrame load_radiance_frame(const std::string& name, bool rough_guides, co
   const auto plan = plan_channels(preset, {}, &p, std::nullopt, channels, fixture(name));
   RadianceFrame r;
   if (rough_guides) r.guides = plan_rough_guides(preset, plan, channels);
-  r.frame = load_frame(exr, plan, 0);
+  r.frame = load_frame(exr, plan, 0, r.guides ? &*r.guides : nullptr);
   const auto positions = exr.read({"ViewLayer.Position.X", "ViewLayer.Position.Y", "ViewLayer.Position.Z"});
   const RecoveredCamera cam = recover_camera(positions, exr.width(), exr.height());
   r.frame.camera.view = cam.view;
   r.frame.camera.projection = cam.projection;
   apply_camera_conversions(r.frame, plan, exr);
-  if (r.guides) apply_rough_guides(r.frame, exr, *r.guides);
+  if (r.guides) apply_rough_guides(r.frame, *r.guides);
   return r;
 }
 
