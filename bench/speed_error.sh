@@ -96,10 +96,10 @@ for s in $scenes; do
     --reference "$ref_spp" "${ref2_args[@]}" --cache "$cache" --quiet
   rm -f "$dir/refs"/frame_*.exr
   [ "$reference2" = 0 ] || ref2_args=(--reference2 "$dir/refs/ref2_%04d.exr")
-  "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/input" \
+  "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/input" --reflection \
     --seed 3 --quiet
   "$dnrender" --scene "$s" --frames "$still" --hold-camera 0 --width "$width" --height "$height" \
-    --out "$dir/still" --seed 3 --quiet
+    --out "$dir/still" --reflection --seed 3 --quiet
   panels=()
   for row in "${rows[@]}"; do
     read -r label pipeline params <<< "$row"

@@ -18,6 +18,7 @@
 #include "svgf.glsl"
 #include "svgf_signal.glsl"
 #include "clip.glsl"
+#include "reflect.glsl"
 
 // History clipping (CLIP): the box a history is clipped to. Paper 001's
 // box, the per-channel min/max of the prefiltered current signal
@@ -60,6 +61,10 @@ bool clipped_here(uint p) {
   return CLIP && !(DN_LOAD1(roughness, ROUGHNESS_HALF, p) >= DN_PARAM_VALUE(svgf, clip_roughness));
 }
 
+// Whether the history's depth and normal tests apply at this pixel (off at
+// REFLECTION's glossy pixels); set by main before the taps are read.
+bool geometry_tests = true;
+
 // Falcor's consistency test of a previous pixel q (the previous pixel must
 // have left history: stored depth > 0).
 bool tap_valid(ivec2 q, float z, vec3 n, vec2 grad, out vec4 aux) {
@@ -68,6 +73,7 @@ bool tap_valid(ivec2 q, float z, vec3 n, vec2 grad, out vec4 aux) {
   uvec4 bits = prev_aux.data[uint(q.y) * frame.size.x + uint(q.x)];
   aux = vec4(uintBitsToFloat(bits.xyz), 0.0);
   if (!(aux.z > 0.0)) return false;
+  if (!geometry_tests) return true;
   if (abs(z - aux.z) / (grad.x + 0.01) > 10.0) return false;
   if (distance(n, dn_svgf_unpack_normal(bits.w)) / (grad.y + 0.01) > 16.0) return false;
   return true;
@@ -104,6 +110,11 @@ void main() {
   bool has_normal = dot(n, n) > 0.0;
   vec2 grad = dn_svgf_gradients(pos, z, n);
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  if (REFLECTION) {
+    vec4 r = reflection.data[p];
+    mv = r.xy;
+    geometry_tests = r.z != DN_REFLECT_GLOSSY;
+  }
 
   vec3 prev = vec3(0.0);
   vec2 prev_m = vec2(0.0);

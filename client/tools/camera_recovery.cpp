@@ -447,7 +447,11 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
   return out;
 }
 
-bool pipeline_needs_camera(const std::string& pipeline) { return pipeline.rfind("svgf-fb", 0) == 0; }
+bool pipeline_needs_camera(const protocol::PipelineInfo* pipeline) {
+  if (!pipeline) return true;
+  return ((pipeline->required_channels | pipeline->optional_channels) &
+          protocol::channel_bit(protocol::ChannelId::SpecularF0)) != 0;
+}
 
 const char* to_string(FrameCameras::Source s) {
   switch (s) {

@@ -66,9 +66,11 @@ struct RecoveredCamera {
 RecoveredCamera recover_camera(std::span<const float> positions, int width, int height,
                                std::span<const float> depth = {}, const CameraRecoveryOptions& options = {});
 
-// True for the pipelines whose passes use the camera matrices (svgf-fb: the
-// view direction from inverse(projection * view)); the others run with identity.
-bool pipeline_needs_camera(const std::string& pipeline);
+// True for the pipelines whose passes use the camera matrices: those that
+// take specular_f0 compute F_beta from the view direction (inverse(projection
+// * view)); the others run with identity. Unknown (a server that lists no
+// pipelines): true.
+bool pipeline_needs_camera(const protocol::PipelineInfo* pipeline);
 
 // dn denoise's camera choice per frame: --camera FILE > the EXR header's dn.*
 // attributes > recovered from the Position pass > identity (only when the

@@ -197,9 +197,6 @@ int run_denoise(const std::vector<std::string>& argv) {
   image::ExrReader first(first_path);
   const int width = first.width(), height = first.height();
   Preset preset = make_preset(args.get_or("preset", "auto"), first.channels(), args.get_or("layer", ""));
-  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
-  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline_name));
-
   // ---- connect and open the session -----------------------------------------
   client::ConnectOptions copts;
   copts.client_name = "dn-cli";
@@ -213,6 +210,8 @@ int run_denoise(const std::vector<std::string>& argv) {
     throw std::runtime_error("server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
                              "' (it offers: " + names + ")");
   }
+  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
+  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline));
   const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
   const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
 

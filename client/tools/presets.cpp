@@ -128,6 +128,10 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         spec(ChannelId::Position, {{{L("position")}}}),
         spec(ChannelId::SampleCount, {{{L("sample_count")}}}),
     };
+    for (ChannelId id : {ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo, ChannelId::ReflectionNormal,
+                         ChannelId::ReflectionDepth, ChannelId::ReflectionDirection, ChannelId::ReflectionDistance,
+                         ChannelId::ReflectionFootprint})
+      p.channels.push_back(spec(id, {{{L(std::string(protocol::find_channel(id)->name))}}}));
     return p;
   }
   if (name == "cycles") {

@@ -29,6 +29,15 @@ glm::vec3 CameraRays::direction(float px, float py) const {
   return glm::normalize(origin_dir_ + px * step_x_ + py * step_y_);
 }
 
+void CameraRays::direction_differentials(float px, float py, glm::vec3& ddx, glm::vec3& ddy) const {
+  // d = u / |u| with u affine in (px, py): d' = (u' - d (d . u')) / |u|.
+  const glm::vec3 u = origin_dir_ + px * step_x_ + py * step_y_;
+  const float len = glm::length(u);
+  const glm::vec3 d = u / len;
+  ddx = (step_x_ - d * glm::dot(d, step_x_)) / len;
+  ddy = (step_y_ - d * glm::dot(d, step_y_)) / len;
+}
+
 glm::vec2 project_to_pixel(const glm::mat4& view_projection, const glm::vec3& world, int width, int height) {
   const glm::vec4 clip = view_projection * glm::vec4(world, 1.0f);
   return {(clip.x / clip.w * 0.5f + 0.5f) * static_cast<float>(width),

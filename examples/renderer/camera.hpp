@@ -20,6 +20,9 @@ class CameraRays {
   const glm::vec3& eye() const { return eye_; }
   // Unit world direction through the continuous pixel position (px, py).
   glm::vec3 direction(float px, float py) const;
+  // The derivatives of direction(px, py) along px and py: the camera ray's
+  // direction differentials (Igehy 1999; the origin, the eye, does not move).
+  void direction_differentials(float px, float py, glm::vec3& ddx, glm::vec3& ddy) const;
 
  private:
   // direction(px, py) = normalize(origin_dir_ + px * step_x_ + py * step_y_): for a

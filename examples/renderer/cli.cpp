@@ -21,7 +21,8 @@ const char* const kUsage =
     "Path-traces a built-in scene (CPU, Embree) with the channels the denoising service takes.\n"
     "\n"
     "  --scene N          1 room, 2 pillars (disocclusion), 3 gap (indirect), 4 fireflies,\n"
-    "                     5 roughness (fine roughness maps) (default 1)\n"
+    "                     5 roughness (fine roughness maps), 6 mirror-floor (planar mirror, glossy floor)\n"
+    "                     (default 1)\n"
     "  --frames N         number of frames (default 1)\n"
     "  --first F          first frame index (default 0)\n"
     "  --hold-camera F    keep the camera of path frame F for every frame (still scene, new noise\n"
@@ -37,7 +38,8 @@ const char* const kUsage =
     "  --gbuffer-grid K   albedo/specular_f0/roughness/normal: pixel-footprint averages of K x K\n"
     "                     stratified G-buffer rays (default 4); 0: point-sampled at the radiance ray\n"
     "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1)\n"
-    "  --spec-hit         also the first non-mirror hit behind mirror-like pixels (spec_hit_* layers)\n"
+    "  --reflection       also the reflection features of mirror and glossy pixels (reflection_* layers,\n"
+    "                     protocol channels 15-21)\n"
     "  --out DIR          write DIR/frame_%04d.exr (dnrender layout, docs/client.md)\n"
     "  --png              with --out, also DIR/frame_%04d.png (ACES tone-mapped radiance preview)\n"
     "  --reference SPP    render SPP-sample references into the cache (reused when present);\n"
@@ -102,7 +104,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--jitter") o.render.jitter = true;
     else if (a == "--gbuffer-grid") o.render.gbuffer_grid = parse_int(a, value(), 0, 16);
     else if (a == "--stats") o.render.channels.statistics = true;
-    else if (a == "--spec-hit") o.render.channels.specular_hit = true;
+    else if (a == "--reflection") o.render.channels.reflection = true;
     else if (a == "--out") o.out = value();
     else if (a == "--reference") o.reference_spp = parse_int(a, value(), 1, 1 << 20);
     else if (a == "--reference2") o.reference2 = true;
@@ -178,7 +180,9 @@ int run_cli(const CliOptions& o) {
     StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
     streamer = std::make_unique<FrameStreamer>(so);
     // Without --out nothing but the session sees the frame: render only what the pipeline takes.
+    // With it, the files get the asked-for channels, plus the reflection features if the pipeline takes them.
     if (o.out.empty()) settings.channels = streamer->channels_needed();
+    else settings.channels.reflection |= streamer->channels_needed().reflection;
   }
   std::vector<double> ms, mrays, rays_per_pixel;
   FrameBuffers fb;

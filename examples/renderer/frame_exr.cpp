@@ -44,9 +44,13 @@ void write_frame_exr(const std::string& path, const FrameBuffers& fb, const Came
   layer("stat_m2", fb.stat_m2, "RGB", F);
   layer("stat_m3", fb.stat_m3, "RGB", F);
   layer("stat_raw_mean", fb.stat_raw_mean, "RGB", F);
-  layer("spec_hit_position", fb.spec_hit_position, "XYZ", F);
-  layer("spec_hit_albedo", fb.spec_hit_albedo, "RGB", H);
-  layer("spec_hit_direction", fb.spec_hit_direction, "XYZ", F);
+  layer("reflection_position", fb.reflection_position, "XYZ", F);
+  layer("reflection_albedo", fb.reflection_albedo, "RGB", H);
+  layer("reflection_normal", fb.reflection_normal, "XYZ", F);
+  layer("reflection_depth", fb.reflection_depth, "Z", F);
+  layer("reflection_direction", fb.reflection_direction, "XYZ", F);
+  layer("reflection_distance", fb.reflection_distance, "Y", F);
+  layer("reflection_footprint", fb.reflection_footprint, "Y", F);
 
   image::ExrWriteOptions options;
   options.camera.view = to_array(camera.view);

@@ -30,11 +30,23 @@ struct Material {
 
 // Coated surfaces: dielectric specular layer with n ~ 1.5.
 inline constexpr float kDielectricF0 = 0.04f;
-// Below this alpha a primary hit counts as specular (mirror-like): the
-// specular-hit extras follow its mirror ray. Also the floor of every alpha,
-// so GGX stays finite for mirrors.
-inline constexpr float kSpecularAlphaThreshold = 0.1f;
+// The floor of every alpha, so GGX stays finite for mirrors.
 inline constexpr float kMinAlpha = 1e-3f;
+
+// Reflection classes (docs/protocol.md §7.5) by the GGX alpha of a pixel's
+// specular lobe, the roughness channel (a coated surface by its coat's): below
+// kMirrorRoughness its specular signal is a mirror image, below
+// kGlossyRoughness a blurred one. They equal the server's defaults of
+// reflect.mirror_roughness and reflect.glossy_roughness, so the renderer
+// computes the reflection features exactly where the server reads them.
+inline constexpr float kMirrorRoughness = 0.1f;
+inline constexpr float kGlossyRoughness = 0.4f;
+
+enum class ReflectionClass { None, Glossy, Mirror };
+inline ReflectionClass reflection_class(float roughness) {
+  if (roughness < kMirrorRoughness) return ReflectionClass::Mirror;
+  return roughness < kGlossyRoughness ? ReflectionClass::Glossy : ReflectionClass::None;
+}
 
 // A material evaluated at one point: what the BSDF and the G-buffers need.
 struct SurfaceParams {

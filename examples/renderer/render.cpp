@@ -10,6 +10,7 @@
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
+#include "bsdf.hpp"
 #include "integrator.hpp"
 #include "online_stats.hpp"
 #include "scenes.hpp"
@@ -26,8 +27,13 @@ void put3(std::vector<float>& plane, size_t i, const glm::vec3& v) {
   plane[3 * i] = v.x, plane[3 * i + 1] = v.y, plane[3 * i + 2] = v.z;
 }
 
+// The roughness channel's value for one surface: its specular lobe's alpha, 1 without one.
+float roughness_of(const SurfaceParams& s) { return s.has_specular ? s.alpha : 1.0f; }
+
+// A pure mirror: a mirror-class specular lobe and nothing under it, so its
+// whole reflection is the mirror image (a coated surface also shows its base).
 bool is_mirror_like(const SurfaceParams& s) {
-  return s.has_specular && !s.has_diffuse && s.alpha < kSpecularAlphaThreshold;
+  return s.has_specular && !s.has_diffuse && s.alpha < kMirrorRoughness;
 }
 
 // Diffuse albedo of a surface, or F0 for a metal: the colour that modulates its reflection.
@@ -58,37 +64,17 @@ struct Planes {
     alloc(fb.stat_m2, want.statistics, 3);
     alloc(fb.stat_m3, want.statistics, 3);
     alloc(fb.stat_raw_mean, want.statistics, 3);
-    alloc(fb.spec_hit_position, want.specular_hit, 3);
-    alloc(fb.spec_hit_albedo, want.specular_hit, 3);
-    alloc(fb.spec_hit_direction, want.specular_hit, 3);
+    alloc(fb.reflection_position, want.reflection, 3);
+    alloc(fb.reflection_albedo, want.reflection, 3);
+    alloc(fb.reflection_normal, want.reflection, 3);
+    alloc(fb.reflection_direction, want.reflection, 3);
+    alloc(fb.reflection_depth, want.reflection, 1);
+    alloc(fb.reflection_distance, want.reflection, 1);
+    alloc(fb.reflection_footprint, want.reflection, 1);
     fb.samples_stride = want.record_samples ? samples_stride : 0;
     alloc(fb.samples, want.record_samples, samples_stride * 3);
   }
 };
-
-// Follows the mirror direction from a mirror-like primary hit to the first
-// surface that is not mirror-like; writes the spec_hit_* planes.
-void trace_mirror_chain(const Scene& scene, const Hit& primary, const glm::vec3& dir, size_t i, FrameBuffers& fb,
-                        TraceContext& ctx) {
-  glm::vec3 n = facing_normal(primary.normal, -dir);
-  glm::vec3 d = glm::reflect(dir, n);
-  put3(fb.spec_hit_direction, i, d);
-  glm::vec3 origin = offset_origin(primary.position, n, d);
-  for (int k = 0; k < kMirrorChainLength; ++k) {
-    const Hit h = scene.intersect(origin, d, ctx);
-    if (!h.found) {
-      put3(fb.spec_hit_position, i, origin + d * kBackgroundDistance);
-      return;
-    }
-    const SurfaceParams s = evaluate_material(scene.material_of(h), h.position);
-    put3(fb.spec_hit_position, i, h.position);
-    put3(fb.spec_hit_albedo, i, base_colour(s));
-    if (!is_mirror_like(s)) return;
-    n = facing_normal(h.normal, -d);
-    d = glm::reflect(d, n);
-    origin = offset_origin(h.position, n, d);
-  }
-}
 
 struct PixelContext {
   const Scene& scene;
@@ -98,6 +84,115 @@ struct PixelContext {
   glm::vec2 jitter;
   int frame;
 };
+
+// Ray differentials (Igehy 1999): the derivatives of a ray's position and
+// direction with respect to the pixel position x and y.
+struct RayDifferentials {
+  glm::vec3 dp[2]{glm::vec3(0.0f), glm::vec3(0.0f)};
+  glm::vec3 dd[2]{glm::vec3(0.0f), glm::vec3(0.0f)};
+};
+
+// Keeps a denominator's sign but away from 0, for rays that graze a surface.
+float away_from_zero(float v) { return v < 0.0f ? std::min(v, -1e-6f) : std::max(v, 1e-6f); }
+
+// Transfer along a ray of unit direction d to its hit at distance t on a
+// surface of normal n (Igehy Eq. 10-12): the hit moves within the tangent plane.
+void transfer(RayDifferentials& rd, const glm::vec3& d, float t, const glm::vec3& n) {
+  for (int k = 0; k < 2; ++k) {
+    const glm::vec3 q = rd.dp[k] + t * rd.dd[k];
+    rd.dp[k] = q - (glm::dot(q, n) / away_from_zero(glm::dot(d, n))) * d;
+  }
+}
+
+// Mirror reflection r = d - 2 (d.n) n about the facing normal n, whose
+// derivative is curvature * dp (a sphere's normal turns with the position, a
+// plane's does not; Igehy Eq. 14-15).
+void reflect_differentials(RayDifferentials& rd, const glm::vec3& d, const glm::vec3& n, float curvature) {
+  for (int k = 0; k < 2; ++k) {
+    const glm::vec3 dn = curvature * rd.dp[k];
+    const float d_dn = glm::dot(rd.dd[k], n) + glm::dot(d, dn);
+    rd.dd[k] -= 2.0f * (glm::dot(d, n) * dn + d_dn * n);
+  }
+}
+
+// What a mirror in the chain passes on: its Fresnel reflectance at the
+// chain's incidence cosine, as Bsdf weighs its specular samples (F at the
+// half vector, which is the normal for a mirror; G2 / G1 is 1 at alpha 0).
+glm::vec3 mirror_reflectance(const SurfaceParams& s, float cos_incidence) {
+  return fresnel_schlick(s.f0, cos_incidence);
+}
+
+// The primary hit of one pixel's sample 0 ray, as the reflection features need it.
+struct PrimaryHit {
+  const Hit& hit;
+  glm::vec3 dir;     // the camera ray, unit
+  glm::vec3 normal;  // facing the camera
+  float depth;       // linear view depth
+  glm::vec2 pixel;   // continuous pixel position of the ray (centre + jitter)
+};
+
+// The footprint of the representative ray r at its hit `h` (channel 21): the
+// camera ray's differentials transferred to the primary hit, reflected, and
+// transferred to h; (|dP/dx| + |dP/dy|) / 2 there.
+float representative_footprint(const PixelContext& pc, const PrimaryHit& p, const glm::vec3& r, const Hit& h) {
+  RayDifferentials rd;  // from the eye: the position does not move with the pixel
+  pc.rays.direction_differentials(p.pixel.x, p.pixel.y, rd.dd[0], rd.dd[1]);
+  transfer(rd, p.dir, p.hit.t, p.normal);
+  reflect_differentials(rd, p.dir, p.normal, glm::dot(p.normal, p.hit.normal) * pc.scene.curvature(p.hit));
+  transfer(rd, r, glm::distance(p.hit.position, h.position), h.normal);
+  return 0.5f * (glm::length(rd.dp[0]) + glm::length(rd.dp[1]));
+}
+
+// The mirror chain (channels 15-18) from a mirror pixel's primary hit along r,
+// whose first segment's hit `h` is already traced: reflects off every pure
+// mirror it meets, up to kMirrorChainLength segments, and describes the
+// surface where it stops. A chain that leaves the scene leaves albedo, normal
+// and depth 0.
+void mirror_chain(const Scene& scene, const PrimaryHit& p, glm::vec3 d, Hit h, size_t i, FrameBuffers& fb,
+                  TraceContext& ctx) {
+  glm::vec3 from = p.hit.position;
+  glm::vec3 reflectance(1.0f);  // of the mirrors after the primary
+  float length = 0.0f;
+  for (int segment = 1;; ++segment) {
+    if (!h.found) {
+      put3(fb.reflection_position, i, from + d * kBackgroundDistance);
+      return;
+    }
+    length += glm::distance(from, h.position);
+    const SurfaceParams s = evaluate_material(scene.material_of(h), h.position);
+    const glm::vec3 n = facing_normal(h.normal, -d);
+    if (!is_mirror_like(s) || segment == kMirrorChainLength) {
+      put3(fb.reflection_position, i, h.position);
+      put3(fb.reflection_normal, i, n);
+      put3(fb.reflection_albedo, i, base_colour(s) * reflectance);
+      // Virtual depth: the chain unfolded onto the primary ray scales depth like distance.
+      fb.reflection_depth[i] = p.depth * (p.hit.t + length) / p.hit.t;
+      return;
+    }
+    reflectance *= mirror_reflectance(s, glm::dot(-d, n));
+    from = h.position;
+    d = glm::reflect(d, n);
+    h = scene.intersect(offset_origin(from, n, d), d, ctx);
+  }
+}
+
+// The reflection features of one pixel of class `cls` (docs/protocol.md §7.5):
+// the representative ray (the view ray mirrored about the primary normal) at
+// mirror and glossy pixels, the mirror chain, which continues it, at mirror
+// pixels. Other pixels keep the zeros the planes were allocated with, and
+// trace nothing.
+void reflection_features(const PixelContext& pc, const PrimaryHit& p, ReflectionClass cls, size_t i,
+                         FrameBuffers& fb, TraceContext& ctx) {
+  if (cls == ReflectionClass::None) return;
+  const glm::vec3 r = glm::reflect(p.dir, p.normal);
+  put3(fb.reflection_direction, i, r);
+  const Hit h = pc.scene.intersect(offset_origin(p.hit.position, p.normal, r), r, ctx);
+  if (h.found) {
+    fb.reflection_distance[i] = glm::distance(p.hit.position, h.position);
+    fb.reflection_footprint[i] = representative_footprint(pc, p, r, h);
+  }
+  if (cls == ReflectionClass::Mirror) mirror_chain(pc.scene, p, r, h, i, fb, ctx);
+}
 
 // The hits through the pixel corners of one tile, (w + 1) x (h + 1), shared
 // by the pixels around each corner (built by build_tile_corners below).
@@ -462,7 +557,7 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
     } else if (hit0.found) {
       put3(fb.albedo, i, surface0.diffuse_albedo);
       put3(fb.specular_f0, i, surface0.f0);
-      fb.roughness[i] = surface0.has_specular ? surface0.alpha : 1.0f;
+      fb.roughness[i] = roughness_of(surface0);
       put3(fb.normal, i, facing_normal(hit0.normal, -dir0));
     } else {
       fb.roughness[i] = 1.0f;
@@ -475,7 +570,15 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
     fb.motion[2 * i] = mv.x;
     fb.motion[2 * i + 1] = mv.y;
   }
-  if (want.specular_hit && hit0.found && is_mirror_like(surface0)) trace_mirror_chain(scene, hit0, dir0, i, fb, ctx);
+  if (want.reflection && hit0.found) {
+    // Classed by the roughness the frame sends (a footprint average), so the
+    // features are there wherever the server's classes read them.
+    const float roughness = want.gbuffer ? fb.roughness[i] : roughness_of(surface0);
+    const float depth = -(pc.view * glm::vec4(hit0.position, 1.0f)).z;
+    const PrimaryHit p{hit0, dir0, facing_normal(hit0.normal, -dir0), depth,
+                       glm::vec2(x + 0.5f + pc.jitter.x, y + 0.5f + pc.jitter.y)};
+    reflection_features(pc, p, reflection_class(roughness), i, fb, ctx);
+  }
 
   const PathSettings path_settings{st.max_depth, st.next_event};
   PathResult sum;

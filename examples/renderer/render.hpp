@@ -18,7 +18,7 @@ struct ChannelSet {
   bool motion = true;
   bool sample_count = true;
   bool statistics = false;    // paper 003 Alg. 1 per pixel (stat_* planes)
-  bool specular_hit = false;  // first non-specular hit behind mirror-like primaries (spec_hit_* planes)
+  bool reflection = false;    // reflection features, docs/protocol.md §7.5 (reflection_* planes)
   bool record_samples = false;  // every sample's radiance, for tests
 };
 
@@ -52,10 +52,12 @@ struct FrameBuffers {
   // are M/n), and the mean of the raw x.
   std::vector<float> stat_count;                              // 1
   std::vector<float> stat_mean, stat_m2, stat_m3, stat_raw_mean;  // 3
-  // For primaries with alpha < kSpecularAlphaThreshold: the first non-specular
-  // hit along the mirror chain (position, diffuse albedo) and the primary's
-  // mirror direction; zeros elsewhere.
-  std::vector<float> spec_hit_position, spec_hit_albedo, spec_hit_direction;  // 3
+  // The reflection features (protocol channels 15-21, docs/protocol.md §7.5),
+  // point-sampled along the sample 0 ray like depth and position. Mirror-class
+  // pixels get all seven, glossy-class pixels direction, distance and
+  // footprint (the representative ray), every other pixel zeros.
+  std::vector<float> reflection_position, reflection_albedo, reflection_normal, reflection_direction;  // 3
+  std::vector<float> reflection_depth, reflection_distance, reflection_footprint;                      // 1
   std::vector<float> samples;  // record_samples: samples_stride RGB samples per pixel, unused slots 0
   int samples_stride = 0;
   uint64_t rays = 0;  // Embree rays traced (rtcIntersect1 + rtcOccluded1)

@@ -74,6 +74,11 @@ class Scene {
   // G-buffer sub-samples of a pixel whose footprint is known to lie on `on`.
   Hit intersect_surface(const Hit& on, const glm::vec3& origin, const glm::vec3& dir) const;
   bool is_sphere(const Hit& hit) const { return shapes_[hit.geometry].sphere; }
+  // How fast the surface's normal turns with position: 1/radius on a sphere, 0 on a plane.
+  float curvature(const Hit& hit) const {
+    const Shape& s = shapes_[hit.geometry];
+    return s.sphere ? 1.0f / s.radius : 0.0f;
+  }
 
   const Material& material_of(const Hit& hit) const { return materials_[shapes_[hit.geometry].material]; }
   // Emitted radiance leaving the hit towards -dir (one-sided quads emit only on their front).

@@ -145,6 +145,32 @@ std::unique_ptr<Scene> roughness_map() {
   return s;
 }
 
+// Reflection motion (paper 001): a large planar mirror on the back wall and a
+// glossy floor (alpha 0.18, no maps: glossy class everywhere), under a small
+// ceiling light. The camera translates sideways, so what the mirror and the
+// floor reflect moves differently from the surfaces themselves. The wall
+// behind the camera is checkered, so the mirror image has texture to match.
+std::unique_ptr<Scene> mirror_floor() {
+  auto s = std::make_unique<Scene>();
+  const int fl = s->add_material(coated({0.35f, 0.3f, 0.25f}, 0.18f));
+  const int white = s->add_material(diffuse(vec3(0.7f)));
+  const int red = s->add_material(diffuse({0.6f, 0.12f, 0.1f}));
+  const int blue = s->add_material(diffuse({0.15f, 0.25f, 0.6f}));
+  Material checks = diffuse({0.75f, 0.75f, 0.7f});
+  checks.albedo_map = Pattern::Checker;
+  checks.albedo2 = {0.15f, 0.35f, 0.2f};
+  const int front = s->add_material(checks);
+  add_room(*s, {-4, 0, -4}, {4, 3, 4}, fl, white, red, blue, white, front);
+  // The mirror, 2 cm in front of the back wall, facing +z.
+  s->add_quad({-3.0f, 0.15f, -3.98f}, {6, 0, 0}, {0, 2.55f, 0}, s->add_material(metal(vec3(0.95f), 0.0f)));
+  s->add_quad({-0.5f, 2.98f, 0.0f}, {1, 0, 0}, {0, 0, 1}, s->add_material(emitter(vec3(30.0f))));
+  s->add_box({-1.9f, 0.0f, -1.6f}, {-0.9f, 1.0f, -0.6f}, s->add_material(diffuse({0.75f, 0.45f, 0.2f})));
+  s->add_box({1.5f, 0.0f, -0.5f}, {2.1f, 1.6f, 0.1f}, white);
+  s->add_sphere({0.5f, 0.5f, -2.0f}, 0.5f, s->add_material(diffuse({0.2f, 0.5f, 0.3f})));
+  s->add_sphere({-0.5f, 0.35f, 0.6f}, 0.35f, s->add_material(diffuse({0.8f, 0.7f, 0.2f})));
+  return s;
+}
+
 struct Pose {
   vec3 eye, target;
   float fov_degrees;
@@ -173,6 +199,11 @@ Pose pose(int scene_id, int frame) {
       return {{-2.5f + 0.03f * back_and_forth(frame, 150), 1.5f, 2.6f}, {0.0f, 0.6f, 0.0f}, 55.0f};
     case 5:
       return {{-1.0f + 0.02f * back_and_forth(frame, 100), 1.2f, 3.0f}, {0.0f, 1.0f, -4.0f}, 60.0f};
+    case 6: {
+      // Translation only (the view direction is fixed): 0.02 m/frame sideways, turning back every 120 frames.
+      const vec3 eye(-1.2f + 0.02f * back_and_forth(frame, 120), 1.4f, 2.4f);
+      return {eye, eye + vec3(0.0f, -0.15f, -1.0f), 55.0f};
+    }
   }
   throw std::invalid_argument("scene id must be 1.." + std::to_string(kSceneCount));
 }
@@ -187,6 +218,7 @@ std::unique_ptr<Scene> build_scene(int scene_id) {
     case 3: s = gap(); break;
     case 4: s = fireflies(); break;
     case 5: s = roughness_map(); break;
+    case 6: s = mirror_floor(); break;
     default: throw std::invalid_argument("scene id must be 1.." + std::to_string(kSceneCount));
   }
   s->commit();
@@ -194,7 +226,7 @@ std::unique_ptr<Scene> build_scene(int scene_id) {
 }
 
 std::string scene_name(int scene_id) {
-  static const char* names[] = {"room", "pillars", "gap", "fireflies", "roughness"};
+  static const char* names[] = {"room", "pillars", "gap", "fireflies", "roughness", "mirror-floor"};
   if (scene_id < 1 || scene_id > kSceneCount) throw std::invalid_argument("unknown scene");
   return names[scene_id - 1];
 }

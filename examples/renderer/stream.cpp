@@ -29,6 +29,13 @@ const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
     case ChannelId::Emission: return &fb.emission;
     case ChannelId::Position: return &fb.position;
     case ChannelId::SampleCount: return &fb.sample_count;
+    case ChannelId::ReflectionPosition: return &fb.reflection_position;
+    case ChannelId::ReflectionAlbedo: return &fb.reflection_albedo;
+    case ChannelId::ReflectionNormal: return &fb.reflection_normal;
+    case ChannelId::ReflectionDepth: return &fb.reflection_depth;
+    case ChannelId::ReflectionDirection: return &fb.reflection_direction;
+    case ChannelId::ReflectionDistance: return &fb.reflection_distance;
+    case ChannelId::ReflectionFootprint: return &fb.reflection_footprint;
     default: return nullptr;
   }
 }
@@ -49,7 +56,10 @@ ChannelSet channels_for(uint64_t takes, bool send_split) {
                            ChannelId::Depth, ChannelId::Position});
   set.motion = takes_any({ChannelId::Motion});
   set.sample_count = takes_any({ChannelId::SampleCount});
-  set.statistics = set.specular_hit = false;
+  set.reflection = takes_any({ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo, ChannelId::ReflectionNormal,
+                              ChannelId::ReflectionDepth, ChannelId::ReflectionDirection,
+                              ChannelId::ReflectionDistance, ChannelId::ReflectionFootprint});
+  set.statistics = false;
   return set;
 }
 

@@ -25,8 +25,8 @@ struct StreamOptions {
 
 // What to render for a pipeline that takes the channel mask `takes`
 // (required | optional): split lighting and emission only when they will be
-// sent, G-buffers and motion only when the pipeline reads some of them.
-// Statistics and specular-hit extras have no protocol channel: never needed.
+// sent, G-buffers, motion and the reflection features only when the pipeline
+// reads some of them. Statistics have no protocol channel: never needed.
 ChannelSet channels_for(uint64_t takes, bool send_split);
 
 class FrameStreamer {

@@ -79,15 +79,18 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   const SvgfSignal& s = v.signals[index];
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
-  const uint32_t normal_half = is_half(channel_format(config, ChannelId::Normal));
-  const uint32_t depth_half = is_half(channel_format(config, ChannelId::Depth));
+  // Features: the signal's own (fp32 buffers) or the primary planes.
+  const std::string depth = s.features ? s.features->depth : "depth";
+  const std::string normal = s.features ? s.features->normal : "normal";
+  const uint32_t normal_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Normal));
+  const uint32_t depth_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Depth));
   const bool clip = v.clip && s.clip;
   if (clip) add_clip_prefilter(g, config, s, demodulate);
 
   PassSpec& reproject = g.add_pass("svgf_reproject" + s.suffix, "svgf_reproject");
   reproject.bind("signal", s.input)
-      .bind("normal", "normal")
-      .bind("depth", "depth")
+      .bind("normal", normal)
+      .bind("depth", depth)
       .bind("motion", "motion")
       .bind("prev_colour", colour)
       .bind("prev_aux", aux)
@@ -100,7 +103,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("DEPTH_HALF", depth_half)
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("DEMODULATE", demodulate)
-      .set("WRITE_GUIDE", index == 0)  // later chains read the first chain's guide
+      .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first chain's guide
       .set("SUBTRACT_EMISSION", s.subtract_emission);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
@@ -110,6 +113,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .bind("roughness", "roughness")
         .set("CLIP", 1u)
         .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)));
+  if (s.motion == MotionSource::Reflection) reproject.bind("reflection", s.reflection_motion).set("REFLECTION", 1u);
   reproject.pixels_per_invocation = 1;
 
   PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
@@ -164,8 +168,10 @@ void check_supported(const SvgfVariant& v) {
     reject("the first signal needs a modulator: svgf_remodulate multiplies it by one");
   for (const SvgfSignal& s : v.signals) {
     if (s.input.empty() || s.history.empty()) reject("a signal needs an input plane and a history name");
-    if (s.motion != MotionSource::Primary)
-      reject("motion source of signal " + s.input + ": only the primary Motion plane is implemented");
+    if (s.motion == MotionSource::Reflection && s.reflection_motion.empty())
+      reject("signal " + s.input + " takes reflection motion but names no reflect_motion buffer");
+    if (s.features && (s.features->depth.empty() || s.features->normal.empty()))
+      reject("signal " + s.input + ": its own features need a depth and a normal buffer");
   }
   if (v.kernel != AtrousKernel::B3_5x5) reject("kernel: svgf_atrous.comp implements only the 5x5 B3 kernel");
   if (v.luminance_weight != LuminanceWeight::VarianceGuided)

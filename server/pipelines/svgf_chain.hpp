@@ -3,7 +3,8 @@
 // then svgf_remodulate and, with TAA, svgf_taa. What varies between
 // pipelines is data, an SvgfVariant: the signals (each with its modulator and
 // motion source), the a-trous kernel, step order and luminance weight, the
-// feedback tap, a validity mask, TAA and emission. svgf and svgf-fb are two
+// feedback tap, a validity mask, TAA and emission; per signal its motion
+// source and its edge-stopping features. svgf and svgf-fb are two
 // variant descriptions (svgf.cpp, svgf_fb.cpp); builders never compare
 // pipeline names. Fields the shaders do not support yet are part of the
 // description and rejected by check_supported() with a message naming them.
@@ -36,7 +37,15 @@ enum class LuminanceWeight {
 // Where a signal's reprojection takes its motion from.
 enum class MotionSource {
   Primary,     // the Motion plane
-  Reflection,  // a reflection-motion plane (Beyond SVGF); no such channel yet
+  Reflection,  // reflect_motion's buffer (paper 001): SvgfSignal::reflection_motion
+};
+
+// A signal's own edge-stopping and history-test features, instead of the
+// primary depth and normal planes: fp32 buffers of 1 and 3 components per
+// pixel that the caller writes (reflect's specular chain: the reflected
+// surface's at mirrors). A chain with its own features writes its own guide.
+struct SignalFeatures {
+  std::string depth, normal;
 };
 
 // What a signal is divided by before filtering and multiplied by after
@@ -57,6 +66,8 @@ struct SvgfSignal {
   std::string history;          // prefix of its history buffers: <history>_colour, <history>_aux
   Modulator modulator;
   MotionSource motion = MotionSource::Primary;
+  std::string reflection_motion;  // Reflection: the buffer of vec4(motion, class, distance) (reflect_motion)
+  std::optional<SignalFeatures> features;
   bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
   bool clip = false;               // its history is clipped (highlights and reflections: radiance, specular)
 };

@@ -7,7 +7,7 @@
 // factor is this pipeline's point (a client with its own F_beta sends
 // specular_lighting + specular_albedo to svgf instead).
 #include "pipelines/definitions.hpp"
-#include "pipelines/fb_lut.hpp"
+#include "pipelines/fb_factor.hpp"
 #include "pipelines/split_signals.hpp"
 #include "pipelines/svgf_chain.hpp"
 
@@ -17,10 +17,7 @@ namespace {
 using protocol::ChannelId;
 
 // Scratch, per pixel: F_beta rgb fp32 (svgf_fb_factor).
-constexpr uint64_t kFbFactorBytes = 12;
 constexpr const char* kFactor = "svgf_fb";
-// The context-wide table this pipeline binds (computed once per device).
-const SharedResourceDecl kFbLut{"fb_lut", fb_lut_buffer};
 
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v = svgf_variant_from(config, p);
@@ -31,26 +28,10 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   const SvgfVariant v = variant(config, g.parameters);
-  add_svgf_inputs(g, config, v);
-  g.add_input(config, ChannelId::SpecularF0, "specular_f0");
-  // roughness: add_svgf_inputs added it (history clipping reads it too).
-  g.add_shared(kFbLut.name, kFbLut.resource);
+  add_svgf_inputs(g, config, v);  // roughness included (history clipping reads it too)
   add_svgf_buffers(g, v);
-  g.add_scratch(kFactor, kFbFactorBytes);
   g.add_output(config);
-
-  g.add_pass("svgf_fb_factor", "svgf_fb_factor")
-      .bind("specular_f0", "specular_f0")
-      .bind("roughness", "roughness")
-      .bind("normal", "normal")
-      .bind("depth", "depth")
-      .bind("fb_lut", kFbLut.name)
-      .bind("factor", kFactor)
-      .set("F0_HALF", is_half(channel_format(config, ChannelId::SpecularF0)))
-      .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)))
-      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
-      .pixels_per_invocation = 1;
+  add_fb_factor(g, config, kFactor);
   add_svgf_passes(g, config, v);
   return g;
 }
@@ -77,7 +58,7 @@ PipelineDefinition svgf_fb_definition() {
                                      protocol::channel_bit(ChannelId::Emission);
   d.parameter_groups = {"svgf"};
   d.description.parameters = parameters_of(d.parameter_groups);
-  d.shared_resources = {kFbLut};
+  d.shared_resources = {kFbLutResource};
   d.build = build;
   d.check_channels = check_channels;
   return d;

@@ -317,6 +317,8 @@ void recording_server(test::Peer& peer, Log& log) {
   protocol::PipelineInfo fb;
   fb.name = "svgf-fb";
   fb.required_channels = protocol::channel_bit(protocol::ChannelId::Radiance);
+  // It takes specular_f0, so it computes F_beta from the view direction and needs a camera.
+  fb.optional_channels = protocol::channel_bit(protocol::ChannelId::SpecularF0);
   w.pipelines.push_back(fb);
   peer.handshake_with(w);
   for (;;) {

@@ -92,7 +92,9 @@ TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
     for (const auto& c : protocol::kChannels)
       if (def.description.required_channels & protocol::channel_bit(c.id)) channels.push_back({c.id, Format::F16});
     if (def.description.name == "svgf") channels.push_back({ChannelId::Radiance, Format::F32});
-    if (def.description.name == "svgf-fb") channels.push_back({ChannelId::DiffuseLighting, Format::F32});
+    // Split pipelines (specular required) take the diffuse part in either form.
+    if (def.description.required_channels & protocol::channel_bit(ChannelId::Specular))
+      channels.push_back({ChannelId::DiffuseLighting, Format::F32});
     const auto config = test::make_config(def.description.name, 33, 17, channels, Format::F16);
     ASSERT_FALSE(pipelines::validate(config).has_value()) << pipelines::validate(config)->message;
     EXPECT_NO_THROW(def.build(config).check());

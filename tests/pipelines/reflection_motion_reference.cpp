@@ -25,13 +25,23 @@ double ray_distance(const RayField& current, const RayField& previous, int px, i
   const double ndepth = p_near ? current.depth[p] : previous.depth[q];
   const auto& fo = p_near ? previous.origin[q] : current.origin[p];
   const auto& fd = p_near ? previous.direction[q] : current.direction[p];
-  const double v[3] = {no[0] + nd[0] * ndepth - fo[0], no[1] + nd[1] * ndepth - fo[1], no[2] + nd[2] * ndepth - fo[2]};
+  // v = approxhit(r_near) - r_far.o as (no - fo) + depth nd, so that two
+  // equal rays give exactly 0 (fd x nd = 0 then).
+  const double b[3] = {no[0] - fo[0], no[1] - fo[1], no[2] - fo[2]};
+  auto cross = [](const auto& a, const auto& c) {
+    return std::array<double, 3>{a[1] * c[2] - a[2] * c[1], a[2] * c[0] - a[0] * c[2], a[0] * c[1] - a[1] * c[0]};
+  };
+  auto dot = [](const auto& a, const auto& c) { return a[0] * c[0] + a[1] * c[1] + a[2] * c[2]; };
   // A ray, not a line: a point behind r_far's origin is measured from the
   // origin (the line alone would also match points on the extension behind
   // the mirror, other walls' hits).
-  if (v[0] * fd[0] + v[1] * fd[1] + v[2] * fd[2] < 0.0) return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  const double c[3] = {fd[1] * v[2] - fd[2] * v[1], fd[2] * v[0] - fd[0] * v[2], fd[0] * v[1] - fd[1] * v[0]};
-  return std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  if (dot(b, fd) + ndepth * dot(nd, fd) < 0.0) {
+    const double v[3] = {b[0] + ndepth * nd[0], b[1] + ndepth * nd[1], b[2] + ndepth * nd[2]};
+    return std::sqrt(dot(v, v));
+  }
+  const auto cb = cross(fd, b), cn = cross(fd, nd);
+  const double c[3] = {cb[0] + ndepth * cn[0], cb[1] + ndepth * cn[1], cb[2] + ndepth * cn[2]};
+  return std::sqrt(dot(c, c));
 }
 
 namespace {

@@ -135,7 +135,7 @@ TEST_F(SvgfPassTest, EveryPassMatchesReferenceOnRenderedFramesWithCameraMotion) 
   render::RenderSettings settings;
   settings.width = w;
   settings.height = h;
-  settings.channels.specular_hit = false;
+  settings.channels.reflection = false;
   compare_every_pass(ctx(), "rendered", w, h, test::SvgfParams{}, {}, 6, [&](int t) {
     // A stride of 4 path frames per denoised frame: about 3.5 px of motion at the edges.
     const int path_frame = 4 * t;

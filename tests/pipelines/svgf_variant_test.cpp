@@ -44,8 +44,11 @@ TEST(SvgfVariant, WhatTheShadersDoNotImplementIsRejectedByName) {
   v.luminance_weight = pipelines::LuminanceWeight::Relative;
   EXPECT_NE(rejection(v).find("luminance weight"), std::string::npos) << rejection(v);
   v = radiance_variant();
-  v.signals[0].motion = pipelines::MotionSource::Reflection;
-  EXPECT_NE(rejection(v).find("motion source"), std::string::npos) << rejection(v);
+  v.signals[0].motion = pipelines::MotionSource::Reflection;  // without reflect_motion's buffer
+  EXPECT_NE(rejection(v).find("reflect_motion buffer"), std::string::npos) << rejection(v);
+  v = radiance_variant();
+  v.signals[0].features = pipelines::SignalFeatures{"reflect_depth", ""};
+  EXPECT_NE(rejection(v).find("depth and a normal buffer"), std::string::npos) << rejection(v);
   v = radiance_variant();
   v.validity_mask = ChannelId::SampleCount;
   EXPECT_NE(rejection(v).find("validity mask"), std::string::npos) << rejection(v);

@@ -28,9 +28,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfAndSvgfFb) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 4u);
+  ASSERT_EQ(all.size(), 5u);
   EXPECT_EQ(all[2].name, "svgf");
   EXPECT_EQ(all[2].required_channels, protocol::channel_bit(ChannelId::Albedo) |
                                           protocol::channel_bit(ChannelId::Normal) |
@@ -59,6 +59,20 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfAndSvgfFb) {
   std::vector<std::string> fb_names;
   for (const auto& p : all[3].parameters) fb_names.push_back(p.name);
   EXPECT_EQ(fb_names, svgf_names);
+  // reflect: svgf-fb's channels plus position and the reflection features
+  // (footprint not yet: nothing reads it); svgf's parameters and its classes.
+  EXPECT_EQ(all[4].name, "reflect");
+  uint64_t features = protocol::channel_bit(ChannelId::Position);
+  for (ChannelId id : {ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo, ChannelId::ReflectionNormal,
+                       ChannelId::ReflectionDepth, ChannelId::ReflectionDirection, ChannelId::ReflectionDistance})
+    features |= protocol::channel_bit(id);
+  EXPECT_EQ(all[4].required_channels, all[3].required_channels | features);
+  EXPECT_EQ(all[4].optional_channels, all[3].optional_channels);
+  std::vector<std::string> reflect_names;
+  for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
+  std::vector<std::string> expected = svgf_names;
+  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness"});
+  EXPECT_EQ(reflect_names, expected);
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
   EXPECT_TRUE(all[0].parameters.empty());

@@ -75,7 +75,7 @@ TEST(PayloadRules, OpenSessionChannelFormatOutOfRange) {
 TEST(PayloadRules, OpenSessionChannelIds) {
   const std::vector<ChannelDecl> ch = {{ChannelId::Radiance, Format::F32}, {ChannelId::Depth, Format::F32}};
   // Unknown id.
-  for (int bad : {15, 31, 33, 63, 64, 255}) {  // 12-14: the lighting forms (docs/protocol.md §7.4)
+  for (int bad : {22, 31, 33, 63, 64, 255}) {  // 12-14: the lighting forms, 15-21: reflection features (docs/protocol.md §7)
     auto bytes = encode(open_session(ch));
     bytes[P + kOsChannels + 2] = static_cast<uint8_t>(bad);
     auto e = expect_error(bytes);

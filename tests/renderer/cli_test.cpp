@@ -16,7 +16,7 @@ TEST(RendererCli, ParsesEveryOption) {
   const CliOptions o = parse_cli({"--scene", "3", "--frames", "10", "--first", "5", "--hold-camera", "7", "--width", "320", "--height",
                                   "180", "--spp", "0.25", "--seed", "9", "--out", "o", "--reference", "512", "--cache",
                                   "c", "--server", "tcp://h:1", "--pipeline", "svgf", "--in-flight", "3", "--stats",
-                                  "--spec-hit", "--jitter", "--max-depth", "5", "--threads", "2", "--send-split",
+                                  "--reflection", "--jitter", "--max-depth", "5", "--threads", "2", "--send-split",
                                   "--png", "--quiet", "--gbuffer-grid", "2", "--reference2"});
   EXPECT_EQ(o.scene, 3);
   EXPECT_EQ(o.frames, 10);
@@ -33,7 +33,7 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_EQ(o.server, "tcp://h:1");
   EXPECT_EQ(o.pipeline, "svgf");
   EXPECT_EQ(o.in_flight, 3);
-  EXPECT_TRUE(o.render.channels.statistics && o.render.channels.specular_hit && o.render.jitter);
+  EXPECT_TRUE(o.render.channels.statistics && o.render.channels.reflection && o.render.jitter);
   EXPECT_EQ(o.render.max_depth, 5);
   EXPECT_EQ(o.render.threads, 2);
   EXPECT_EQ(o.render.gbuffer_grid, 2);
@@ -56,7 +56,7 @@ TEST(RendererCli, SecondReferenceIsCopiedToOut) {
 
 TEST(RendererCli, RejectsBadArguments) {
   for (const std::vector<std::string>& bad :
-       std::vector<std::vector<std::string>>{{"--scene", "6"},
+       std::vector<std::vector<std::string>>{{"--scene", "7"},
                                              {"--scene", "x"},
                                              {"--spp", "0"},
                                              {"--spp", "-1"},
@@ -70,7 +70,7 @@ TEST(RendererCli, RejectsBadArguments) {
                                              {"--reference2"}})
     EXPECT_THROW(parse_cli(bad), UsageError) << bad[0];
   try {
-    parse_cli({"--scene", "7"});
+    parse_cli({"--scene", "8"});
   } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("--scene"), std::string::npos) << e.what();
   }
@@ -102,11 +102,18 @@ TEST(RendererStream, ChannelsForAPipeline) {
                                            ChannelId::Depth, ChannelId::Motion, ChannelId::Emission}),
                                      false);
   EXPECT_TRUE(fb.split && fb.gbuffer && fb.motion);
-  EXPECT_FALSE(fb.statistics || fb.specular_hit || fb.sample_count);
+  EXPECT_FALSE(fb.statistics || fb.reflection || fb.sample_count);
   // Radiance or split: split only when asked to send it (or for emission).
   const ChannelSet either = channels_for(mask({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular}), false);
   EXPECT_FALSE(either.split);
   EXPECT_TRUE(channels_for(mask({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::Specular}), true).split);
+  // The reflection features (ids 15-21) only for a pipeline that takes one of them.
+  EXPECT_FALSE(channels_for(mask({ChannelId::Radiance, ChannelId::Roughness, ChannelId::Depth}), false).reflection);
+  for (int id = 15; id <= 21; ++id) {
+    const ChannelSet reflect = channels_for(mask({ChannelId::Radiance, static_cast<ChannelId>(id)}), false);
+    EXPECT_TRUE(reflect.reflection) << id;
+    EXPECT_FALSE(reflect.statistics) << id;
+  }
 }
 
 }  // namespace

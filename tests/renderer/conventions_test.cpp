@@ -120,29 +120,45 @@ TEST(RendererConventions, RadianceIsDiffusePlusSpecularPlusEmission) {
   }
 }
 
-TEST(RendererConventions, MirrorPixelsGetSpecularHitExtras) {
+// The reflection features follow the radiance sample 0 ray, jitter included,
+// as depth and position do: the representative ray starts at `position`,
+// leaves along the primary normal's mirror direction, and its hit at
+// `reflection_distance` is where the chain goes next.
+TEST(RendererConventions, ReflectionFeaturesFollowTheSampleZeroRay) {
   const std::unique_ptr<Scene> scene = build_scene(1);
   RenderSettings st = test::small_settings(64, 36);
-  st.channels.specular_hit = true;
-  // The extras follow the radiance sample 0 ray; so do point-sampled material
-  // G-buffers (footprint averages mix the mirror's with its neighbours' at its edge).
+  st.channels.reflection = true;
+  st.jitter = true;
+  // Point-sampled material G-buffers follow the same ray (footprint averages
+  // mix the mirror's normal with its neighbours' at its edge).
   st.gbuffer_grid = 0;
-  const Camera cam = frame_camera(1, 0, st);
-  const FrameBuffers fb = render_frame(*scene, cam, cam, 0, st);
-  int mirror = 0;
-  for (int i = 0; i < st.width * st.height; ++i) {
-    const glm::vec3 dir = at3(fb.spec_hit_direction, i);
-    if (glm::length(dir) == 0.0f) continue;
-    ++mirror;
-    ASSERT_NEAR(glm::length(dir), 1.0f, 1e-4f);
-    // Only metals with alpha below the threshold are mirror-like.
-    ASSERT_LT(fb.roughness[i], kSpecularAlphaThreshold);
-    ASSERT_EQ(fb.albedo[3 * i], 0.0f);
-    // The hit behind the mirror lies along the mirror ray.
-    const glm::vec3 to_hit = at3(fb.spec_hit_position, i) - at3(fb.position, i);
-    ASSERT_GT(glm::dot(glm::normalize(to_hit), dir), 0.999f);
-  }
-  EXPECT_GT(mirror, 20);  // the mirror sphere covers a visible part of the frame
+  const Camera cam = frame_camera(1, 3, st);
+  const FrameBuffers fb = render_frame(*scene, cam, frame_camera(1, 2, st), 3, st);
+  const CameraRays rays(cam, st.width, st.height);
+  int mirror = 0, glossy = 0;
+  for (int y = 0; y < st.height; ++y)
+    for (int x = 0; x < st.width; ++x) {
+      const size_t i = size_t(y) * st.width + x;
+      const glm::vec3 r = at3(fb.reflection_direction, i);
+      if (glm::length(r) == 0.0f) continue;
+      ASSERT_LT(fb.roughness[i], kGlossyRoughness);
+      const glm::vec3 d = rays.direction(x + 0.5f + cam.jitter.x, y + 0.5f + cam.jitter.y);
+      const glm::vec3 n = at3(fb.normal, i);
+      ASSERT_LE(glm::distance(r, glm::reflect(d, n)), 1e-5f) << "pixel " << i;
+      if (fb.roughness[i] >= kMirrorRoughness) {
+        ++glossy;
+        continue;
+      }
+      ++mirror;
+      // A chain that stops at its first hit ends at the representative ray's
+      // hit (up to the ray's offset off the surface, 1e-4 of the coordinates).
+      const glm::vec3 first = at3(fb.position, i) + fb.reflection_distance[i] * r;
+      if (glm::distance(first, at3(fb.reflection_position, i)) <= 1e-3f * (1.0f + fb.reflection_distance[i])) continue;
+      // Otherwise it went on from a pure mirror, and the room's only one is the mirror sphere.
+      ASSERT_NEAR(glm::distance(first, glm::vec3(-1.5f, 1.0f, -1.2f)), 1.0f, 1e-3f) << "pixel " << i;
+    }
+  EXPECT_GT(mirror, 20);  // the mirror sphere and the coated floor's mirror stripes
+  EXPECT_GT(glossy, 20);  // the gold sphere and the floor's rough stripes
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ TEST(RendererExr, FrameHasEveryLayerAndTheCamera) {
   RenderSettings st = test::small_settings(32, 18, 2.0);
   st.jitter = true;
   st.channels.statistics = true;
-  st.channels.specular_hit = true;
+  st.channels.reflection = true;
   const Camera cam = frame_camera(1, 3, st), prev = frame_camera(1, 2, st);
   const FrameBuffers fb = render_frame(*scene, cam, prev, 3, st);
   const std::string path =
@@ -33,8 +33,9 @@ TEST(RendererExr, FrameHasEveryLayerAndTheCamera) {
   for (const char* name :
        {"radiance.R", "diffuse.G", "specular.B", "albedo.R", "specular_f0.G", "roughness.Y", "normal.X", "depth.Z",
         "motion.X", "motion.Y", "emission.R", "position.Z", "sample_count.Y", "stat_count.Y", "stat_mean.R",
-        "stat_m2.G", "stat_m3.B", "stat_raw_mean.R", "spec_hit_position.X", "spec_hit_albedo.G",
-        "spec_hit_direction.Z"})
+        "stat_m2.G", "stat_m3.B", "stat_raw_mean.R", "reflection_position.X", "reflection_albedo.G",
+        "reflection_normal.Z", "reflection_depth.Z", "reflection_direction.X", "reflection_distance.Y",
+        "reflection_footprint.Y"})
     EXPECT_TRUE(exr.has_channel(name)) << name;
   const auto camera = exr.camera();
   ASSERT_TRUE(camera.view && camera.projection && camera.jitter && camera.prev_view);

@@ -38,6 +38,15 @@ enum class ChannelId : uint8_t {
   DiffuseLighting = 12,   // rgb  diffuse radiance / albedo (Cycles DiffDir + DiffInd)
   SpecularLighting = 13,  // rgb  specular radiance / specular_albedo (Cycles GlossDir + GlossInd)
   SpecularAlbedo = 14,    // rgb  directional albedo of the specular lobes (Cycles GlossCol)
+  // Reflection features (1.3; paper 001): what a reflection shows, for
+  // reflection motion and the specular signal's demodulation and edges.
+  ReflectionPosition = 15,   // xyz  first non-mirror hit along the mirror chain (world)
+  ReflectionAlbedo = 16,     // rgb  its albedo times the chain's later mirror reflectances
+  ReflectionNormal = 17,     // xyz  its world-space unit normal
+  ReflectionDepth = 18,      // r    virtual depth: linear view depth of that hit unfolded onto the primary ray
+  ReflectionDirection = 19,  // xyz  representative ray: the view ray mirrored about the primary normal
+  ReflectionDistance = 20,   // r    distance along that ray to its first hit
+  ReflectionFootprint = 21,  // r    ray-differential footprint width at that hit (world units)
   Output = 32,         // rgb  denoised radiance, only in RESULT
 };
 
@@ -59,6 +68,13 @@ inline constexpr ChannelInfo kChannels[] = {
     {ChannelId::Position, "position", 3},   {ChannelId::SampleCount, "sample_count", 1},
     {ChannelId::DiffuseLighting, "diffuse_lighting", 3, 2}, {ChannelId::SpecularLighting, "specular_lighting", 3, 2},
     {ChannelId::SpecularAlbedo, "specular_albedo", 3, 2},
+    {ChannelId::ReflectionPosition, "reflection_position", 3, 3},
+    {ChannelId::ReflectionAlbedo, "reflection_albedo", 3, 3},
+    {ChannelId::ReflectionNormal, "reflection_normal", 3, 3},
+    {ChannelId::ReflectionDepth, "reflection_depth", 1, 3},
+    {ChannelId::ReflectionDirection, "reflection_direction", 3, 3},
+    {ChannelId::ReflectionDistance, "reflection_distance", 1, 3},
+    {ChannelId::ReflectionFootprint, "reflection_footprint", 1, 3},
     {ChannelId::Output, "output", 3},
 };
 

@@ -1,0 +1,84 @@
+#version 450
+// reflect_prepare (reflect, after svgf_fb_factor): classes each pixel by its
+// roughness (reflect.mirror_roughness, reflect.glossy_roughness; NaN or a
+// background pixel: none) and writes
+//  - the search features of this frame (reflect.glsl): a mirror whose chain
+//    hit is not finite, or a glossy pixel without a finite position or unit
+//    direction, falls to class none (primary motion);
+//  - the specular modulator: F_beta, times the reflected albedo at a mirror
+//    (components below the albedo guard, or not finite, count as 1: a mirror
+//    that shows the sky is demodulated by F_beta alone);
+//  - the specular chain's depth and normal: at a mirror whose chain hit is
+//    foreground, the virtual depth and the reflected surface's normal (its
+//    edges are the reflection's, paper 001 §4.1), else the primary ones.
+// docs/pipelines.md, "reflect".
+//
+// Resources: passes/reflect_prepare.pass (binding 0 FrameConstants).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+#include "plane.glsl"
+#include "sanitize.glsl"
+#include "pass.glsl"
+#include "passes/reflect_prepare.pass"
+
+#include "svgf_guards.glsl"
+#include "reflect.glsl"
+
+float reflection_class(uint p, float z) {
+  float r = DN_LOAD1(roughness, ROUGHNESS_HALF, p);
+  if (!dn_is_foreground(z) || !dn_is_finite(r)) return DN_REFLECT_NONE;
+  if (r < DN_PARAM_VALUE(reflect, mirror_roughness)) return DN_REFLECT_MIRROR;
+  if (r < DN_PARAM_VALUE(reflect, glossy_roughness)) return DN_REFLECT_GLOSSY;
+  return DN_REFLECT_NONE;
+}
+
+vec3 guarded(vec3 a) {
+  return vec3(a.x >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.x) ? a.x : 1.0,
+              a.y >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.y) ? a.y : 1.0,
+              a.z >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.z) ? a.z : 1.0);
+}
+
+void main() {
+  uint p = dn_invocation_index();
+  if (p >= frame.size.z) return;
+  float z = DN_LOAD1(depth, DEPTH_HALF, p);
+  vec3 n = DN_LOAD3(normal, NORMAL_HALF, p);
+  float cls = reflection_class(p, z);
+  vec3 f = vec3(fb_factor.data[3u * p], fb_factor.data[3u * p + 1u], fb_factor.data[3u * p + 2u]);
+
+  vec4 a = vec4(0.0), b = vec4(0.0);
+  if (cls == DN_REFLECT_MIRROR) {
+    vec3 w = DN_LOAD3(reflection_position, REFLECTION_POSITION_HALF, p);
+    if (dn_is_finite(w)) {
+      a = vec4(w, cls);
+      f *= guarded(DN_LOAD3(reflection_albedo, REFLECTION_ALBEDO_HALF, p));
+      float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
+      if (dn_is_foreground(vz)) {
+        z = vz;
+        n = DN_LOAD3(reflection_normal, REFLECTION_NORMAL_HALF, p);
+      }
+    } else {
+      cls = DN_REFLECT_NONE;
+    }
+  } else if (cls == DN_REFLECT_GLOSSY) {
+    vec3 o = DN_LOAD3(position, POSITION_HALF, p);
+    vec3 d = DN_LOAD3(reflection_direction, REFLECTION_DIRECTION_HALF, p);
+    float t = DN_LOAD1(reflection_distance, REFLECTION_DISTANCE_HALF, p);
+    float len = length(d);
+    if (dn_is_finite(o) && dn_is_finite(len) && len > 0.5) {
+      a = vec4(o, cls);
+      b = vec4(d / len, dn_reflect_ray_exists(t) ? t : 0.0);
+    } else {
+      cls = DN_REFLECT_NONE;
+    }
+  }
+  features.data[2u * p] = a;
+  features.data[2u * p + 1u] = b;
+  modulator.data[3u * p] = f.x;
+  modulator.data[3u * p + 1u] = f.y;
+  modulator.data[3u * p + 2u] = f.z;
+  feature_depth.data[p] = z;
+  feature_normal.data[3u * p] = n.x;
+  feature_normal.data[3u * p + 1u] = n.y;
+  feature_normal.data[3u * p + 2u] = n.z;
+}

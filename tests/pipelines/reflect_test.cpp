@@ -1,0 +1,276 @@
+// reflect on the device: its reflection motion pass against the CPU
+// reference of the search (reflection_motion_reference.cpp) on path-traced
+// frames of dnrender, the static-camera oracle (exactly zero motion), the
+// planar-mirror oracle (the mirrored hit's analytic motion), and the whole
+// pipeline on the hard cases. Frames: dnrender scene 6 (a planar wall
+// mirror and a glossy floor, camera translating) and scene 1 (mirror sphere,
+// glossy gold sphere, roughness-mapped coated floor, orbiting camera).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "camera.hpp"
+#include "gpu_test_env.hpp"
+#include "pipelines/graph.hpp"
+#include "pipelines/parameters.hpp"
+#include "reflection_motion_reference.hpp"
+#include "render.hpp"
+#include "scenes.hpp"
+#include "svgf_inputs.hpp"
+
+namespace dn {
+namespace {
+
+using namespace svgf_inputs;
+
+class ReflectTest : public test::GpuTest {};
+
+// The channels reflect takes, as dnrender streams them.
+const ChannelId kChannels[] = {ChannelId::Diffuse,           ChannelId::Specular,          ChannelId::Emission,
+                               ChannelId::Albedo,            ChannelId::SpecularF0,        ChannelId::Roughness,
+                               ChannelId::Normal,            ChannelId::Depth,             ChannelId::Motion,
+                               ChannelId::Position,          ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo,
+                               ChannelId::ReflectionNormal,  ChannelId::ReflectionDepth,   ChannelId::ReflectionDirection,
+                               ChannelId::ReflectionDistance};
+
+const std::vector<float>& plane(const render::FrameBuffers& fb, ChannelId id) {
+  switch (id) {
+    case ChannelId::Diffuse: return fb.diffuse;
+    case ChannelId::Specular: return fb.specular;
+    case ChannelId::Emission: return fb.emission;
+    case ChannelId::Albedo: return fb.albedo;
+    case ChannelId::SpecularF0: return fb.specular_f0;
+    case ChannelId::Roughness: return fb.roughness;
+    case ChannelId::Normal: return fb.normal;
+    case ChannelId::Depth: return fb.depth;
+    case ChannelId::Motion: return fb.motion;
+    case ChannelId::Position: return fb.position;
+    case ChannelId::ReflectionPosition: return fb.reflection_position;
+    case ChannelId::ReflectionAlbedo: return fb.reflection_albedo;
+    case ChannelId::ReflectionNormal: return fb.reflection_normal;
+    case ChannelId::ReflectionDepth: return fb.reflection_depth;
+    case ChannelId::ReflectionDirection: return fb.reflection_direction;
+    case ChannelId::ReflectionDistance: return fb.reflection_distance;
+    default: throw std::logic_error("not a reflect channel");
+  }
+}
+
+pipelines::SessionConfig reflect_config(int w, int h, std::vector<protocol::Parameter> params = {}) {
+  std::vector<protocol::ChannelDecl> channels;
+  for (ChannelId id : kChannels) channels.push_back({id, Format::F32});
+  return test::make_config("reflect", w, h, channels, Format::F32, std::move(params));
+}
+
+std::array<float, 16> to_array(const glm::mat4& m) {
+  std::array<float, 16> a{};
+  std::memcpy(a.data(), &m[0][0], sizeof a);
+  return a;
+}
+
+struct Rendered {
+  render::FrameBuffers fb;
+  render::Camera camera;
+};
+
+// Frame t of a dnrender scene, `stride` path frames apart (more motion per frame).
+Rendered render_frame(const render::Scene& scene, int scene_id, int t, int stride, int w, int h) {
+  render::RenderSettings settings;
+  settings.width = w;
+  settings.height = h;
+  settings.channels.reflection = true;
+  const render::Camera cam = render::frame_camera(scene_id, stride * t, settings);
+  const render::Camera prev = render::frame_camera(scene_id, stride * (t - 1), settings);
+  return {render::render_frame(scene, cam, prev, t, settings), cam};
+}
+
+test::HostFrame host(const Rendered& r, bool reset) {
+  test::HostFrame h;
+  h.info.flags = reset ? protocol::kFrameReset : 0u;
+  h.info.view = to_array(r.camera.view);
+  h.info.projection = to_array(r.camera.projection);
+  for (ChannelId id : kChannels) h.add(id, Format::F32, plane(r.fb, id));
+  return h;
+}
+
+// The reflection classes of docs/protocol.md §7.5 with the pipeline's defaults.
+float parameter_default(const char* name) {
+  const std::string_view group[] = {"reflect"};
+  for (const auto& p : pipelines::parameters_of(group))
+    if (p.name == name) return float(p.default_value);
+  throw std::logic_error("no such parameter");
+}
+enum Class { None = 0, Mirror = 1, Glossy = 2 };
+Class class_of(const render::FrameBuffers& fb, size_t i) {
+  const float r = fb.roughness[i];
+  if (!(fb.depth[i] > 0.0f) || !std::isfinite(fb.depth[i]) || !std::isfinite(r)) return None;
+  if (r < parameter_default("mirror_roughness")) return Mirror;
+  if (r < parameter_default("glossy_roughness")) return Glossy;
+  return None;
+}
+
+// The reference's fields from a frame's planes (fp32 values, as the device reads them).
+struct Fields {
+  test::reflect::HitField hits;
+  test::reflect::RayField rays;
+};
+Fields fields_of(const render::FrameBuffers& fb) {
+  Fields f;
+  const int w = fb.width, h = fb.height;
+  const size_t n = size_t(w) * h;
+  f.hits.width = f.rays.width = w;
+  f.hits.height = f.rays.height = h;
+  f.hits.position.resize(n);
+  f.hits.valid.assign(n, 0);
+  f.rays.origin.resize(n);
+  f.rays.direction.resize(n);
+  f.rays.depth.assign(n, 0.0);
+  f.rays.valid.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const Class c = class_of(fb, i);
+    auto at3 = [&](const std::vector<float>& v) { return std::array<double, 3>{v[3 * i], v[3 * i + 1], v[3 * i + 2]}; };
+    if (c == Mirror) {
+      f.hits.position[i] = at3(fb.reflection_position);
+      f.hits.valid[i] = 1;
+    } else if (c == Glossy) {
+      const float t = fb.reflection_distance[i];
+      std::array<double, 3> d = at3(fb.reflection_direction);
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      for (double& x : d) x = double(float(x / len));  // the device normalises in fp32
+      f.rays.origin[i] = at3(fb.position);
+      f.rays.direction[i] = d;
+      f.rays.depth[i] = t;
+      f.rays.valid[i] = t > 0.0f && std::isfinite(t);
+    }
+  }
+  return f;
+}
+
+std::vector<float> floats(const std::vector<uint8_t>& bytes) {
+  std::vector<float> out(bytes.size() / 4);
+  std::memcpy(out.data(), bytes.data(), out.size() * 4);
+  return out;
+}
+
+// Runs frames a then b through a fresh reflect session and returns
+// reflect_motion's vec4(motion, class, distance) per pixel for frame b.
+std::vector<float> reflection_motion(gpu::Context& ctx, const Rendered& a, const Rendered& b) {
+  const int w = b.fb.width, h = b.fb.height;
+  auto pipe = pipelines::create(ctx, reflect_config(w, h));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  EXPECT_NE(graph, nullptr);
+  graph->set_capture(true);
+  run(*pipe, host(a, true));
+  run(*pipe, host(b, false));
+  return floats(graph->captured("reflect_motion", "reflect_motion"));
+}
+
+struct Agreement {
+  int searched = 0, equal = 0, within_1px = 0, class_mismatch = 0;
+};
+
+// The device's motion of every mirror and glossy pixel against the CPU
+// reference's diamond search and sub-pixel step on the same fields.
+Agreement compare_with_reference(const Rendered& a, const Rendered& b, const std::vector<float>& got) {
+  const Fields prev = fields_of(a.fb), cur = fields_of(b.fb);
+  const int w = b.fb.width, h = b.fb.height;
+  Agreement out;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      const Class c = class_of(b.fb, i);
+      if (c == None) continue;
+      const std::array<double, 2> mv{b.fb.motion[2 * i], b.fb.motion[2 * i + 1]};
+      test::reflect::IntegerMatch m;
+      test::reflect::SubpixelMatch s;
+      if (c == Mirror) {
+        m = test::reflect::diamond_search(cur.hits, prev.hits, x, y, mv);
+        s = test::reflect::refine_subpixel(cur.hits, prev.hits, x, y, m);
+      } else {
+        if (!cur.rays.valid[i]) continue;
+        m = test::reflect::diamond_search(cur.rays, prev.rays, x, y, mv);
+        s = test::reflect::refine_subpixel(cur.rays, prev.rays, x, y, m);
+      }
+      if (!std::isfinite(m.distance)) continue;
+      ++out.searched;
+      if (got[4 * i + 2] != float(c)) ++out.class_mismatch;
+      const double dx = got[4 * i] - (s.x - x), dy = got[4 * i + 1] - (s.y - y);
+      const double err = std::sqrt(dx * dx + dy * dy);
+      if (err < 0.01) ++out.equal;
+      if (err < 1.0) ++out.within_1px;
+    }
+  return out;
+}
+
+TEST_F(ReflectTest, MotionSearchMatchesTheCpuReferenceOnRenderedFrames) {
+  const int w = 128, h = 72;
+  for (int scene_id : {6, 1}) {
+    SCOPED_TRACE("scene " + std::to_string(scene_id));
+    const auto scene = render::build_scene(scene_id);
+    const Rendered a = render_frame(*scene, scene_id, 1, 4, w, h), b = render_frame(*scene, scene_id, 2, 4, w, h);
+    const Agreement r = compare_with_reference(a, b, reflection_motion(ctx(), a, b));
+    std::printf("scene %d: %d searched pixels, %.1f %% equal to 0.01 px, %.1f %% within 1 px, %d class mismatches\n",
+                scene_id, r.searched, 100.0 * r.equal / r.searched, 100.0 * r.within_1px / r.searched,
+                r.class_mismatch);
+    ASSERT_GT(r.searched, w * h / 20) << "too few reflective pixels to say anything";
+    EXPECT_EQ(r.class_mismatch, 0);
+    // fp32 against double: near-ties may take another path; nearly all agree.
+    EXPECT_GE(r.equal, 0.97 * r.searched);
+    EXPECT_GE(r.within_1px, 0.99 * r.searched);
+  }
+}
+
+TEST_F(ReflectTest, StaticCameraGivesExactlyZeroReflectionMotion) {
+  const int w = 96, h = 54, scene_id = 1;
+  const auto scene = render::build_scene(scene_id);
+  const Rendered a = render_frame(*scene, scene_id, 3, 0, w, h);  // stride 0: the same camera twice
+  const std::vector<float> got = reflection_motion(ctx(), a, a);
+  int reflective = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    if (got[4 * i + 2] == 0.0f) continue;
+    ++reflective;
+    ASSERT_EQ(got[4 * i], 0.0f) << "pixel " << i;
+    ASSERT_EQ(got[4 * i + 1], 0.0f) << "pixel " << i;
+  }
+  EXPECT_GT(reflective, w * h / 10);
+}
+
+// Scene 6's wall mirror is planar and the scene static: what a mirror pixel
+// shows is the mirror image of a point, fixed in the world, seen through the
+// mirror, so its motion is the virtual point's (the camera ray extended by
+// the chain's length) projected with the previous camera (NRD's virtual
+// motion; IMPLEMENTATION-NOTES C.4-3).
+TEST_F(ReflectTest, PlanarMirrorAgreesWithTheAnalyticMotion) {
+  const int w = 128, h = 72, scene_id = 6;
+  const auto scene = render::build_scene(scene_id);
+  const Rendered a = render_frame(*scene, scene_id, 1, 4, w, h), b = render_frame(*scene, scene_id, 2, 4, w, h);
+  const std::vector<float> got = reflection_motion(ctx(), a, b);
+  const glm::mat4 prev_vp = a.camera.projection * a.camera.view;
+  const glm::vec3 eye = glm::vec3(glm::inverse(b.camera.view)[3]);
+  int mirrors = 0, within = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (got[4 * i + 2] != float(Mirror) || !(b.fb.reflection_depth[i] > 0.0f)) continue;
+      const glm::vec3 primary(b.fb.position[3 * i], b.fb.position[3 * i + 1], b.fb.position[3 * i + 2]);
+      const glm::vec3 hit(b.fb.reflection_position[3 * i], b.fb.reflection_position[3 * i + 1],
+                          b.fb.reflection_position[3 * i + 2]);
+      const float t1 = glm::length(primary - eye), t2 = glm::length(hit - primary);
+      const glm::vec3 virtual_point = eye + glm::normalize(primary - eye) * (t1 + t2);
+      const glm::vec2 prev = render::project_to_pixel(prev_vp, virtual_point, w, h);
+      const glm::vec2 analytic = prev - glm::vec2(x + 0.5f, y + 0.5f);
+      ++mirrors;
+      if (glm::length(analytic - glm::vec2(got[4 * i], got[4 * i + 1])) <= 1.0f) ++within;
+    }
+  std::printf("planar mirror: %d mirror pixels, %.1f %% within 1 px of the analytic motion\n", mirrors,
+              100.0 * within / std::max(mirrors, 1));
+  ASSERT_GT(mirrors, w * h / 10);
+  EXPECT_GE(within, 0.9 * mirrors);
+}
+
+}  // namespace
+}  // namespace dn
