@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -270,6 +271,71 @@ TEST_F(ReflectTest, PlanarMirrorAgreesWithTheAnalyticMotion) {
               100.0 * within / std::max(mirrors, 1));
   ASSERT_GT(mirrors, w * h / 10);
   EXPECT_GE(within, 0.9 * mirrors);
+}
+
+// Hard cases (docs/pipelines.md "reflect"): bad reflection features (NaN and
+// infinite hits, zero and NaN directions, NaN and negative distances, NaN
+// roughness, zero and NaN reflected albedo) and bad radiance at some pixels
+// never reach the output or the history: every output value of the bad frame
+// and of the good frame after it is finite and >= 0.
+TEST_F(ReflectTest, BadFeaturesNeverReachTheOutput) {
+  const int w = 64, h = 36, scene_id = 1;
+  const auto scene = render::build_scene(scene_id);
+  std::vector<Rendered> seq;
+  for (int t = 1; t <= 3; ++t) seq.push_back(render_frame(*scene, scene_id, t, 2, w, h));
+  Rendered bad = seq[1];
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const size_t n = size_t(w) * h;
+  for (size_t i = 0; i < n; i += 7) {
+    const int k = int(i / 7) % 7;
+    auto& f = bad.fb;
+    switch (k) {
+      case 0: f.reflection_position[3 * i] = nan; break;
+      case 1: f.reflection_position[3 * i + 1] = inf; break;
+      case 2: f.reflection_direction[3 * i] = f.reflection_direction[3 * i + 1] = f.reflection_direction[3 * i + 2] = 0.0f; break;
+      case 3: f.reflection_distance[i] = (i % 2) ? nan : -1.0f; break;
+      case 4: f.roughness[i] = nan; break;
+      case 5: f.reflection_albedo[3 * i] = (i % 2) ? nan : 0.0f; break;
+      case 6: f.specular[3 * i] = (i % 2) ? inf : nan; break;
+    }
+  }
+  auto pipe = pipelines::create(ctx(), reflect_config(w, h));
+  for (int t = 0; t < 3; ++t) {
+    const auto out = run(*pipe, host(t == 1 ? bad : seq[size_t(t)], t == 0));
+    for (float v : out) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << "frame " << t << ": " << v;
+  }
+}
+
+// reflect(k x) = k reflect(x) for radiance scaled by k (features unchanged).
+TEST_F(ReflectTest, OutputScalesWithInput) {
+  const int w = 64, h = 36, scene_id = 1;
+  const auto scene = render::build_scene(scene_id);
+  std::vector<Rendered> seq;
+  for (int t = 1; t <= 4; ++t) seq.push_back(render_frame(*scene, scene_id, t, 4, w, h));
+  std::vector<std::vector<float>> base;
+  {
+    auto pipe = pipelines::create(ctx(), reflect_config(w, h));
+    for (int t = 0; t < 4; ++t) base.push_back(run(*pipe, host(seq[size_t(t)], t == 0)));
+  }
+  for (double k : {1e-6, 1e-3, 1e3, 1e4}) {
+    auto pipe = pipelines::create(ctx(), reflect_config(w, h));
+    double worst = 0.0;
+    for (int t = 0; t < 4; ++t) {
+      Rendered r = seq[size_t(t)];
+      for (auto* v : {&r.fb.diffuse, &r.fb.specular, &r.fb.emission})
+        for (auto& x : *v) x = static_cast<float>(x * k);
+      const auto out = run(*pipe, host(r, t == 0));
+      std::vector<float> got(out.size());
+      std::vector<double> want(out.size());
+      for (size_t i = 0; i < out.size(); ++i) {
+        got[i] = static_cast<float>(out[i] / k);
+        want[i] = base[size_t(t)][i];
+      }
+      worst = std::max(worst, test::relative_rms(got, want));
+    }
+    std::printf("[ info     ] reflect k = %g: worst relative RMS %.2g\n", k, worst);
+    EXPECT_LE(worst, 1e-3) << "k = " << k;
+  }
 }
 
 }  // namespace
