@@ -20,7 +20,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 . bench/lib/bench_server.sh
 
-scenes="1 2 3 4 5"
+scenes="1 2 3 4 5 6"
 frames=12        # moving-camera frames per scene
 still=16         # still-camera frames per scene (the second half is measured)
 size=320x180

@@ -37,6 +37,15 @@
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 const int WIN = BLOCK + 6;
 
+// The samples the temporal colour averages (variance_of_mean): its first
+// 1/alpha frames are a true mean of `len` samples, after that an exponential
+// average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
+float samples_averaged(float len) {
+  if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
+  float a = DN_PARAM_VALUE(svgf, alpha_colour);
+  return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
+}
+
 void main() {
   ivec2 size = ivec2(frame.size.xy);
   int nx = (size.x + B - 1) / B;
@@ -122,7 +131,7 @@ void main() {
         vec2 m = sm[k] / sw[k];
         v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
       }
-      illum.data[pi].w = v;
+      illum.data[pi].w = v / samples_averaged(len[k]);
     }
   }
 }

@@ -352,7 +352,7 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
 // 2 x 16 = 288 B/px; the table itself is the context's.
 TEST_F(SvgfFbTest, DeviceBytesAreAsDocumented) {
   const auto config = fb_config(64, 48);
-  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 288 + 160);
+  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 288 + pipelines::GraphSpec::kUniformBytes);
   EXPECT_EQ(pipelines::create(ctx(), config)->device_bytes(), pipelines::estimate_device_bytes(config));
 }
 

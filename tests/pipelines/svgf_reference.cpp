@@ -283,7 +283,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     }
   ch.temporal = colour;
 
-  // Pass 2: variance.
+  // Pass 2: variance, of one sample or (variance_of_mean) of the temporal
+  // mean: divided by the samples it averages, len while the blend weight is
+  // 1/len, then the exponential average's (2 - alpha) / alpha.
+  auto samples_averaged = [&](double l) {
+    if (!p_.variance_of_mean) return 1.0;
+    const double a = p_.alpha_colour;
+    return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
+  };
   std::vector<double> var(n, 0.0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -293,7 +300,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // m2 - m1^2 cancels; in single precision as on the device, which
         // decides the HDR step gate and the edge-stopping of sharp pixels.
         const float f1 = float(m1[i]), f2 = float(m2[i]);
-        var[i] = std::max(0.0f, f2 - f1 * f1);
+        var[i] = std::max(0.0f, f2 - f1 * f1) / samples_averaged(len[i]);
         continue;
       }
       const double l = luminance(&colour[3 * i]);
@@ -318,7 +325,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         }
       s1 /= sw;
       s2 /= sw;
-      var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i];  // cancels: fp32 as on the device
+      var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i] /  // cancels: fp32 as on the device
+               samples_averaged(len[i]);
     }
   ch.variance = var;
 

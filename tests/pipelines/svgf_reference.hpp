@@ -19,6 +19,7 @@ struct SvgfParams {
   double phi_depth = 1.0;
   double taa_alpha = 0.0;  // > 0: the final TAA blend (pass 5)
   double clip_roughness = 0.9;  // > 0: history clipping of the radiance / specular chain (pass 1)
+  int variance_of_mean = 1;      // 1: the variance steering the a-trous is the temporal mean's (pass 2)
 };
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in

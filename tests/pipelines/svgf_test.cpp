@@ -8,6 +8,7 @@
 
 #include "frames.hpp"
 #include "gpu_test_env.hpp"
+#include "pipelines/graph.hpp"
 #include "pipelines/pipeline.hpp"
 #include "svgf_inputs.hpp"
 #include "svgf_reference.hpp"
@@ -56,6 +57,7 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
     if (p.name == "phi_depth") params.phi_depth = p.value;
     if (p.name == "taa_alpha") params.taa_alpha = p.value;
     if (p.name == "clip_roughness") params.clip_roughness = p.value;
+    if (p.name == "variance_of_mean") params.variance_of_mean = static_cast<int>(p.value);
   }
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
@@ -98,9 +100,10 @@ INSTANTIATE_TEST_SUITE_P(
                 {{"taa_alpha", 0.1}}},
         Variant{"taa_fp16_uv", 97, 61, Format::F16, Format::F16, MotionConvention::UvToPrevious, false,
                 {{"taa_alpha", 0.25}, {"atrous_iterations", 2}}},
-        // History clipping off (clip_roughness 0): Falcor's svgf.
+        // History clipping off (clip_roughness 0) and the per-sample
+        // variance (variance_of_mean 0): Falcor's svgf.
         Variant{"no_clip", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
-                {{"clip_roughness", 0}}}),
+                {{"clip_roughness", 0}, {"variance_of_mean", 0}}}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 // A static geometry description: one plane, unit normals, zero motion.
@@ -391,10 +394,10 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12+12+4+8, history 16+16 (one copy), scratch 4*16 (2 illumination, guide, temporal),
-  // output 12 = 156 B/px, + 160 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + 160);
+  // output 12 = 156 B/px, + the uniform block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + pipelines::GraphSpec::kUniformBytes);
   // fp16 planes: 6+6+6+2+4 + 32 + 64 + 6 = 126 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + 160);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + pipelines::GraphSpec::kUniformBytes);
 }
 
 TEST(SvgfValidate, ChannelsAndParameters) {
@@ -517,11 +520,11 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16), scratch 5*16 (3 illumination,
-  // guide, temporal), output 12 = 216 B/px, + 160 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + 160);
+  // guide, temporal), output 12 = 216 B/px, + the uniform block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + pipelines::GraphSpec::kUniformBytes);
   // fp16 planes: 6+6+6+6+2+4 + 64 + 80 + 6 = 180 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 180 + 160);
+            64u * 48 * 180 + pipelines::GraphSpec::kUniformBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -660,9 +663,9 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
   }
   // 156 B/px without TAA + 12 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 168 + 160);
+            64u * 48 * 168 + pipelines::GraphSpec::kUniformBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 138 + 160);
+            64u * 48 * 138 + pipelines::GraphSpec::kUniformBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

@@ -8,6 +8,7 @@
 
 #include "frames.hpp"
 #include "gpu_test_env.hpp"
+#include "pipelines/graph.hpp"
 #include "pipelines/parameters.hpp"
 #include "pipelines/pipeline.hpp"
 #include "pipelines/registry.hpp"
@@ -46,7 +47,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
                                                   "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha",
-                                                  "clip_roughness"}));
+                                                  "clip_roughness", "variance_of_mean"}));
   // svgf-fb: split lighting with F0 and roughness (diffuse in either form); svgf's parameters.
   EXPECT_EQ(all[3].name, "svgf-fb");
   EXPECT_EQ(all[3].required_channels,
@@ -205,14 +206,14 @@ TEST_F(DeviceBytesTest, EstimateEqualsAllocatedBytes) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // accumulate, fp32 everywhere: inputs 12+12+4+8, history 2*(16+16), output 12 = 112 B/px, + 160 B of constants.
-  EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48)), 64u * 48 * 112 + 160);
+  // accumulate, fp32 everywhere: inputs 12+12+4+8, history 2*(16+16), output 12 = 112 B/px, + the uniform block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48)), 64u * 48 * 112 + pipelines::GraphSpec::kUniformBytes);
   // fp16 planes: 6+6+2+4 + 64 + 6 = 88 B/px; odd counts round each plane up to 4 bytes.
   EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 88 + 160);
+            64u * 48 * 88 + pipelines::GraphSpec::kUniformBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 test::make_config("passthrough", 3, 1, {{ChannelId::Radiance, Format::F16}}, Format::F16)),
-            2u * 20 + 160);
+            2u * 20 + pipelines::GraphSpec::kUniformBytes);
 }
 
 TEST_F(DeviceBytesTest, CreateRejectsConfigurationsValidateRejects) {
