@@ -72,6 +72,9 @@ for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" {
   case "$p" in passthrough | accumulate) ;; *) rows+=("$p $p") ;; esac
 done
 rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emission")
+# reflect without specular history: the thesis's NoSpecReproj baseline
+# (paper 001 §7.2) its temporal error is compared with.
+case " ${rows[*]} " in *" reflect reflect "*) rows+=("reflect-nospec reflect specular_history=0") ;; esac
 
 # Column NAME of a `dn denoise --summary` file.
 

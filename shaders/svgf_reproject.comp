@@ -122,7 +122,7 @@ void main() {
   bool valid = false;
   ivec2 origin;
   vec4 weights;
-  if ((frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_is_finite(mv) &&
+  if (READ_HISTORY && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_is_finite(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 sc = vec3(0.0);
     vec2 sm = vec2(0.0);

@@ -60,6 +60,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   specular.motion = MotionSource::Reflection;
   specular.reflection_motion = kMotion;
   specular.features = SignalFeatures{kFeatureDepth, kFeatureNormal};
+  specular.reads_history = p.reflect_specular_history != 0.0f;
   return v;
 }
 

@@ -104,7 +104,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("DEMODULATE", demodulate)
       .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first chain's guide
-      .set("SUBTRACT_EMISSION", s.subtract_emission);
+      .set("SUBTRACT_EMISSION", s.subtract_emission)
+      .set("READ_HISTORY", s.reads_history);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));

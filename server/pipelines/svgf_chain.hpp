@@ -70,6 +70,7 @@ struct SvgfSignal {
   std::optional<SignalFeatures> features;
   bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
   bool clip = false;               // its history is clipped (highlights and reflections: radiance, specular)
+  bool reads_history = true;       // false: filtered from the current frame alone (a NoSpecReproj baseline)
 };
 
 struct SvgfVariant {

@@ -338,5 +338,103 @@ TEST_F(ReflectTest, OutputScalesWithInput) {
   }
 }
 
+// History clipping (paper 001 §4.2.3, IMPLEMENTATION-NOTES C.4-10): after the
+// specular reprojection every pixel with roughness < clip_roughness holds a
+// temporal colour inside its clip box, recomputed here from the captured
+// prefilter output (the 5x5 box of the 7x7-Gaussian current signal), the
+// raw 3x3 range of the current demodulated signal and the pixel's own value
+// (docs/pipelines.md "svgf in detail"), with the reflection motion moving
+// the history.
+TEST_F(ReflectTest, ClippedHistoryStaysInsideItsNeighbourhoodBox) {
+  const int w = 96, h = 54, scene_id = 6;
+  const auto scene = render::build_scene(scene_id);
+  auto pipe = pipelines::create(ctx(), reflect_config(w, h));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  ASSERT_NE(graph, nullptr);
+  graph->set_capture(true);
+  Rendered r;
+  for (int t = 1; t <= 4; ++t) {
+    r = render_frame(*scene, scene_id, t, 4, w, h);
+    run(*pipe, host(r, t == 1));
+  }
+  const std::vector<float> box = floats(graph->captured("svgf_clip_prefilter_y_specular", "svgf_clip_neighbourhood"));
+  const std::vector<float> mod = floats(graph->captured("reflect_prepare", "reflect_modulator"));
+  const std::vector<float> out = floats(graph->captured("svgf_reproject_specular", "svgf_illum_c"));
+  // The current demodulated specular signal, as svgf_signal.glsl computes it.
+  auto guard = [](float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0f; };
+  auto current = [&](int x, int y, int c) {
+    const size_t i = size_t(y) * w + x;
+    float v = r.fb.specular[3 * i + c];
+    if (!std::isfinite(v) || v < 0.0f || v > 1e12f) v = 0.0f;
+    return v / guard(mod[3 * i + c]);
+  };
+  const float clip_roughness = 0.9f;  // svgf's clip_roughness default
+  int checked = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (!(r.fb.depth[i] > 0.0f) || !(r.fb.roughness[i] < clip_roughness)) continue;
+      for (int c = 0; c < 3; ++c) {
+        const float d = current(x, y, c);
+        float pre_lo = 1e38f, pre_hi = -1e38f, raw_lo = d, raw_hi = d;
+        for (int yy = -2; yy <= 2; ++yy)
+          for (int xx = -2; xx <= 2; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+            const size_t q = size_t(qy) * w + qx;
+            if (box[4 * q + 3] != 0.0f) {
+              pre_lo = std::min(pre_lo, box[4 * q + c]);
+              pre_hi = std::max(pre_hi, box[4 * q + c]);
+            }
+            if (std::abs(xx) <= 1 && std::abs(yy) <= 1) {
+              raw_lo = std::min(raw_lo, current(qx, qy, c));
+              raw_hi = std::max(raw_hi, current(qx, qy, c));
+            }
+          }
+        const float nlo = std::max(pre_lo, raw_lo), nhi = std::min(pre_hi, raw_hi);
+        const bool overlap = nlo <= nhi;
+        const float lo = std::min(overlap ? nlo : raw_lo, d), hi = std::max(overlap ? nhi : raw_hi, d);
+        const float v = out[4 * i + c], slack = 1e-5f * std::max(std::abs(lo), std::abs(hi));
+        ASSERT_GE(v, lo - slack) << "pixel (" << x << ", " << y << ") channel " << c;
+        ASSERT_LE(v, hi + slack) << "pixel (" << x << ", " << y << ") channel " << c;
+      }
+      ++checked;
+    }
+  EXPECT_GT(checked, w * h / 4);
+}
+
+// specular_history 0 (the NoSpecReproj baseline) reads no specular history:
+// its specular temporal colour is the current frame's signal exactly, while
+// the default accumulates.
+TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
+  const int w = 64, h = 36, scene_id = 6;
+  const auto scene = render::build_scene(scene_id);
+  for (double history : {0.0, 1.0}) {
+    auto pipe = pipelines::create(ctx(), reflect_config(w, h, {{"specular_history", history}}));
+    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+    ASSERT_NE(graph, nullptr);
+    graph->set_capture(true);
+    Rendered r;
+    for (int t = 1; t <= 3; ++t) {
+      r = render_frame(*scene, scene_id, t, 4, w, h);
+      run(*pipe, host(r, t == 1));
+    }
+    const std::vector<float> mod = floats(graph->captured("reflect_prepare", "reflect_modulator"));
+    const std::vector<float> out = floats(graph->captured("svgf_reproject_specular", "svgf_illum_c"));
+    const std::vector<float> temporal = floats(graph->captured("svgf_reproject_specular", "svgf_temporal"));
+    int foreground = 0, fresh = 0;
+    for (size_t i = 0; i < size_t(w) * h; ++i) {
+      if (!(r.fb.depth[i] > 0.0f)) continue;
+      ++foreground;
+      const float m = std::isfinite(mod[3 * i]) && mod[3 * i] >= 1e-3f ? mod[3 * i] : 1.0f;
+      if (temporal[4 * i + 2] == 1.0f && out[4 * i] == r.fb.specular[3 * i] / m) ++fresh;  // length 1, current value
+    }
+    if (history == 0.0)
+      EXPECT_EQ(fresh, foreground);
+    else
+      EXPECT_LT(fresh, foreground / 2) << "the default keeps specular history";
+  }
+}
+
 }  // namespace
 }  // namespace dn
