@@ -13,7 +13,7 @@ struct SvgfParams {
   double alpha_moments = 0.2;
   double max_history = 32.0;
   int atrous_iterations = 4;
-  int feedback_tap = 1;
+  int feedback_tap = 0;
   double phi_colour = 10.0;
   double phi_normal = 128.0;
   double phi_depth = 1.0;
