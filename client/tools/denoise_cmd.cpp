@@ -18,6 +18,7 @@
 #include "frame_source.hpp"
 #include "presets.hpp"
 #include "progress.hpp"
+#include "reflection_features.hpp"
 #include "sequence_metrics.hpp"
 
 namespace dn::cli {
@@ -349,6 +350,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     cameras.apply(exr, frames[i], lf.camera);
     apply_camera_conversions(lf, plan, exr);
     if (rough_guides) apply_rough_guides(lf, *rough_guides);
+    derive_reflection_features(lf, plan, exr);
     return lf;
   };
   std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));

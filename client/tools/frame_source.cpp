@@ -126,7 +126,8 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
         for (size_t k = 0; k < n; ++k)
           p.data[i * n + k] += all[i * stride + term[k]] * (factor.empty() ? 1.0f : all[i * stride + factor[k]]);
     }
-    if (ch.convert == Convert::CyclesDepth || ch.convert == Convert::CyclesVirtualDepth) convert_cycles_depth(p.data);
+    if (ch.convert == Convert::CyclesDepth || ch.convert == Convert::CyclesVirtualDepth)
+      convert_cycles_depth(p.data);
     if (ch.convert == Convert::CyclesVector) convert_cycles_vector(p.data);
     (c < requested.size() ? f.planes : f.primary_guides).push_back(std::move(p));
   }

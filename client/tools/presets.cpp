@@ -164,6 +164,22 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         spec(ChannelId::Motion, {{{TermSpec{{P + "Vector.X", P + "Vector.Y"}, {}}}, Convert::CyclesVector}}),
         spec(ChannelId::Emission, {{{L(P + "Emit"), opt("Env")}}}),
         spec(ChannelId::Position, {{{L(P + "Position")}}}),
+        // Reflection features (reflect; docs/client.md): what the Denoising
+        // Data passes say of the first non-specular hit, plus the mirror
+        // direction and its hit, derived with the camera
+        // (derive_reflection_features). On glossy surfaces (Cycles follows
+        // bounces up to roughness 0.27) the passes describe one sampled
+        // reflection; measured, that still beats the primary hit's features
+        // there (docs/client.md), so they are not rough-guided.
+        // Denoising Albedo includes the mirror's own reflectance, which the
+        // protocol leaves to F_beta: the server divides and multiplies by the
+        // same product, and dividing it out measured worse (docs/client.md).
+        spec(ChannelId::ReflectionAlbedo, {{{L(P + "Denoising Albedo")}}}),
+        spec(ChannelId::ReflectionNormal, {{{L(P + "Denoising Normal")}, Convert::CyclesCameraNormal}}),
+        spec(ChannelId::ReflectionDepth, {{{L(P + "Denoising Depth")}, Convert::CyclesChainDepth}}),
+        spec(ChannelId::ReflectionDirection, {{{L(P + "Normal")}, Convert::CyclesMirrorDirection}}),
+        spec(ChannelId::ReflectionDistance, {{{L(P + "Denoising Depth")}, Convert::CyclesChainLength}}),
+        spec(ChannelId::ReflectionPosition, {{{L(P + "Position")}, Convert::CyclesChainHit}}),
     };
     // Radiance mode: the Denoising Data passes follow near-specular bounces
     // (a mirror's albedo, normal and depth are those of what it reflects),
@@ -290,6 +306,11 @@ std::string ResolvedChannel::describe() const {
   if (convert == Convert::CyclesDepth) out += " (Cycles depth)";
   if (convert == Convert::CyclesVector) out += " (Cycles vector)";
   if (convert == Convert::CyclesVirtualDepth) out += " (path length to view depth)";
+  if (convert == Convert::CyclesMirrorDirection) out += " (view ray mirrored about it)";
+  if (convert == Convert::CyclesChainLength) out += " (path length past the primary hit)";
+  if (convert == Convert::CyclesChainDepth) out += " (virtual depth)";
+  if (convert == Convert::CyclesCameraNormal) out += " (camera to world)";
+  if (convert == Convert::CyclesChainHit) out += " (+ mirror direction x path length past it)";
   return out;
 }
 

@@ -28,6 +28,12 @@ enum class Convert {
   CyclesVirtualDepth,  // Denoising Depth: length of the path to the first non-specular hit -> that point's depth
                        // along the pixel's view ray (x cos of the ray's angle to the view axis; needs the frame's
                        // projection); background (FLT_MAX) -> +inf
+  // The reflection features of a renderer without them (reflection_features.hpp), from the frame's camera:
+  CyclesMirrorDirection,  // Normal: the pixel's view ray reflected about it
+  CyclesChainLength,      // Denoising Depth: the path's length past the primary hit
+  CyclesChainDepth,       // Denoising Depth: the virtual depth (primary + that length, as a view depth)
+  CyclesChainHit,         // Position: + mirror direction x that length
+  CyclesCameraNormal,     // Denoising Normal: camera space -> world
 };
 
 // One summand: either explicit EXR channels (one per component) or a layer
