@@ -40,6 +40,8 @@ constexpr uint64_t kMotionBytes = 16;
 // two vec4 per pixel (shaders/include/reflect.glsl).
 constexpr const char* kFeatures = "reflect_features";
 constexpr uint64_t kFeaturesBytes = 32;
+// The displayed frame before the firefly median (SvgfVariant::display).
+constexpr const char* kDisplay = "reflect_display";
 
 // The reflection feature planes reflect_prepare reads: channel, binding and buffer name.
 constexpr ChannelId kFeatureChannels[] = {ChannelId::Position,           ChannelId::ReflectionPosition,
@@ -61,6 +63,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   specular.reflection_motion = kMotion;
   specular.features = SignalFeatures{kFeatureDepth, kFeatureNormal};
   specular.reads_history = p.reflect_specular_history != 0.0f;
+  if (p.reflect_firefly_median != 0.0f) v.display = kDisplay;
   return v;
 }
 
@@ -107,6 +110,15 @@ GraphSpec build(const SessionConfig& config) {
       .pixels_per_invocation = 1;
 
   add_svgf_passes(g, config, v);
+  if (!v.display.empty()) {
+    PassSpec& median = g.add_pass("reflect_median", "reflect_median");
+    median.bind("src", kDisplay)
+        .bind("features", kFeatures)
+        .bind("depth", "depth")
+        .bind("result", "output")
+        .set("DEPTH_HALF", half(ChannelId::Depth))
+        .set("OUTPUT_HALF", is_half(config.output_format));
+  }
   return g;
 }
 

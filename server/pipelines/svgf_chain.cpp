@@ -18,6 +18,8 @@ constexpr uint64_t kAuxHistoryBytes = 16;
 // TAA: the previous final output, rgb fp32, one persistent copy (read by
 // svgf_remodulate, rewritten by svgf_taa after it).
 constexpr uint64_t kTaaHistoryBytes = 12;
+// SvgfVariant::display: the displayed frame, rgb fp32.
+constexpr uint64_t kDisplayBytes = 12;
 // Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
 constexpr uint64_t kIlluminationBytes = 16;
 // Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
@@ -198,6 +200,7 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
   }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
+  if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
   g.add_scratch(kIllumA, kIlluminationBytes);
   if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
   if (v.signals.size() > 1) g.add_scratch(kIllumC, kIlluminationBytes);
@@ -223,13 +226,15 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   // once the a-trous chains are done) instead of Output; svgf_taa blends them.
   // Without it, the TAA bindings stay unbound.
   const Modulator& first = v.signals[0].modulator;
+  const std::string result = v.display.empty() ? "output" : v.display;
+  const uint32_t result_half = v.display.empty() ? is_half(config.output_format) : 0u;
   PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
   remodulate.bind("illum", results[0])
       .bind("albedo", first.buffer)
-      .bind("result", "output")
+      .bind("result", result)
       .set("ALBEDO_HALF", modulator_half(config, first))
       .set("HAS_EMISSION", v.emission)
-      .set("OUTPUT_HALF", is_half(config.output_format))
+      .set("OUTPUT_HALF", result_half)
       .set("HAS_SPECULAR", v.signals.size() > 1)
       .set("TAA", v.taa);
   if (v.emission)
@@ -255,9 +260,9 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     g.add_pass("svgf_taa", "svgf_taa")
         .bind("current", kTemporal)
         .bind("previous", kGuide)
-        .bind("result", "output")
+        .bind("result", result)
         .bind("history", kTaaHistory)
-        .set("OUTPUT_HALF", is_half(config.output_format));
+        .set("OUTPUT_HALF", result_half);
 }
 
 }  // namespace dn::pipelines

@@ -85,6 +85,10 @@ struct SvgfVariant {
   bool emission = false;             // add the Emission plane back after filtering
   bool roughness = false;            // the session has a Roughness plane (an input)
   bool clip = false;                 // clip the signals marked clip where roughness < clip_roughness (needs roughness)
+  // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
+  // displayed frame to this scratch buffer (rgb fp32, add_svgf_buffers adds
+  // it) for a pass of the caller's that writes Output (reflect's median).
+  std::string display;
 };
 
 // The svgf parameter group's part of a variant (iterations, feedback tap,

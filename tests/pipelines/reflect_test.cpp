@@ -10,7 +10,10 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <algorithm>
 #include <limits>
+#include <map>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -434,6 +437,70 @@ TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
     else
       EXPECT_LT(fresh, foreground / 2) << "the default keeps specular history";
   }
+}
+
+// The firefly median (paper 001 §6; IMPLEMENTATION-NOTES C.4-9): with it the
+// output at a foreground pixel of reflection class none is the colour, among
+// the foreground pixels of its 3x3 window, of luminance rank count / 2 in the
+// output without it (ties: the first in row order), and elsewhere the same;
+// every history buffer is bit-identical with the median on or off.
+TEST_F(ReflectTest, FireflyMedianChangesTheDisplayedFrameOnly) {
+  const int w = 64, h = 36, scene_id = 1;
+  const auto scene = render::build_scene(scene_id);
+  std::vector<Rendered> seq;
+  for (int t = 1; t <= 4; ++t) seq.push_back(render_frame(*scene, scene_id, t, 2, w, h));
+  struct Run {
+    std::vector<float> out, features;
+    std::map<std::string, std::vector<uint8_t>> history;
+  };
+  auto run_with = [&](double median) {
+    auto pipe = pipelines::create(ctx(), reflect_config(w, h, {{"firefly_median", median}}));
+    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+    graph->set_capture(true);
+    Run r;
+    for (int t = 0; t < 4; ++t) r.out = run(*pipe, host(seq[size_t(t)], t == 0));
+    r.features = floats(graph->captured("reflect_prepare", "reflect_features"));
+    // Each persistent or history buffer as the last pass that binds it left it.
+    for (const auto& b : graph->spec().buffers) {
+      if (b.role != pipelines::BufferRole::Persistent && b.role != pipelines::BufferRole::History) continue;
+      std::string last;
+      for (const auto& pass : graph->spec().passes)
+        for (const auto& ref : pass.bindings())
+          if (ref.buffer == b.name) last = pass.name();
+      r.history[b.name] = graph->captured(last, b.name);
+    }
+    return r;
+  };
+  const Run off = run_with(0.0), on = run_with(1.0);
+  ASSERT_FALSE(off.history.empty());
+  for (const auto& [name, bytes] : off.history) EXPECT_EQ(bytes, on.history.at(name)) << name;
+  auto lum = [](const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; };
+  const auto& depth = seq.back().fb.depth;
+  int filtered = 0, changed = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      const float* want = &off.out[3 * i];
+      if (off.features[8 * i + 3] == 0.0f && depth[i] > 0.0f && std::isfinite(depth[i])) {
+        std::vector<size_t> window;
+        for (int yy = -1; yy <= 1; ++yy)
+          for (int xx = -1; xx <= 1; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+            const size_t q = size_t(qy) * w + qx;
+            if (depth[q] > 0.0f && std::isfinite(depth[q])) window.push_back(q);
+          }
+        std::vector<size_t> order = window;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](size_t a, size_t b) { return lum(&off.out[3 * a]) < lum(&off.out[3 * b]); });
+        want = &off.out[3 * order[order.size() / 2]];
+        ++filtered;
+      }
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(on.out[3 * i + c], want[c]) << "pixel (" << x << ", " << y << ")";
+      changed += on.out[3 * i] != off.out[3 * i];
+    }
+  EXPECT_GT(filtered, w * h / 4);
+  EXPECT_GT(changed, 0);
 }
 
 }  // namespace

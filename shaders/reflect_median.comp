@@ -1,0 +1,62 @@
+#version 450
+// reflect_median (reflect, last pass): paper 001 §6's firefly suppression,
+// a 3x3 median of the displayed frame at foreground pixels of reflection
+// class none (a diffuse or rough primary hit; mirror and glossy pixels keep
+// their highlights): the luminance-ranked vector median, the colour of the
+// window pixel whose luminance is the median of the foreground pixels'
+// (ties: the first in row order). It reads svgf_remodulate's result and
+// writes only Output: no history is touched (the colour history is written
+// by the chains before it). docs/pipelines.md "reflect".
+// One invocation per pixel pair.
+//
+// Resources: passes/reflect_median.pass (binding 0 FrameConstants).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+#include "plane.glsl"
+#include "sanitize.glsl"
+#include "luminance.glsl"
+#include "reproject.glsl"
+#include "pass.glsl"
+#include "passes/reflect_median.pass"
+
+#include "reflect.glsl"
+
+vec3 filtered(uint p) {
+  vec3 c = DN_LOAD3(src, false, p);
+  if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
+  ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
+  vec3 colours[9];
+  float lums[9];
+  int count = 0;
+  for (int yy = -1; yy <= 1; ++yy)
+    for (int xx = -1; xx <= 1; ++xx) {
+      ivec2 q = pos + ivec2(xx, yy);
+      if (!dn_inside(q, frame.size.xy)) continue;
+      uint qi = uint(q.y) * frame.size.x + uint(q.x);
+      if (!dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, qi))) continue;
+      colours[count] = DN_LOAD3(src, false, qi);
+      lums[count] = dn_luminance(colours[count]);
+      ++count;
+    }
+  // The element with as many smaller as larger luminances (rank count / 2).
+  int want = count / 2;
+  for (int i = 0; i < count; ++i) {
+    int below = 0, equal_before = 0;
+    for (int j = 0; j < count; ++j) {
+      below += lums[j] < lums[i] ? 1 : 0;
+      equal_before += (lums[j] == lums[i] && j < i) ? 1 : 0;
+    }
+    if (below + equal_before == want) return colours[i];
+  }
+  return c;
+}
+
+void main() {
+  uint pair = dn_invocation_index();
+  uint p0 = 2u * pair;
+  if (p0 >= frame.size.z) return;
+  bool has_b = p0 + 1u < frame.size.z;
+  vec3 a = filtered(p0);
+  vec3 b = has_b ? filtered(p0 + 1u) : vec3(0.0);
+  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+}
