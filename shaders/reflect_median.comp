@@ -1,12 +1,14 @@
 #version 450
 // reflect_median (reflect, last pass): paper 001 §6's firefly suppression,
-// a 3x3 median of the displayed frame at foreground pixels of reflection
-// class none (a diffuse or rough primary hit; mirror and glossy pixels keep
-// their highlights): the luminance-ranked vector median, the colour of the
-// window pixel whose luminance is the median of the foreground pixels'
-// (ties: the first in row order). It reads svgf_remodulate's result and
-// writes only Output: no history is touched (the colour history is written
-// by the chains before it). docs/pipelines.md "reflect".
+// a 3x3 median of the displayed frame at foreground pixels whose 3x3
+// foreground window is all of reflection class none (a diffuse or rough
+// surface away from mirror and glossy pixels, whose highlights and edges a
+// median would cut): the luminance-ranked vector median of the filtered
+// light, the colour (minus emission) of the window pixel whose luminance is
+// the median of the window's (ties: the first in row order), plus the
+// pixel's own emission (a small light is not a firefly). It reads the
+// chain's displayed frame and writes only Output: no history is touched.
+// docs/pipelines.md "reflect".
 // One invocation per pixel pair.
 //
 // Resources: passes/reflect_median.pass (binding 0 FrameConstants).
@@ -21,6 +23,8 @@
 
 #include "reflect.glsl"
 
+vec3 emitted(uint p) { return HAS_EMISSION ? dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)) : vec3(0.0); }
+
 vec3 filtered(uint p) {
   vec3 c = DN_LOAD3(src, false, p);
   if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
@@ -34,7 +38,8 @@ vec3 filtered(uint p) {
       if (!dn_inside(q, frame.size.xy)) continue;
       uint qi = uint(q.y) * frame.size.x + uint(q.x);
       if (!dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, qi))) continue;
-      colours[count] = DN_LOAD3(src, false, qi);
+      if (features.data[2u * qi].w != DN_REFLECT_NONE) return c;
+      colours[count] = DN_LOAD3(src, false, qi) - emitted(qi);
       lums[count] = dn_luminance(colours[count]);
       ++count;
     }
@@ -46,7 +51,7 @@ vec3 filtered(uint p) {
       below += lums[j] < lums[i] ? 1 : 0;
       equal_before += (lums[j] == lums[i] && j < i) ? 1 : 0;
     }
-    if (below + equal_before == want) return colours[i];
+    if (below + equal_before == want) return colours[i] + emitted(p);
   }
   return c;
 }

@@ -118,6 +118,10 @@ GraphSpec build(const SessionConfig& config) {
         .bind("result", "output")
         .set("DEPTH_HALF", half(ChannelId::Depth))
         .set("OUTPUT_HALF", is_half(config.output_format));
+    if (v.emission)
+      median.bind("emission", "emission")
+          .set("HAS_EMISSION", 1u)
+          .set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   }
   return g;
 }
