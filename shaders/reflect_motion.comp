@@ -111,14 +111,13 @@ void main() {
   pb = features.data[2u * p + 1u];
   bool searched = pa.w != DN_REFLECT_NONE && (pa.w == DN_REFLECT_MIRROR || dn_reflect_ray_exists(pb.w)) &&
                   (frame.size.w & DN_FLAG_RESET) == 0u;
-  float cls = DN_REFLECT_NONE, match = 0.0;
+  float match = -1.0;
   if (searched) {
     diamond_search(pos, mv);
     if (best_distance < DN_REFLECT_INVALID) {
       mv = refine_subpixel() - vec2(pos);
-      cls = pa.w;
       match = best_distance;
     }
   }
-  result.data[p] = vec4(mv, cls, match);
+  result.data[p] = vec4(mv, pa.w, match);
 }

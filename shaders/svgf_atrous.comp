@@ -58,6 +58,7 @@ void main() {
   bool act[B * B];
   vec3 sc[B * B];
   float sv[B * B], sw[B * B];
+  uint ccls[B * B];  // CLASS_EDGES: p's guide .w
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
       int k = j * B + i;
@@ -65,6 +66,7 @@ void main() {
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
       uvec4 gd = guide.data[pi];
+      ccls[k] = gd.w;
       cz[k] = uintBitsToFloat(gd.x);
       act[k] = p.x < size.x && p.y < size.y && cz[k] > 0.0;
       cn[k] = dn_svgf_unpack_normal(gd.y);
@@ -104,10 +106,11 @@ void main() {
       ivec2 qc = clamp(q, ivec2(0), size - 1);
       bool inside = q == qc;
       uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-      uvec2 gq = guide.data[qi].xy;
+      uvec4 gq = guide.data[qi];
       vec4 s = src.data[qi];
       float zq = uintBitsToFloat(gq.x);
       bool tap_ok = inside && zq > 0.0;
+      uint qcls = gq.w;
       vec3 nq = dn_svgf_unpack_normal(gq.y);
       float lq = dn_luminance(s.rgb);
       [[unroll]] for (int j = 0; j < B; ++j) {
@@ -123,7 +126,7 @@ void main() {
           float w_l = abs(cl[k] - lq) * ipl[k];
           float w = h[dx + 2] * h[dy + 2] *
                     exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-          w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
+          w = (act[k] && tap_ok && cos_n > 0.0 && (!CLASS_EDGES || qcls == ccls[k])) ? w : 0.0;
           sc[k] += w * s.rgb;
           sv[k] += w * w * s.w;
           sw[k] += w;

@@ -174,6 +174,6 @@ void main() {
   illum.data[p] = vec4(colour, 0.0);
   if (WRITE_GUIDE)
     guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
-                          floatBitsToUint(grad.x), 0u);
+                          floatBitsToUint(grad.x), REFLECTION ? uint(reflection.data[p].z) : 0u);
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));
 }

@@ -138,7 +138,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .bind("dst", other)
         .set("STEP", 1u << level)
         .set("FEEDBACK", i == tap)
-        .set("BLOCK", kAtrousBlock);
+        .set("BLOCK", kAtrousBlock)
+        .set("CLASS_EDGES", s.motion == MotionSource::Reflection);
     if (i == tap) atrous.bind("colour_history", colour);
     // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;

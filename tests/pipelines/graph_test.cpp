@@ -77,11 +77,12 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 4u);
+  ASSERT_EQ(sa.size(), 5u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
   EXPECT_EQ(sa[3], (gpu::SpecConstant{3, 4}));
+  EXPECT_EQ(sa[4], (gpu::SpecConstant{4, 0}));  // CLASS_EDGES' default
 }
 
 // Every configuration the tests use builds a graph that passes check().

@@ -235,7 +235,7 @@ TEST_F(ReflectTest, StaticCameraGivesExactlyZeroReflectionMotion) {
   const std::vector<float> got = reflection_motion(ctx(), a, a);
   int reflective = 0;
   for (size_t i = 0; i < size_t(w) * h; ++i) {
-    if (got[4 * i + 2] == 0.0f) continue;
+    if (got[4 * i + 3] < 0.0f) continue;  // no match (class none, or no ray)
     ++reflective;
     ASSERT_EQ(got[4 * i], 0.0f) << "pixel " << i;
     ASSERT_EQ(got[4 * i + 1], 0.0f) << "pixel " << i;
@@ -259,7 +259,7 @@ TEST_F(ReflectTest, PlanarMirrorAgreesWithTheAnalyticMotion) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * w + x;
-      if (got[4 * i + 2] != float(Mirror) || !(b.fb.reflection_depth[i] > 0.0f)) continue;
+      if (got[4 * i + 2] != float(Mirror) || got[4 * i + 3] < 0.0f || !(b.fb.reflection_depth[i] > 0.0f)) continue;
       const glm::vec3 primary(b.fb.position[3 * i], b.fb.position[3 * i + 1], b.fb.position[3 * i + 2]);
       const glm::vec3 hit(b.fb.reflection_position[3 * i], b.fb.reflection_position[3 * i + 1],
                           b.fb.reflection_position[3 * i + 2]);
