@@ -126,10 +126,6 @@ GraphSpec build(const SessionConfig& config) {
   return g;
 }
 
-std::optional<ConfigError> check_channels(const SessionConfig& config) {
-  return check_split_channels(config, "reflect", /*radiance_allowed=*/false);
-}
-
 }  // namespace
 
 PipelineDefinition reflect_definition() {
@@ -153,7 +149,7 @@ PipelineDefinition reflect_definition() {
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};
   d.build = build;
-  d.check_channels = check_channels;
+  d.check_channels = check_split_only;
   return d;
 }
 

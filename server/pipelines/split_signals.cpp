@@ -102,4 +102,8 @@ std::optional<ConfigError> check_split_channels(const SessionConfig& config, con
   return std::nullopt;
 }
 
+std::optional<ConfigError> check_split_only(const SessionConfig& config) {
+  return check_split_channels(config, config.pipeline, /*radiance_allowed=*/false);
+}
+
 }  // namespace dn::pipelines

@@ -31,6 +31,11 @@ std::vector<SvgfSignal> split_signals(const SessionConfig& config, const Modulat
 std::optional<ConfigError> check_split_channels(const SessionConfig& config, const std::string& pipeline,
                                                 bool radiance_allowed);
 
+// PipelineDefinition::check_channels of a pipeline that takes the split
+// pair only (svgf-fb, reflect): check_split_channels without radiance,
+// naming config.pipeline.
+std::optional<ConfigError> check_split_only(const SessionConfig& config);
+
 // Channel bits of both forms of both signals and of specular_albedo.
 uint64_t split_channel_bits();
 

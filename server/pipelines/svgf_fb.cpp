@@ -36,10 +36,6 @@ GraphSpec build(const SessionConfig& config) {
   return g;
 }
 
-std::optional<ConfigError> check_channels(const SessionConfig& config) {
-  return check_split_channels(config, "svgf-fb", /*radiance_allowed=*/false);
-}
-
 }  // namespace
 
 PipelineDefinition svgf_fb_definition() {
@@ -60,7 +56,7 @@ PipelineDefinition svgf_fb_definition() {
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};
   d.build = build;
-  d.check_channels = check_channels;
+  d.check_channels = check_split_only;
   return d;
 }
 

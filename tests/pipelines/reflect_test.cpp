@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -160,17 +162,43 @@ std::vector<float> floats(const std::vector<uint8_t>& bytes) {
   return out;
 }
 
+// A fresh reflect session with capture on, fed `frames` in order (the first
+// as a reset); the captures and `out` are the last frame's.
+struct CapturedRun {
+  std::unique_ptr<pipelines::Pipeline> pipe;
+  pipelines::GraphPipeline* graph = nullptr;
+  std::vector<float> out;
+  std::vector<float> captured(const std::string& pass, const std::string& buffer) const {
+    return floats(graph->captured(pass, buffer));
+  }
+};
+CapturedRun run_captured(gpu::Context& ctx, const std::vector<const Rendered*>& frames,
+                         std::vector<protocol::Parameter> params = {}) {
+  CapturedRun r;
+  r.pipe = pipelines::create(ctx, reflect_config(frames.front()->fb.width, frames.front()->fb.height, std::move(params)));
+  r.graph = dynamic_cast<pipelines::GraphPipeline*>(r.pipe.get());
+  if (!r.graph) throw std::logic_error("reflect is not a graph pipeline");
+  r.graph->set_capture(true);
+  for (size_t t = 0; t < frames.size(); ++t) r.out = run(*r.pipe, host(*frames[t], t == 0));
+  return r;
+}
+// Frames first..last of a dnrender scene, `stride` path frames apart.
+std::vector<Rendered> render_sequence(int scene_id, int first, int last, int stride, int w, int h) {
+  const auto scene = render::build_scene(scene_id);
+  std::vector<Rendered> seq;
+  for (int t = first; t <= last; ++t) seq.push_back(render_frame(*scene, scene_id, t, stride, w, h));
+  return seq;
+}
+std::vector<const Rendered*> pointers(const std::vector<Rendered>& seq) {
+  std::vector<const Rendered*> out;
+  for (const auto& r : seq) out.push_back(&r);
+  return out;
+}
+
 // Runs frames a then b through a fresh reflect session and returns
 // reflect_motion's vec4(motion, class, distance) per pixel for frame b.
 std::vector<float> reflection_motion(gpu::Context& ctx, const Rendered& a, const Rendered& b) {
-  const int w = b.fb.width, h = b.fb.height;
-  auto pipe = pipelines::create(ctx, reflect_config(w, h));
-  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
-  EXPECT_NE(graph, nullptr);
-  graph->set_capture(true);
-  run(*pipe, host(a, true));
-  run(*pipe, host(b, false));
-  return floats(graph->captured("reflect_motion", "reflect_motion"));
+  return run_captured(ctx, {&a, &b}).captured("reflect_motion", "reflect_motion");
 }
 
 struct Agreement {
@@ -349,20 +377,13 @@ TEST_F(ReflectTest, OutputScalesWithInput) {
 // (docs/pipelines.md "svgf in detail"), with the reflection motion moving
 // the history.
 TEST_F(ReflectTest, ClippedHistoryStaysInsideItsNeighbourhoodBox) {
-  const int w = 96, h = 54, scene_id = 6;
-  const auto scene = render::build_scene(scene_id);
-  auto pipe = pipelines::create(ctx(), reflect_config(w, h));
-  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
-  ASSERT_NE(graph, nullptr);
-  graph->set_capture(true);
-  Rendered r;
-  for (int t = 1; t <= 4; ++t) {
-    r = render_frame(*scene, scene_id, t, 4, w, h);
-    run(*pipe, host(r, t == 1));
-  }
-  const std::vector<float> box = floats(graph->captured("svgf_clip_prefilter_y_specular", "svgf_clip_neighbourhood"));
-  const std::vector<float> mod = floats(graph->captured("reflect_prepare", "reflect_modulator"));
-  const std::vector<float> out = floats(graph->captured("svgf_reproject_specular", "svgf_illum_c"));
+  const int w = 96, h = 54;
+  const std::vector<Rendered> seq = render_sequence(6, 1, 4, 4, w, h);
+  const Rendered& r = seq.back();
+  const CapturedRun session = run_captured(ctx(), pointers(seq));
+  const std::vector<float> box = session.captured("svgf_clip_prefilter_y_specular", "svgf_clip_neighbourhood");
+  const std::vector<float> mod = session.captured("reflect_prepare", "reflect_modulator");
+  const std::vector<float> out = session.captured("svgf_reproject_specular", "svgf_illum_c");
   // The current demodulated specular signal, as svgf_signal.glsl computes it.
   auto guard = [](float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0f; };
   auto current = [&](int x, int y, int c) {
@@ -410,21 +431,14 @@ TEST_F(ReflectTest, ClippedHistoryStaysInsideItsNeighbourhoodBox) {
 // its specular temporal colour is the current frame's signal exactly, while
 // the default accumulates.
 TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
-  const int w = 64, h = 36, scene_id = 6;
-  const auto scene = render::build_scene(scene_id);
+  const int w = 64, h = 36;
+  const std::vector<Rendered> seq = render_sequence(6, 1, 3, 4, w, h);
+  const Rendered& r = seq.back();
   for (double history : {0.0, 1.0}) {
-    auto pipe = pipelines::create(ctx(), reflect_config(w, h, {{"specular_history", history}}));
-    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
-    ASSERT_NE(graph, nullptr);
-    graph->set_capture(true);
-    Rendered r;
-    for (int t = 1; t <= 3; ++t) {
-      r = render_frame(*scene, scene_id, t, 4, w, h);
-      run(*pipe, host(r, t == 1));
-    }
-    const std::vector<float> mod = floats(graph->captured("reflect_prepare", "reflect_modulator"));
-    const std::vector<float> out = floats(graph->captured("svgf_reproject_specular", "svgf_illum_c"));
-    const std::vector<float> temporal = floats(graph->captured("svgf_reproject_specular", "svgf_temporal"));
+    const CapturedRun session = run_captured(ctx(), pointers(seq), {{"specular_history", history}});
+    const std::vector<float> mod = session.captured("reflect_prepare", "reflect_modulator");
+    const std::vector<float> out = session.captured("svgf_reproject_specular", "svgf_illum_c");
+    const std::vector<float> temporal = session.captured("svgf_reproject_specular", "svgf_temporal");
     int foreground = 0, fresh = 0;
     for (size_t i = 0; i < size_t(w) * h; ++i) {
       if (!(r.fb.depth[i] > 0.0f)) continue;
@@ -446,21 +460,18 @@ TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
 // row order), plus the pixel's emission; elsewhere the same; every history
 // buffer is bit-identical with the median on or off.
 TEST_F(ReflectTest, FireflyMedianChangesTheDisplayedFrameOnly) {
-  const int w = 64, h = 36, scene_id = 1;
-  const auto scene = render::build_scene(scene_id);
-  std::vector<Rendered> seq;
-  for (int t = 1; t <= 4; ++t) seq.push_back(render_frame(*scene, scene_id, t, 2, w, h));
+  const int w = 64, h = 36;
+  const std::vector<Rendered> seq = render_sequence(1, 1, 4, 2, w, h);
   struct Run {
     std::vector<float> out, features;
     std::map<std::string, std::vector<uint8_t>> history;
   };
   auto run_with = [&](double median) {
-    auto pipe = pipelines::create(ctx(), reflect_config(w, h, {{"firefly_median", median}}));
-    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
-    graph->set_capture(true);
+    const CapturedRun captured = run_captured(ctx(), pointers(seq), {{"firefly_median", median}});
+    const pipelines::GraphPipeline* graph = captured.graph;
     Run r;
-    for (int t = 0; t < 4; ++t) r.out = run(*pipe, host(seq[size_t(t)], t == 0));
-    r.features = floats(graph->captured("reflect_prepare", "reflect_features"));
+    r.out = captured.out;
+    r.features = captured.captured("reflect_prepare", "reflect_features");
     // Each persistent or history buffer as the last pass that binds it left it.
     for (const auto& b : graph->spec().buffers) {
       if (b.role != pipelines::BufferRole::Persistent && b.role != pipelines::BufferRole::History) continue;
