@@ -55,6 +55,26 @@ bool clip_box(ivec2 pos, vec3 d, out vec3 lo, out vec3 hi) {
   return any;
 }
 
+// History rejection (clip.glsl): the history is contradicted by the
+// prefiltered current luminance lp, by p's own current luminance l and, on
+// the same side, by at least DN_REJECT_NEIGHBOURS of the 8 raw current
+// neighbours. A highlight that arrived or left covers its neighbours too; a
+// sparse bright sample (1-spp indirect light) does not, and rejecting on it
+// made the history of every such pixel restart over and over (still-camera
+// temporal error 2-8x, docs/results.md).
+bool history_rejected(ivec2 pos, float l, float lp, float lh, vec2 moments) {
+  if (!dn_history_contradicted(lp, lh, moments) || !dn_history_contradicted(l, lh, moments)) return false;
+  int agree = 0;
+  for (int yy = -1; yy <= 1; ++yy)
+    for (int xx = -1; xx <= 1; ++xx) {
+      ivec2 q = pos + ivec2(xx, yy);
+      if ((xx == 0 && yy == 0) || !dn_inside(q, frame.size.xy)) continue;
+      float lq = dn_luminance(dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x)));
+      if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, moments)) ++agree;
+    }
+  return agree >= DN_REJECT_NEIGHBOURS;
+}
+
 // Whether p's history is clipped: roughness below clip_roughness (NaN
 // counts as a mirror).
 bool clipped_here(uint p) {
@@ -153,7 +173,7 @@ void main() {
   // current frame contradicts, else clip it to the current neighbourhood.
   if (valid && clipped_here(p)) {
     vec4 pre = neighbourhood.data[p];
-    if (pre.w > 0.0 && dn_history_contradicted(dn_luminance(pre.rgb), dn_luminance(prev), prev_m)) valid = false;
+    if (pre.w > 0.0 && history_rejected(pos, l, dn_luminance(pre.rgb), dn_luminance(prev), prev_m)) valid = false;
     vec3 lo, hi;
     if (valid && clip_box(pos, d, lo, hi)) {
       vec3 clipped = dn_clip_to_box(prev, lo, hi);

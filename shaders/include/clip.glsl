@@ -16,12 +16,17 @@ vec3 dn_clip_to_box(vec3 h, vec3 lo, vec3 hi) {
   return m > 1.0 ? centre + v / m : h;
 }
 
-// History rejection (disagreement): the prefiltered current luminance lp
-// and the reprojected history's lh differ by more than the history's own
-// sample noise explains, 4 sigma = 4 sqrt(m2 - m1^2), plus half the larger of
-// the two. A reflection that moved against the surface's motion (a highlight
+// How many of the 8 neighbours must contradict a history, on the same side
+// as p, for svgf_reproject to drop it (a 3x3 highlight's corner has 3).
+const int DN_REJECT_NEIGHBOURS = 3;
+
+// History rejection (disagreement): a current luminance lp and the
+// reprojected history's lh differ by more than the history's own sample
+// noise explains, 4 sigma = 4 sqrt(m2 - m1^2), plus half the larger of the
+// two. A reflection that moved against the surface's motion (a highlight
 // that arrived or left) is such a pixel; stationary noise, and a static edge
-// that the prefilter blurs, are not. Scale-equivariant.
+// that the prefilter blurs, are not. Scale-equivariant. svgf_reproject asks
+// it of the prefiltered current, of p's own and of its neighbours' values.
 bool dn_history_contradicted(float lp, float lh, vec2 moments) {
   float larger = max(lp, lh);
   float sigma = min(sqrt(max(0.0, moments.y - moments.x * moments.x)), 0.125 * larger);

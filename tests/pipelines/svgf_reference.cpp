@@ -233,15 +233,31 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           plen = std::floor(sl / sw + 0.5);
         }
       }
-      // Clipped chains: reject a history the prefiltered current contradicts
-      // (beyond 4 sigma of its own moments plus half the larger luminance).
+      // Clipped chains: reject a history that the prefiltered current, p's
+      // own current value and at least 3 of its 8 raw neighbours (on p's side)
+      // contradict, each beyond 4 sigma of the history's moments plus half the
+      // larger luminance.
       if (valid && clip && clipped_here(i) && has_pre[i]) {
-        // A threshold decision: made in single precision, as the device makes
-        // it, so rounding does not flip it (m2 - m1^2 cancels in fp32).
-        const float lp = float(luminance(&pre[3 * i])), lh = float(luminance(pc)), larger = std::max(lp, lh);
-        const float m1 = float(pm1), m2 = float(pm2);
-        const float sigma = std::min(std::sqrt(std::max(0.0f, m2 - m1 * m1)), 0.125f * larger);
-        if (std::fabs(lp - lh) > 4.0f * sigma + 0.5f * larger) valid = false;
+        // Threshold decisions: made in single precision, as the device makes
+        // them, so rounding does not flip them (m2 - m1^2 cancels in fp32).
+        const float lh = float(luminance(pc)), m1 = float(pm1), m2 = float(pm2);
+        auto contradicts = [&](float lc) {
+          const float larger = std::max(lc, lh);
+          const float sigma = std::min(std::sqrt(std::max(0.0f, m2 - m1 * m1)), 0.125f * larger);
+          return std::fabs(lc - lh) > 4.0f * sigma + 0.5f * larger;
+        };
+        const float l = float(luminance(&d[3 * i]));
+        if (contradicts(float(luminance(&pre[3 * i]))) && contradicts(l)) {
+          int agree = 0;
+          for (int yy = -1; yy <= 1; ++yy)
+            for (int xx = -1; xx <= 1; ++xx) {
+              const int qx = x + xx, qy = y + yy;
+              if ((xx == 0 && yy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+              const float lq = float(luminance(&d[3 * (qy * w + qx)]));
+              if ((lq > lh) == (l > lh) && contradicts(lq)) ++agree;
+            }
+          if (agree >= 3) valid = false;
+        }
       }
       if (valid && clip && clipped_here(i) && has_box[i]) {
         // Toward the box centre until inside (clip.glsl).
