@@ -12,8 +12,15 @@
 // The luminance term is relative (Falcor divides by phi_colour alone, in
 // absolute units), so the filter stays scale-equivariant, and relative to the
 // darker of the two (HDR step rule): a highlight does not average its dark
-// surroundings into its variance, nor they it. Normals
-// are the guide's octahedral snorm16x2 ones (unit length).
+// surroundings into its variance, nor they it. Except at an isolated bright
+// pixel, whose 8 foreground neighbours are all darker than half its
+// luminance (a firefly): there the term is relative to the brighter of the
+// two, so its variance holds its neighbours' and the a-trous filters it;
+// under the HDR step rule its variance was its own single sample's, 0, and
+// a firefly went through untouched. A highlight has neighbours like itself
+// (a 3x3 one's corner has 3). Isolated dark pixels keep the HDR step rule:
+// taking them too blurred the edge of a light. Normals are the guide's
+// octahedral snorm16x2 ones (unit length).
 // History: this pass runs after every read of the (single-copy) history by
 // svgf_reproject, and writes it for the next frame: colour vec4(temporal rgb,
 // len) (the feedback a-trous iteration later replaces .rgb) and aux
@@ -56,9 +63,10 @@ void main() {
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
-  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B];
+  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B], sw_iso[B * B];
   vec3 cn[B * B];
-  vec2 sm[B * B];
+  vec2 sm[B * B], sm_iso[B * B];  // _iso: the isolated pixel's sums (brighter-relative)
+  bool alike[B * B];              // not isolated bright: a 3x3 neighbour within a factor 2 or brighter
   bool inside[B * B], act[B * B];
   bool any_act = false;
   [[unroll]] for (int j = 0; j < B; ++j) {
@@ -87,6 +95,9 @@ void main() {
       ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
       sm[k] = t.xy;  // p itself, weight 1
       sw[k] = 1.0;
+      sm_iso[k] = t.xy;
+      sw_iso[k] = 1.0;
+      alike[k] = false;
     }
   }
   if (any_act) {
@@ -110,11 +121,19 @@ void main() {
             int k = j * B + i;
             float cos_n = dot(cn[k], nq);
             float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
-            float w_l = abs(cl[k] - tq.w) / (phi_c * min(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
-            float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-            w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
+            float step = abs(cl[k] - tq.w);
+            float w_l = step / (phi_c * min(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
+            float w_l_iso = step / (phi_c * max(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
+            float w_g = phi_n * log2(max(cos_n, 1e-37)) - w_z * 1.4426950408889634;
+            bool take = act[k] && tap_ok && cos_n > 0.0;
+            float w = take ? exp2(w_g - w_l * 1.4426950408889634) : 0.0;
+            float w_iso = take ? exp2(w_g - w_l_iso * 1.4426950408889634) : 0.0;
             sm[k] += w * tq.xy;
             sw[k] += w;
+            sm_iso[k] += w_iso * tq.xy;
+            sw_iso[k] += w_iso;
+            // Not isolated: a 3x3 neighbour within a factor 2, or one at least as bright.
+            if (tap_ok && abs(dx) <= 1 && abs(dy) <= 1 && (step <= 0.5 * max(cl[k], tq.w) || tq.w >= cl[k])) alike[k] = true;
           }
         }
       }
@@ -128,7 +147,7 @@ void main() {
       uint pi = uint(p.y) * uint(size.x) + uint(p.x);
       float v = var[k];
       if (cz[k] != 0.0 && len[k] < 4.0) {
-        vec2 m = sm[k] / sw[k];
+        vec2 m = alike[k] ? sm[k] / sw[k] : sm_iso[k] / sw_iso[k];
         v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
       }
       illum.data[pi].w = v / samples_averaged(len[k]);

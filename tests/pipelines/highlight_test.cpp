@@ -7,6 +7,7 @@
 // keeps >= 95 % of the highlight's energy inside its footprint dilated by
 // 1 px and no pixel outside that exceeds twice its true value; over the
 // sequence the mean luminance stays within 2 % of the input's.
+// FireflyTest: the isolated-bright-pixel exception of the HDR step rule.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -44,6 +45,7 @@ bool in_footprint(int x, int y, int t, const Motion& m, int dilate) {
 }
 
 class HighlightTest : public test::GpuTest, public testing::WithParamInterface<std::tuple<Motion, bool>> {};
+class FireflyTest : public test::GpuTest {};
 
 TEST_P(HighlightTest, StaysInItsFootprint) {
   const auto& [motion, split] = GetParam();
@@ -105,6 +107,41 @@ TEST_P(HighlightTest, StaysInItsFootprint) {
   EXPECT_LE(drift, 0.02) << "mean luminance of the output against the input's, over the sequence";
   std::printf("[ info     ] %s %s: energy kept >= %.4f, brightest outside %.3f (true %.1f), mean drift %.4f\n",
               motion.name, split ? "split" : "radiance", worst_energy, worst_outside, kBackground, drift);
+}
+
+// The other side of the HDR step rule: a lone bright pixel (a firefly: all
+// 8 neighbours darker than half of it) on the first frame, when the variance
+// is the 7x7 spatial estimate, is taken apart by the a-trous instead of
+// passing through as its own zero-variance sample; the 3x3 highlight of the
+// tests above is kept. Radiance mode, roughness 1 (no history clipping).
+TEST_F(FireflyTest, IsFilteredWhereAHighlightIsKept) {
+  std::vector<protocol::ChannelDecl> decls = {{ChannelId::Radiance, Format::F32}};
+  for (ChannelId id : {ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion})
+    decls.push_back({id, Format::F32});
+  auto pipe = pipelines::create(ctx(), test::make_config("svgf", kW, kH, decls));
+  const int n = kW * kH, firefly = 20 * kW + 60;
+  std::vector<float> radiance(3 * n), albedo(3 * n, 1.0f), normal(3 * n), depth(n, 5.0f), mv(2 * n, 0.0f);
+  for (int i = 0; i < n; ++i) {
+    const float bg = kBackground * (0.5f + noise(static_cast<uint32_t>(i), 0u));
+    const bool light = in_footprint(i % kW, i / kW, 0, Motion{"still", 0, 0}, 0) || i == firefly;
+    for (int k = 0; k < 3; ++k) radiance[3 * i + k] = light ? kLight : bg;
+    normal[3 * i + 2] = 1.0f;
+  }
+  test::HostFrame f;
+  f.info.flags = protocol::kFrameReset;
+  f.add(ChannelId::Radiance, Format::F32, radiance);
+  f.add(ChannelId::Albedo, Format::F32, albedo);
+  f.add(ChannelId::Normal, Format::F32, normal);
+  f.add(ChannelId::Depth, Format::F32, depth);
+  f.add(ChannelId::Motion, Format::F32, mv);
+  const auto out = run(*pipe, f);
+  double highlight = 0.0;
+  for (int i = 0; i < n; ++i)
+    if (in_footprint(i % kW, i / kW, 0, Motion{"still", 0, 0}, 1)) highlight += out[3 * i] - kBackground;
+  std::printf("[ info     ] firefly %.2f -> %.2f; highlight energy kept %.4f\n", kLight, out[3 * firefly],
+              highlight / (kSize * kSize * (kLight - kBackground)));
+  EXPECT_LT(out[3 * firefly], 0.25f * kLight) << "a lone firefly passes through the spatial filter";
+  EXPECT_GE(highlight, 0.95 * kSize * kSize * (kLight - kBackground)) << "the 3x3 highlight lost energy";
 }
 
 INSTANTIATE_TEST_SUITE_P(Svgf, HighlightTest,
