@@ -5,7 +5,8 @@
 # (the noisy input, plain temporal accumulation, and a non-temporal
 # edge-avoiding a-trous filter). Writes to OUT: results.tsv, results.md (the
 # table), region.tsv (error over glossy surfaces, highlights, disocclusions and
-# roughness-mapped surfaces), speed_error.png (plot) and scene<N>.png (side by
+# roughness-mapped surfaces), region_temporal.tsv (the still shot's temporal
+# error over glossy surfaces), speed_error.png (plot) and scene<N>.png (side by
 # side with crops).
 # Two independent references per frame (dnrender --reference2: the second has
 # a seed of its own; the noisy inputs are rendered with seed 3, so they share
@@ -84,6 +85,8 @@ case " ${rows[*]} " in *" reflect reflect "*) rows+=("reflect-nospec reflect spe
 region_roughness() { case "$1" in 1) echo 0.04,0.35 ;; 5) echo 0.03,0.4 ;; esac; }
 region="$out/region.tsv"
 printf 'scene\tregion\tmethod\trmse\trelmse\tssim\tnc_mse\tnc_relmse\tref_noise_mse\tpixels\n' > "$region"
+region_temporal="$out/region_temporal.tsv"
+printf 'scene\tregion\tmethod\ttemporal\tpixels\n' > "$region_temporal"
 
 results="$out/results.tsv"
 printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\tnc_mse\tnc_relmse\tref_noise_mse\n' > "$results"
@@ -117,7 +120,12 @@ for s in $scenes; do
       --summary "$dir/$label/moving.tsv"
     "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
       --input "$dir/still/frame_%04d.exr" --start 0 --end $((still - 1)) --warmup $((still / 2)) \
-      --summary "$dir/$label/still.tsv"
+      --output "$dir/$label/still/frame_%04d.exr" --summary "$dir/$label/still.tsv"
+    # The same still-shot pairs as dn's temporal column (both frames past the
+    # warm-up), over glossy surfaces only.
+    "$bin/bench/region_temporal" --output "$dir/$label/still/frame_%04d.exr" --input "$dir/still/frame_%04d.exr" \
+      --first $((still / 2 + 1)) --frames $((still - still / 2 - 1)) --method "$label" --region glossy |
+      awk -v s="$s" 'NR > 1 { print s "\t" $0 }' >> "$region_temporal"
     m="$dir/$label/moving.tsv"
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" \
       "$(column "$m" relmse)" "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" \
@@ -186,6 +194,14 @@ cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
     echo "| scene | region | method | RMSE | relMSE | SSIM | nc MSE | nc relMSE | reference noise MSE | pixels/frame |"
     echo "|---|---|---|---|---|---|---|---|---|---|"
     awk -F'\t' 'NR > 1 { printf "| %s | %s | %s | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %.0f |\n", $1, $2, $3, $4, $5, $6, $7, $8, $9, $10 }' "$region"
+  fi
+  if [ "$(wc -l < "$region_temporal")" -gt 1 ]; then
+    echo
+    echo "Still-camera temporal error over glossy surfaces only (bench/region_temporal: roughness below 0.3 in the still shot's input, the same frame pairs as the temporal column above):"
+    echo
+    echo "| scene | method | temporal, glossy | pixels/frame |"
+    echo "|---|---|---|---|"
+    awk -F'\t' 'NR > 1 && $4 != "nan" { printf "| %s | %s | %.5f | %.0f |\n", $1, $3, $4, $5 }' "$region_temporal"
   fi
   echo
   echo "![speed against error](images/speed_error.png)"

@@ -23,6 +23,15 @@ for method in noisy accumulate atrous svgf svgf-fb svgf-split; do
       { echo "no $region row for $method"; cat "$dir/out/region.tsv"; exit 1; }
   done
 done
+# The glossy still-shot temporal error of every method (scene 1 has glossy
+# spheres), and svgf's below the noisy input's there too.
+for method in noisy svgf; do
+  grep -q "^1	glossy	$method	" "$dir/out/region_temporal.tsv" ||
+    { echo "no glossy temporal row for $method"; cat "$dir/out/region_temporal.tsv"; exit 1; }
+done
+awk -F'\t' '$3 == "noisy" { noisy = $4 } $3 == "svgf" { svgf = $4 }
+            END { if (!(svgf < 0.5 * noisy)) { print "glossy temporal: noisy " noisy " svgf " svgf; exit 1 } }' \
+  "$dir/out/region_temporal.tsv"
 # Every numeric field is a finite number.
 # (results.tsv: from field 3 on; region.tsv: scene, region, method, then numbers)
 awk -F'\t' 'FNR == 1 { first = FILENAME ~ /region/ ? 4 : 3 }

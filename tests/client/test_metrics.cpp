@@ -178,6 +178,11 @@ TEST(Metrics, NoiseCorrectedRelativeMseRemovesMostOfTheNoiseBias) {
 TEST(Metrics, TemporalError) {
   const std::vector<float> a = {1, 1, 1, 0, 0, 0}, b = {0, 0, 0, 0, 0, 0};
   EXPECT_NEAR(temporal_error(a.data(), b.data(), 2), 0.5, 1e-6);
+  // Over a mask: only the masked pixels count, and none gives NaN.
+  const std::vector<float> c = {2, 2, 2, 0, 0, 0, 1, 1, 1}, d(9, 0.0f);
+  const std::vector<uint8_t> first_last = {1, 0, 1}, none = {0, 0, 0};
+  EXPECT_NEAR(temporal_error(c.data(), d.data(), first_last.data(), 3), 1.5, 1e-6);
+  EXPECT_TRUE(std::isnan(temporal_error(c.data(), d.data(), none.data(), 3)));
 }
 
 }  // namespace

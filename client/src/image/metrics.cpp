@@ -219,4 +219,17 @@ double temporal_error(const float* rgb, const float* prev_rgb, size_t pixels) {
   return sum / double(pixels);
 }
 
+double temporal_error(const float* rgb, const float* prev_rgb, const uint8_t* mask, size_t pixels) {
+  double sum = 0.0;
+  size_t n = 0;
+  for (size_t i = 0; i < pixels; ++i) {
+    if (!mask[i]) continue;
+    const double a = linear_luminance(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+    const double b = linear_luminance(prev_rgb[3 * i], prev_rgb[3 * i + 1], prev_rgb[3 * i + 2]);
+    sum += std::fabs(a - b);
+    ++n;
+  }
+  return n ? sum / double(n) : std::nan("");
+}
+
 }  // namespace dn::image

@@ -10,7 +10,8 @@
 //  - ssim_tonemapped: ssim of display luma: exposure, tone map (ACES fitted by
 //                    default), sRGB OETF, then Y' = 0.2126 R' + 0.7152 G' + 0.0722 B'.
 //  - temporal_error: mean |Y(a) - Y(b)| of linear luminance, for consecutive
-//                    frames of a fixed camera.
+//                    frames of a fixed camera; with a mask, over the pixels whose
+//                    mask byte is nonzero (NaN when there is none).
 //  - noise_corrected_mse: mean of (a - r1)(a - r2) over two independent,
 //                    unbiased references r1, r2 of the same image (and
 //                    independent of a): an unbiased estimate of the MSE of a
@@ -70,5 +71,6 @@ double ssim_tonemapped(const float* rgb, const float* ref_rgb, int width, int he
                        float exposure = 1.0f);
 
 double temporal_error(const float* rgb, const float* prev_rgb, size_t pixels);
+double temporal_error(const float* rgb, const float* prev_rgb, const uint8_t* mask, size_t pixels);
 
 }  // namespace dn::image
