@@ -9,6 +9,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <algorithm>
 #include <limits>
@@ -254,6 +256,85 @@ TEST_F(ReflectTest, MotionSearchMatchesTheCpuReferenceOnRenderedFrames) {
     EXPECT_GE(r.equal, 0.97 * r.searched);
     EXPECT_GE(r.within_1px, 0.99 * r.searched);
   }
+}
+
+// The thesis's accuracy figure (§7.4, Figs. 12-13; IMPLEMENTATION-NOTES C.4-1)
+// on rendered frames: over a moving-camera sequence of scene 6 (planar wall
+// mirror, glossy floor) and scene 1 (mirror and glossy spheres), the device's
+// reflection motion of every mirror and glossy pixel against the brute-force
+// optimum of the same distance (every previous pixel, then the same sub-pixel
+// step). Asserted on scene 6, one surface per class as in the thesis's test:
+// on average over the frames, > 90 % within 1 px ("on average more than 90 %
+// of the found motion vectors in a frame are within one pixel of the
+// optimum"). Scene 1 is measured, not asserted: its mirror class holds the
+// sphere and the floor's smooth stripes, its glossy class two spheres, so
+// the global optimum may lie on another object (and it measured 82 % and 75 %,
+// 86 % and 79 % with brute force limited to +-20 px: local minima too).
+// DN_MOTION_ACCURACY_OUT=FILE writes the per-frame figures
+// (bench/reflection_motion.sh plots them).
+TEST_F(ReflectTest, MotionAccuracyAgainstBruteForceOverAFlythrough) {
+  const int w = 96, h = 54, frames = 6;
+  FILE* tsv = nullptr;
+  if (const char* path = std::getenv("DN_MOTION_ACCURACY_OUT")) {
+    tsv = std::fopen(path, "w");
+    ASSERT_NE(tsv, nullptr) << path;
+    std::fprintf(tsv, "scene\tframe\tclass\tpixels\twithin_1px\tmean_error_px\n");
+  }
+  for (int scene_id : {6, 1}) {
+    SCOPED_TRACE("scene " + std::to_string(scene_id));
+    const std::vector<Rendered> seq = render_sequence(scene_id, 1, frames, 2, w, h);
+    auto pipe = pipelines::create(ctx(), reflect_config(w, h));
+    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+    ASSERT_NE(graph, nullptr);
+    graph->set_capture(true);
+    double share_sum[3] = {0, 0, 0};
+    int share_frames[3] = {0, 0, 0};
+    for (int t = 0; t < frames; ++t) {
+      run(*pipe, host(seq[size_t(t)], t == 0));
+      if (t == 0) continue;
+      const std::vector<float> got = floats(graph->captured("reflect_motion", "reflect_motion"));
+      const Fields prev = fields_of(seq[size_t(t) - 1].fb), cur = fields_of(seq[size_t(t)].fb);
+      int pixels[3] = {0, 0, 0}, within[3] = {0, 0, 0};
+      double error[3] = {0, 0, 0};
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const size_t i = size_t(y) * w + x;
+          const Class c = class_of(seq[size_t(t)].fb, i);
+          if (c == None || got[4 * i + 3] < 0.0f) continue;
+          test::reflect::SubpixelMatch best;
+          if (c == Mirror) {
+            const auto m = test::reflect::brute_force_search(cur.hits, prev.hits, x, y, 100);
+            if (!std::isfinite(m.distance)) continue;
+            best = test::reflect::refine_subpixel(cur.hits, prev.hits, x, y, m);
+          } else {
+            if (!cur.rays.valid[i]) continue;
+            const auto m = test::reflect::brute_force_search(cur.rays, prev.rays, x, y, 100);
+            if (!std::isfinite(m.distance)) continue;
+            best = test::reflect::refine_subpixel(cur.rays, prev.rays, x, y, m);
+          }
+          const double e = std::hypot(got[4 * i] - (best.x - x), got[4 * i + 1] - (best.y - y));
+          ++pixels[c];
+          within[c] += e <= 1.0;
+          error[c] += e;
+        }
+      for (int c : {int(Mirror), int(Glossy)}) {
+        if (pixels[c] == 0) continue;
+        share_sum[c] += double(within[c]) / pixels[c];
+        share_frames[c]++;
+        if (tsv)
+          std::fprintf(tsv, "%d\t%d\t%s\t%d\t%.4f\t%.4f\n", scene_id, t, c == Mirror ? "mirror" : "glossy", pixels[c],
+                       double(within[c]) / pixels[c], error[c] / pixels[c]);
+      }
+    }
+    for (int c : {int(Mirror), int(Glossy)}) {
+      ASSERT_GT(share_frames[c], 0) << (c == Mirror ? "no mirror pixel" : "no glossy pixel");
+      const double mean = share_sum[c] / share_frames[c];
+      std::printf("[ info     ] scene %d %s: %.1f %% within 1 px of brute force (mean over %d frames)\n", scene_id,
+                  c == Mirror ? "mirror" : "glossy", 100.0 * mean, share_frames[c]);
+      if (scene_id == 6) EXPECT_GT(mean, 0.9) << (c == Mirror ? "mirror" : "glossy");
+    }
+  }
+  if (tsv) std::fclose(tsv);
 }
 
 TEST_F(ReflectTest, StaticCameraGivesExactlyZeroReflectionMotion) {
