@@ -187,7 +187,7 @@ void main() {
     }
   }
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
-  float alpha = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_colour)) : 1.0;
+  float alpha = valid ? max(1.0 / len, DN_SVGF_ALPHA_COLOUR) : 1.0;
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);

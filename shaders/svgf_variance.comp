@@ -49,7 +49,7 @@ const int WIN = BLOCK + 6;
 // average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
 float samples_averaged(float len) {
   if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
-  float a = DN_PARAM_VALUE(svgf, alpha_colour);
+  float a = DN_SVGF_ALPHA_COLOUR;
   return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
 }
 
@@ -63,11 +63,11 @@ void main() {
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
-  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B], sw_iso[B * B];
+  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B];
   vec3 cn[B * B];
-  vec2 sm[B * B], sm_iso[B * B];  // _iso: the isolated pixel's sums (brighter-relative)
-  bool alike[B * B];              // not isolated bright: a 3x3 neighbour within a factor 2 or brighter
+  vec2 sm[B * B];
   bool inside[B * B], act[B * B];
+  bool isolated[B * B];  // every 3x3 foreground neighbour below half of p's luminance
   bool any_act = false;
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
@@ -95,9 +95,16 @@ void main() {
       ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
       sm[k] = t.xy;  // p itself, weight 1
       sw[k] = 1.0;
-      sm_iso[k] = t.xy;
-      sw_iso[k] = 1.0;
-      alike[k] = false;
+      isolated[k] = true;
+      if (act[k]) {
+        for (int yy = -1; yy <= 1; ++yy)
+          for (int xx = -1; xx <= 1; ++xx) {
+            ivec2 q = p + ivec2(xx, yy);
+            if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+            uint qi = uint(q.y) * uint(size.x) + uint(q.x);
+            if (uintBitsToFloat(guide.data[qi].x) > 0.0 && temporal.data[qi].w >= 0.5 * t.w) isolated[k] = false;
+          }
+      }
     }
   }
   if (any_act) {
@@ -121,19 +128,12 @@ void main() {
             int k = j * B + i;
             float cos_n = dot(cn[k], nq);
             float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
-            float step = abs(cl[k] - tq.w);
-            float w_l = step / (phi_c * min(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
-            float w_l_iso = step / (phi_c * max(cl[k], tq.w) + DN_SVGF_LUMINANCE_EPS);
-            float w_g = phi_n * log2(max(cos_n, 1e-37)) - w_z * 1.4426950408889634;
-            bool take = act[k] && tap_ok && cos_n > 0.0;
-            float w = take ? exp2(w_g - w_l * 1.4426950408889634) : 0.0;
-            float w_iso = take ? exp2(w_g - w_l_iso * 1.4426950408889634) : 0.0;
+            float relative_to = isolated[k] ? max(cl[k], tq.w) : min(cl[k], tq.w);
+            float w_l = abs(cl[k] - tq.w) / (phi_c * relative_to + DN_SVGF_LUMINANCE_EPS);
+            float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+            w = (act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
             sm[k] += w * tq.xy;
             sw[k] += w;
-            sm_iso[k] += w_iso * tq.xy;
-            sw_iso[k] += w_iso;
-            // Not isolated: a 3x3 neighbour within a factor 2, or one at least as bright.
-            if (tap_ok && abs(dx) <= 1 && abs(dy) <= 1 && (step <= 0.5 * max(cl[k], tq.w) || tq.w >= cl[k])) alike[k] = true;
           }
         }
       }
@@ -147,7 +147,7 @@ void main() {
       uint pi = uint(p.y) * uint(size.x) + uint(p.x);
       float v = var[k];
       if (cz[k] != 0.0 && len[k] < 4.0) {
-        vec2 m = alike[k] ? sm[k] / sw[k] : sm_iso[k] / sw_iso[k];
+        vec2 m = sm[k] / sw[k];
         v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
       }
       illum.data[pi].w = v / samples_averaged(len[k]);

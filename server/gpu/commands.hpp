@@ -26,6 +26,10 @@ class CommandStream {
   void submit_and_wait(uint64_t timeout_ns = kDefaultTimeoutNs);
 
   static constexpr uint64_t kDefaultTimeoutNs = 60ull * 1000 * 1000 * 1000;
+  // For a submission that is the first use of its pipelines: lavapipe
+  // JIT-compiles each at its first dispatch, inside the wait (a cold-cache
+  // first reflect frame: 77-89 s on a 2-core VM).
+  static constexpr uint64_t kFirstUseTimeoutNs = 600ull * 1000 * 1000 * 1000;
 
  private:
   void wait_pending() noexcept;

@@ -469,7 +469,9 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   }
   timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
 
-  commands_->submit_and_wait();
+  commands_->submit_and_wait(first_use_ ? gpu::CommandStream::kFirstUseTimeoutNs
+                                        : gpu::CommandStream::kDefaultTimeoutNs);
+  first_use_ = false;
   scratch_.release();  // the frame's work is done: other sessions may lease it now
   const std::vector<double> intervals = timestamps_->read_intervals_ms(mark);
 

@@ -185,6 +185,7 @@ class GraphPipeline final : public Pipeline {
   std::unique_ptr<gpu::DescriptorPool> descriptors_;
   std::vector<Pass> passes_;
   std::unique_ptr<gpu::CommandStream> commands_;
+  bool first_use_ = true;  // no frame submitted yet: its wait includes the shader compiles
   std::unique_ptr<gpu::TimestampPool> timestamps_;
   uint64_t device_bytes_ = 0;
   uint64_t transient_bytes_ = 0;

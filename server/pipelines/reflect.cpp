@@ -63,6 +63,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   specular.reflection_motion = kMotion;
   specular.features = SignalFeatures{kFeatureDepth, kFeatureNormal};
   specular.reads_history = p.reflect_specular_history != 0.0f;
+  specular.specular_alpha = true;
   if (p.reflect_firefly_median != 0.0f) v.display = kDisplay;
   return v;
 }

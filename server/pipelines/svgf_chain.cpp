@@ -107,7 +107,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("DEMODULATE", demodulate)
       .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first chain's guide
       .set("SUBTRACT_EMISSION", s.subtract_emission)
-      .set("READ_HISTORY", s.reads_history);
+      .set("READ_HISTORY", s.reads_history)
+      .set("SPECULAR_ALPHA", s.specular_alpha);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
@@ -125,7 +126,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .bind("illum", current)
       .bind("colour_history", colour)
       .bind("aux_history", aux)
-      .set("BLOCK", kVarianceBlock);
+      .set("BLOCK", kVarianceBlock)
+      .set("SPECULAR_ALPHA", s.specular_alpha);
   variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                          ((config.height + kVarianceBlock - 1) / kVarianceBlock);
 

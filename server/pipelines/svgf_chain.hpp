@@ -71,6 +71,7 @@ struct SvgfSignal {
   bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
   bool clip = false;               // its history is clipped (highlights and reflections: radiance, specular)
   bool reads_history = true;       // false: filtered from the current frame alone (a NoSpecReproj baseline)
+  bool specular_alpha = false;     // blends with reflect's alpha_specular, not svgf's alpha_colour
 };
 
 struct SvgfVariant {

@@ -16,6 +16,11 @@ const float DN_SVGF_MAX_RADIANCE = 1e12;
 const float DN_SVGF_VARIANCE_EPS = 1e-20;
 // Relative luminance guard of the 7x7 variance estimate (see svgf_variance.comp).
 const float DN_SVGF_LUMINANCE_EPS = 1e-20;
+
+// The floor of a chain's temporal blend weight: svgf's alpha_colour, or
+// reflect's alpha_specular on its specular chain (SPECULAR_ALPHA, a
+// specialization constant of svgf_reproject and svgf_variance).
+#define DN_SVGF_ALPHA_COLOUR (SPECULAR_ALPHA ? DN_PARAM_VALUE(reflect, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
 // HDR step rule of the a-trous variance prefilter: a neighbour's variance
 // counts for p only when |l_p - l_q| <= DN_SVGF_STEP_SIGMAS * sqrt(v_q), so a
 // bright pixel's variance does not open a dark neighbour's luminance

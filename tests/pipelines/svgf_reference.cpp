@@ -320,45 +320,39 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         continue;
       }
       // Luminance weight relative to the darker of p and q (HDR step rule),
-      // or, at an isolated bright pixel (no 3x3 foreground neighbour within a
-      // factor 2 or at least as bright: a firefly), to the brighter.
+      // or, at an isolated bright pixel (every 3x3 foreground neighbour below
+      // half its luminance: a firefly), to the brighter.
       const double l = luminance(&colour[3 * i]);
-      double s1 = 0, s2 = 0, sw = 0, s1_iso = 0, s2_iso = 0, sw_iso = 0;
-      bool alike = false;
+      bool isolated = true;
+      for (int yy = -1; yy <= 1; ++yy)
+        for (int xx = -1; xx <= 1; ++xx) {
+          const int qx = x + xx, qy = y + yy;
+          if ((xx == 0 && yy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx]) continue;
+          // A threshold decision: in single precision, as on the device.
+          if (float(luminance(&colour[3 * (qy * w + qx)])) >= 0.5f * float(l)) isolated = false;
+        }
+      double s1 = 0, s2 = 0, sw = 0;
       for (int yy = -3; yy <= 3; ++yy)
         for (int xx = -3; xx <= 3; ++xx) {
           const int qx = x + xx, qy = y + yy;
           if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
           const int q = qy * w + qx;
           if (!fg[q]) continue;
-          double wt = 1.0, wt_iso = 1.0;
+          double wt = 1.0;
           if (q != i) {
             const double dist = std::sqrt(double(xx * xx + yy * yy));
             const double wz = std::fabs(z[i] - z[q]) / (p_.phi_depth * std::max(dz[i], 1e-8) * 3.0 * dist);
             const double lq = luminance(&colour[3 * q]);
-            const double wl = std::fabs(l - lq) / (p_.phi_colour * std::min(l, lq) + 1e-20);
-            const double wl_iso = std::fabs(l - lq) / (p_.phi_colour * std::max(l, lq) + 1e-20);
+            const double relative_to = isolated ? std::max(l, lq) : std::min(l, lq);
+            const double wl = std::fabs(l - lq) / (p_.phi_colour * relative_to + 1e-20);
             wt = std::exp(-wz - wl) * normal_weight(i, q);
-            wt_iso = std::exp(-wz - wl_iso) * normal_weight(i, q);
-            // A threshold decision: in single precision, as on the device.
-            const float lf = float(l), lqf = float(lq);
-            if (std::abs(xx) <= 1 && std::abs(yy) <= 1 && (std::fabs(lf - lqf) <= 0.5f * std::max(lf, lqf) || lqf >= lf))
-              alike = true;
           }
           s1 += wt * m1[q];
           s2 += wt * m2[q];
           sw += wt;
-          s1_iso += wt_iso * m1[q];
-          s2_iso += wt_iso * m2[q];
-          sw_iso += wt_iso;
         }
-      if (alike) {
-        s1 /= sw;
-        s2 /= sw;
-      } else {
-        s1 = s1_iso / sw_iso;
-        s2 = s2_iso / sw_iso;
-      }
+      s1 /= sw;
+      s2 /= sw;
       var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i] /  // cancels: fp32 as on the device
                samples_averaged(len[i]);
     }

@@ -72,7 +72,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   std::vector<std::string> reflect_names;
   for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
   std::vector<std::string> expected = svgf_names;
-  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "firefly_median"});
+  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "firefly_median"});
   EXPECT_EQ(reflect_names, expected);
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
