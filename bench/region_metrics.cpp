@@ -39,17 +39,14 @@
 
 #include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
+#include "frame_path.hpp"
 #include "region_masks.hpp"
 
 namespace {
 
 using dn::bench::Mask;
 
-std::string frame_path(const std::string& pattern, int frame) {
-  char buf[1024];
-  std::snprintf(buf, sizeof buf, pattern.c_str(), frame);
-  return buf;
-}
+using dn::bench::frame_path;
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;

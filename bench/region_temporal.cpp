@@ -22,15 +22,12 @@
 
 #include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
+#include "frame_path.hpp"
 #include "region_masks.hpp"
 
 namespace {
 
-std::string frame_path(const std::string& pattern, int frame) {
-  char buf[1024];
-  std::snprintf(buf, sizeof buf, pattern.c_str(), frame);
-  return buf;
-}
+using dn::bench::frame_path;
 
 struct Options {
   std::string output, input, method = "-", roughness_layer = "roughness.Y";
