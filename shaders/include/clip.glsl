@@ -3,7 +3,8 @@
 // Neighbourhood clipping of a history colour:
 // move h toward the centre of the box [lo, hi] until it lies inside, along
 // the line to the centre (clip, not a per-channel clamp, so the hue of h is
-// kept). A flat box (lo = hi) returns its centre for any h outside it.
+// kept). A flat box (lo = hi) returns its centre for any h outside it (the
+// final clamp: the step along the line leaves up to 1e-30 there).
 #ifndef DN_CLIP_GLSL
 #define DN_CLIP_GLSL
 
@@ -13,7 +14,7 @@ vec3 dn_clip_to_box(vec3 h, vec3 lo, vec3 hi) {
   vec3 v = h - centre;
   vec3 units = abs(v) / max(extent, vec3(1e-30));
   float m = max(units.x, max(units.y, units.z));
-  return m > 1.0 ? centre + v / m : h;
+  return m > 1.0 ? clamp(centre + v / m, lo, hi) : h;
 }
 
 // How many of the 8 neighbours must contradict a history, on the same side

@@ -285,7 +285,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           m = std::max(m, std::fabs(v[k]) / extent);
         }
         if (m > 1.0) {
-          for (int k = 0; k < 3; ++k) pc[k] = 0.5 * (blo[k] + bhi[k]) + v[k] / m;
+          for (int k = 0; k < 3; ++k) pc[k] = std::clamp(0.5 * (blo[k] + bhi[k]) + v[k] / m, blo[k], bhi[k]);
           pm1 = luminance(pc);  // the moments restart from the clipped colour
           pm2 = pm1 * pm1;
         }
