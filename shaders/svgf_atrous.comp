@@ -5,12 +5,14 @@
 //   g   = 3x3 gaussian {1/4, 1/2, 1/4}^2 of the variance over the pixels q
 //         inside the image whose luminance step to p their own noise explains,
 //         |l_p - l_q| <= 3 sqrt(v_q) (the HDR step rule; p always), renormalised
-//   phi_l = phi_colour * sqrt(g + 1e-20)
+//   phi_l = phi_colour * sqrt(g + 1e-20), times 8 - min(7, len - 1) with
+//         luminance_ramp (paper 001 Eq. 8; len the history length, temporal .z)
 //   taps q = p + STEP * (i, j), i, j in -2..2, inside and foreground, q != p:
 //     w_q = h(i) h(j) * exp(-|z_p - z_q| / (phi_depth * max(dz_p, 1e-8) * STEP * |(i, j)|)
 //                           - |l_p - l_q| / phi_l) * max(0, n_p.n_q)^phi_normal
 //     with h = {1/6, 2/3, 1, 2/3, 1/6} (the B3 kernel {1/16, 1/4, 3/8, 1/4, 1/16} / (3/8))
-//   p itself has weight 1; c = sum w c / sum w, v = sum w^2 v / (sum w)^2.
+//   p itself has weight 1; c = sum w c / sum w, v = sum w^2 v / (sum w)^2
+//   (v_p unchanged without propagate_variance: paper 001 §6).
 // Background pixels (and pixels without a normal, which take no tap) are
 // copied. With FEEDBACK the result's rgb also becomes the colour history
 // (length kept). Depth, dz and the (octahedral, unit) normal come from the
@@ -51,6 +53,8 @@ void main() {
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * float(STEP);
+  bool ramp = DN_PARAM_VALUE(svgf, luminance_ramp) != 0.0;
+  bool propagate = DN_PARAM_VALUE(svgf, propagate_variance) != 0.0;
 
   // Block pixels: centre data.
   float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];
@@ -93,7 +97,8 @@ void main() {
             gw += kk;
           }
         }
-        ipl[k] = 1.0 / (phi_c * sqrt(gv / gw + DN_SVGF_VARIANCE_EPS));
+        float widen = ramp ? 8.0 - min(7.0, max(temporal.data[pi].z - 1.0, 0.0)) : 1.0;
+        ipl[k] = 1.0 / (phi_c * widen * sqrt(gv / gw + DN_SVGF_VARIANCE_EPS));
         ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
       }
     }
@@ -128,7 +133,7 @@ void main() {
                     exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
           w = (act[k] && tap_ok && cos_n > 0.0 && (!CLASS_EDGES || qcls == ccls[k])) ? w : 0.0;
           sc[k] += w * s.rgb;
-          sv[k] += w * w * s.w;
+          sv[k] += propagate ? w * w * s.w : 0.0;
           sw[k] += w;
         }
       }
@@ -141,7 +146,7 @@ void main() {
       ivec2 p = base + STEP * ivec2(i, j);
       if (p.x >= size.x || p.y >= size.y) continue;
       uint pi = uint(p.y) * uint(size.x) + uint(p.x);
-      vec4 result = vec4(sc[k] / sw[k], sv[k] / (sw[k] * sw[k]));
+      vec4 result = vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k]);
       dst.data[pi] = result;
       if (FEEDBACK) colour_history.data[pi].rgb = result.rgb;
     }

@@ -138,6 +138,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
     atrous.bind("guide", kGuide)
         .bind("src", current)
         .bind("dst", other)
+        .bind("temporal", kTemporal)
         .set("STEP", 1u << level)
         .set("FEEDBACK", i == tap)
         .set("BLOCK", kAtrousBlock)

@@ -394,7 +394,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             gv += k * cq[3];
             gw += k;
           }
-        const double phi_l = p_.phi_colour * std::sqrt(gv / gw + 1e-20);
+        const double ramp = p_.luminance_ramp ? 8.0 - std::min(7.0, std::max(len[i] - 1.0, 0.0)) : 1.0;
+        const double phi_l = p_.phi_colour * ramp * std::sqrt(gv / gw + 1e-20);
         double sc[3] = {0, 0, 0}, sv = 0, sw = 0;
         for (int yy = -2; yy <= 2; ++yy)
           for (int xx = -2; xx <= 2; ++xx) {
@@ -414,7 +415,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             sw += wt;
           }
         for (int k = 0; k < 3; ++k) next[4 * i + k] = sc[k] / sw;
-        next[4 * i + 3] = sv / (sw * sw);
+        next[4 * i + 3] = p_.propagate_variance ? sv / (sw * sw) : cur[4 * i + 3];
       }
     cur = std::move(next);
     ch.atrous[it] = cur;

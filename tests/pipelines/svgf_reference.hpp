@@ -20,6 +20,8 @@ struct SvgfParams {
   double taa_alpha = 0.0;  // > 0: the final TAA blend (pass 5)
   double clip_roughness = 0.9;  // > 0: history clipping of the radiance / specular chain (pass 1)
   int variance_of_mean = 1;      // 1: the variance steering the a-trous is the temporal mean's (pass 2)
+  int luminance_ramp = 0;        // 1: paper 001 Eq. 8, phi_l times 8 - min(7, length - 1) (pass 3)
+  int propagate_variance = 1;    // 0: every a-trous iteration keeps the variance pass's estimate (pass 3)
 };
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in

@@ -58,6 +58,8 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
     if (p.name == "taa_alpha") params.taa_alpha = p.value;
     if (p.name == "clip_roughness") params.clip_roughness = p.value;
     if (p.name == "variance_of_mean") params.variance_of_mean = static_cast<int>(p.value);
+    if (p.name == "luminance_ramp") params.luminance_ramp = static_cast<int>(p.value);
+    if (p.name == "propagate_variance") params.propagate_variance = static_cast<int>(p.value);
   }
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
@@ -103,7 +105,12 @@ INSTANTIATE_TEST_SUITE_P(
         // History clipping off (clip_roughness 0) and the per-sample
         // variance (variance_of_mean 0): Falcor's svgf.
         Variant{"no_clip", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
-                {{"clip_roughness", 0}, {"variance_of_mean", 0}}}),
+                {{"clip_roughness", 0}, {"variance_of_mean", 0}}},
+        // Paper 001 §6: the luminance bandwidth ramp of Eq. 8 and the
+        // variance kept across the a-trous iterations (reset at frame 5:
+        // short histories).
+        Variant{"ramp_no_propagation", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
+                {{"luminance_ramp", 1}, {"propagate_variance", 0}}}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 // A static geometry description: one plane, unit normals, zero motion.
