@@ -10,7 +10,11 @@
 //    that shows the sky is demodulated by F_beta alone);
 //  - the specular chain's depth and normal: at a mirror whose chain hit is
 //    foreground, the virtual depth and the reflected surface's normal (its
-//    edges are the reflection's, paper 001 §4.1), else the primary ones.
+//    edges are the reflection's, paper 001 §4.1), else the primary ones;
+//  - with FOOTPRINT, the spatial bandwidth of Eq. 6 (svgf_atrous's
+//    SPATIAL_BANDWIDTH): at a glossy pixel with a finite footprint f >= 0,
+//    sigma = max(exp(-f / footprint_omega), DN_REFLECT_MIN_BANDWIDTH) in
+//    a-trous steps; 0 (no spatial term) elsewhere.
 // docs/pipelines.md, "reflect".
 //
 // Resources: passes/reflect_prepare.pass (binding 0 FrameConstants).
@@ -23,6 +27,9 @@
 
 #include "svgf_guards.glsl"
 #include "reflect.glsl"
+
+// Eq. 6's floor: a huge footprint must not leave a kernel of p alone.
+const float DN_REFLECT_MIN_BANDWIDTH = 0.05;
 
 float reflection_class(uint p, float z) {
   float r = DN_LOAD1(roughness, ROUGHNESS_HALF, p);
@@ -71,6 +78,12 @@ void main() {
     } else {
       cls = DN_REFLECT_NONE;
     }
+  }
+  if (FOOTPRINT) {
+    float fp = DN_LOAD1(reflection_footprint, REFLECTION_FOOTPRINT_HALF, p);
+    bool take = cls == DN_REFLECT_GLOSSY && dn_is_finite(fp) && fp >= 0.0;
+    float omega = DN_PARAM_VALUE(reflect, footprint_omega);
+    bandwidth.data[p] = take ? max(exp(-fp / omega), DN_REFLECT_MIN_BANDWIDTH) : 0.0;
   }
   features.data[2u * p] = a;
   features.data[2u * p + 1u] = b;

@@ -11,6 +11,9 @@
 //     w_q = h(i) h(j) * exp(-|z_p - z_q| / (phi_depth * max(dz_p, 1e-8) * STEP * |(i, j)|)
 //                           - |l_p - l_q| / phi_l) * max(0, n_p.n_q)^phi_normal
 //     with h = {1/6, 2/3, 1, 2/3, 1/6} (the B3 kernel {1/16, 1/4, 3/8, 1/4, 1/16} / (3/8))
+//     times exp(-(i^2 + j^2) / (2 sigma_p^2)) with SPATIAL_BANDWIDTH and
+//     sigma_p = bandwidth[p] > 0 (reflect's Eq. 6; in steps, so the same
+//     fraction of every iteration's footprint)
 //   p itself has weight 1; c = sum w c / sum w, v = sum w^2 v / (sum w)^2
 //   (v_p unchanged without propagate_variance: paper 001 §6).
 // Background pixels (and pixels without a normal, which take no tap) are
@@ -63,6 +66,7 @@ void main() {
   vec3 sc[B * B];
   float sv[B * B], sw[B * B];
   uint ccls[B * B];  // CLASS_EDGES: p's guide .w
+  float isig[B * B];  // SPATIAL_BANDWIDTH: 1 / (2 sigma_p^2), 0 without
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
       int k = j * B + i;
@@ -81,6 +85,11 @@ void main() {
       sw[k] = 1.0;
       ipz[k] = 0.0;
       ipl[k] = 0.0;
+      isig[k] = 0.0;
+      if (SPATIAL_BANDWIDTH) {
+        float sigma = bandwidth.data[pi];
+        isig[k] = sigma > 0.0 ? 0.5 / (sigma * sigma) : 0.0;
+      }
       if (act[k]) {
         const float g[3] = float[3](0.25, 0.5, 0.25);
         float gv = 0.0, gw = 0.0;
@@ -129,6 +138,7 @@ void main() {
           float cos_n = dot(cn[k], nq);
           float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
           float w_l = abs(cl[k] - lq) * ipl[k];
+          if (SPATIAL_BANDWIDTH) w_l += float(dx * dx + dy * dy) * isig[k];
           float w = h[dx + 2] * h[dy + 2] *
                     exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
           w = (act[k] && tap_ok && cos_n > 0.0 && (!CLASS_EDGES || qcls == ccls[k])) ? w : 0.0;

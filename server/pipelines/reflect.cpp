@@ -10,6 +10,8 @@
 //  - edge-stops and tests its history on the reflected surface's normal and
 //    virtual depth at mirrors, with the depth and normal tests off at glossy
 //    pixels (clipping guards those);
+//  - with footprint_omega > 0 and a reflection_footprint plane, is filtered
+//    with Eq. 6's ray-differential spatial bandwidth at glossy pixels;
 // with the reflection features of docs/protocol.md §7.5 as inputs. Passes in
 // front of the SVGF chains: svgf_fb_factor, reflect_prepare, reflect_motion.
 #include "pipelines/definitions.hpp"
@@ -35,6 +37,10 @@ constexpr uint64_t kFeatureDepthBytes = 4;
 constexpr const char* kFeatureNormal = "reflect_normal";
 constexpr uint64_t kFeatureNormalBytes = 12;
 constexpr const char* kMotion = "reflect_motion";
+// Eq. 6's sigma per pixel, fp32 (reflect_prepare), when the session sends
+// reflection_footprint and footprint_omega > 0.
+constexpr const char* kBandwidth = "reflect_bandwidth";
+constexpr uint64_t kBandwidthBytes = 4;
 constexpr uint64_t kMotionBytes = 16;
 // History (this frame's and the previous frame's copy): the search features,
 // two vec4 per pixel (shaders/include/reflect.glsl).
@@ -48,6 +54,10 @@ constexpr ChannelId kFeatureChannels[] = {ChannelId::Position,           Channel
                                           ChannelId::ReflectionAlbedo,   ChannelId::ReflectionNormal,
                                           ChannelId::ReflectionDepth,    ChannelId::ReflectionDirection,
                                           ChannelId::ReflectionDistance};
+
+bool takes_footprint(const SessionConfig& config, const Parameters& p) {
+  return p.reflect_footprint_omega > 0.0f && has_channel(config, ChannelId::ReflectionFootprint);
+}
 
 std::string upper(std::string_view s) {
   std::string out(s);
@@ -65,6 +75,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   specular.reads_history = p.reflect_specular_history != 0.0f;
   specular.specular_alpha = true;
   if (p.reflect_firefly_median != 0.0f) v.display = kDisplay;
+  if (takes_footprint(config, p)) specular.spatial_bandwidth = kBandwidth;
   return v;
 }
 
@@ -73,11 +84,14 @@ GraphSpec build(const SessionConfig& config) {
   const SvgfVariant v = variant(config, g.parameters);
   add_svgf_inputs(g, config, v);
   for (ChannelId id : kFeatureChannels) g.add_input(config, id, std::string(protocol::find_channel(id)->name));
+  const bool footprint = takes_footprint(config, g.parameters);
+  if (footprint) g.add_input(config, ChannelId::ReflectionFootprint, "reflection_footprint");
   add_svgf_buffers(g, v);
   g.add_scratch(kModulator, kModulatorBytes);
   g.add_scratch(kFeatureDepth, kFeatureDepthBytes);
   g.add_scratch(kFeatureNormal, kFeatureNormalBytes);
   g.add_scratch(kMotion, kMotionBytes);
+  if (footprint) g.add_scratch(kBandwidth, kBandwidthBytes);
   g.add_history(kFeatures, kFeaturesBytes);
   g.add_output(config);
 
@@ -100,6 +114,11 @@ GraphSpec build(const SessionConfig& config) {
     const std::string name(protocol::find_channel(id)->name);
     prepare.bind(name, name).set(upper(name) + "_HALF", half(id));
   }
+  if (footprint)
+    prepare.bind("reflection_footprint", "reflection_footprint")
+        .bind("bandwidth", kBandwidth)
+        .set("FOOTPRINT", 1u)
+        .set("REFLECTION_FOOTPRINT_HALF", half(ChannelId::ReflectionFootprint));
   prepare.pixels_per_invocation = 1;
 
   g.add_pass("reflect_motion", "reflect_motion")
@@ -145,7 +164,8 @@ PipelineDefinition reflect_definition() {
   d.description.required_channels = required;
   d.description.optional_channels = protocol::channel_bit(ChannelId::Diffuse) |
                                      protocol::channel_bit(ChannelId::DiffuseLighting) |
-                                     protocol::channel_bit(ChannelId::Emission);
+                                     protocol::channel_bit(ChannelId::Emission) |
+                                     protocol::channel_bit(ChannelId::ReflectionFootprint);
   d.parameter_groups = {"svgf", "reflect"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};

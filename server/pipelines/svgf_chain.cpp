@@ -144,6 +144,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .set("BLOCK", kAtrousBlock)
         .set("CLASS_EDGES", s.motion == MotionSource::Reflection);
     if (i == tap) atrous.bind("colour_history", colour);
+    if (!s.spatial_bandwidth.empty()) atrous.bind("bandwidth", s.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
     // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
     atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);

@@ -44,7 +44,7 @@ const ChannelId kChannels[] = {ChannelId::Diffuse,           ChannelId::Specular
                                ChannelId::Normal,            ChannelId::Depth,             ChannelId::Motion,
                                ChannelId::Position,          ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo,
                                ChannelId::ReflectionNormal,  ChannelId::ReflectionDepth,   ChannelId::ReflectionDirection,
-                               ChannelId::ReflectionDistance};
+                               ChannelId::ReflectionDistance, ChannelId::ReflectionFootprint};
 
 const std::vector<float>& plane(const render::FrameBuffers& fb, ChannelId id) {
   switch (id) {
@@ -64,6 +64,7 @@ const std::vector<float>& plane(const render::FrameBuffers& fb, ChannelId id) {
     case ChannelId::ReflectionDepth: return fb.reflection_depth;
     case ChannelId::ReflectionDirection: return fb.reflection_direction;
     case ChannelId::ReflectionDistance: return fb.reflection_distance;
+    case ChannelId::ReflectionFootprint: return fb.reflection_footprint;
     default: throw std::logic_error("not a reflect channel");
   }
 }
@@ -607,6 +608,71 @@ TEST_F(ReflectTest, FireflyMedianChangesTheDisplayedFrameOnly) {
     }
   EXPECT_GT(filtered, w * h / 5);
   EXPECT_GT(changed, 0);
+}
+
+
+// A pass's buffer bound at `binding` (1-based, the .pass file's numbering).
+std::string bound(const pipelines::GraphPipeline& graph, const std::string& pass, size_t binding) {
+  for (const auto& p : graph.spec().passes)
+    if (p.name() == pass) return p.bindings().at(binding - 1).buffer;
+  throw std::logic_error("no pass " + pass);
+}
+
+// Eq. 6 (paper 001; docs/pipelines.md "reflect"): reflect_prepare writes
+// sigma = max(exp(-footprint / omega), 0.05) at glossy pixels and 0
+// elsewhere; the specular a-trous weights its taps by
+// exp(-|(i, j)|^2 / (2 sigma^2)), so at the floor (omega tiny) a glossy
+// pixel's taps weigh exp(-200), 0 in fp32, and its first iteration returns
+// its input exactly, while every other pixel's first iteration is the one
+// without Eq. 6, bit for bit (one reset frame: same inputs).
+TEST_F(ReflectTest, FootprintBandwidthNarrowsOnlyGlossyPixels) {
+  const int w = 64, h = 36;
+  const std::vector<Rendered> seq = render_sequence(1, 2, 2, 1, w, h);
+  const Rendered& r = seq.front();
+  const std::string atrous = "svgf_atrous_0_specular";
+  {
+    const double omega = 0.5;
+    const CapturedRun on = run_captured(ctx(), pointers(seq), {{"footprint_omega", omega}});
+    const std::vector<float> sigma = on.captured("reflect_prepare", "reflect_bandwidth");
+    const std::vector<float> features = on.captured("reflect_prepare", "reflect_features");
+    int glossy = 0;
+    for (size_t i = 0; i < size_t(w) * h; ++i) {
+      const float fp = r.fb.reflection_footprint[i];
+      if (features[8 * i + 3] == float(Glossy)) {
+        ++glossy;
+        const double want = std::max(std::exp(-fp / omega), 0.05);
+        ASSERT_NEAR(sigma[i], want, 1e-6 * want) << "pixel " << i;
+      } else {
+        ASSERT_EQ(sigma[i], 0.0f) << "pixel " << i;
+      }
+    }
+    EXPECT_GT(glossy, w * h / 20);
+  }
+  const CapturedRun off = run_captured(ctx(), pointers(seq));
+  const CapturedRun floor = run_captured(ctx(), pointers(seq), {{"footprint_omega", 1e-4}});
+  const std::string src = bound(*floor.graph, atrous, 2), dst = bound(*floor.graph, atrous, 3);
+  ASSERT_EQ(src, bound(*off.graph, atrous, 2));
+  const std::vector<float> in = floor.captured(atrous, src), got = floor.captured(atrous, dst);
+  const std::vector<float> without = off.captured(atrous, dst);
+  const std::vector<float> features = floor.captured("reflect_prepare", "reflect_features");
+  int glossy = 0, other = 0, changed = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    const bool is_glossy = features[8 * i + 3] == float(Glossy);
+    for (int c = 0; c < 3; ++c) {
+      if (is_glossy)
+        ASSERT_EQ(got[4 * i + c], in[4 * i + c]) << "glossy pixel " << i;
+      else
+        ASSERT_EQ(got[4 * i + c], without[4 * i + c]) << "pixel " << i;
+    }
+    if (is_glossy) {
+      ++glossy;
+      if (without[4 * i] != in[4 * i]) ++changed;
+    } else if (r.fb.depth[i] > 0.0f) {
+      ++other;
+    }
+  }
+  EXPECT_GT(other, w * h / 4);
+  EXPECT_GT(changed, glossy / 2) << "without Eq. 6 the glossy pixels are filtered";
 }
 
 }  // namespace

@@ -69,11 +69,13 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
                        ChannelId::ReflectionDepth, ChannelId::ReflectionDirection, ChannelId::ReflectionDistance})
     features |= protocol::channel_bit(id);
   EXPECT_EQ(all[4].required_channels, all[3].required_channels | features);
-  EXPECT_EQ(all[4].optional_channels, all[3].optional_channels);
+  EXPECT_EQ(all[4].optional_channels,
+            all[3].optional_channels | protocol::channel_bit(ChannelId::ReflectionFootprint));
   std::vector<std::string> reflect_names;
   for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
   std::vector<std::string> expected = svgf_names;
-  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "firefly_median"});
+  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "footprint_omega",
+                                  "firefly_median"});
   EXPECT_EQ(reflect_names, expected);
   EXPECT_EQ(all[0].name, "passthrough");
   EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
