@@ -2,7 +2,9 @@
 // reflect_motion (reflect): reflection motion vectors by diamond search
 // (paper 001 Alg. 1, Eq. 1-5; docs/pipelines.md "reflect"). For a mirror or
 // glossy pixel p, the previous pixel q whose features (reflect.glsl) are
-// nearest to p's: starts at p and at the pixel nearest p + primary motion;
+// nearest to p's: starts at p, at the pixel nearest p + primary motion and,
+// with VIRTUAL_START, at the pixel nearest p + the virtual point's motion
+// (reflect_prepare);
 // a large diamond scaled FIRST_STEP -> ... -> 1 moved while it strictly
 // improves; one small diamond; then Eq. 2-3 sub-pixel refinement over the
 // best 2x2 block. Candidates off-screen, of another class, or (glossy)
@@ -49,11 +51,17 @@ const ivec2 LARGE_AXES[4] = ivec2[4](ivec2(2, 0), ivec2(-2, 0), ivec2(0, 2), ive
 const ivec2 LARGE_DIAGONALS[4] = ivec2[4](ivec2(1, 1), ivec2(-1, 1), ivec2(1, -1), ivec2(-1, -1));
 const ivec2 SMALL[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
 
-void diamond_search(ivec2 pos, vec2 mv) {
+// A start at the pixel nearest pos + mv, for a usable motion.
+void consider_start(ivec2 pos, vec2 mv) {
+  if (dn_is_finite(mv) && all(lessThan(abs(mv), vec2(1e6)))) consider(ivec2(floor(vec2(pos) + mv + 0.5)));
+}
+
+void diamond_search(ivec2 pos, vec2 mv, vec2 vmv) {
   best = pos;
   best_distance = DN_REFLECT_INVALID;
   consider(pos);
-  if (dn_is_finite(mv) && all(lessThan(abs(mv), vec2(1e6)))) consider(ivec2(floor(vec2(pos) + mv + 0.5)));
+  consider_start(pos, mv);
+  if (VIRTUAL_START) consider_start(pos, vmv);
   int step = FIRST_STEP;
   ivec2 centre = best;
   for (int it = 0; it < MAX_ITERATIONS; ++it) {
@@ -113,7 +121,7 @@ void main() {
                   (frame.size.w & DN_FLAG_RESET) == 0u;
   float match = -1.0;
   if (searched) {
-    diamond_search(pos, mv);
+    diamond_search(pos, mv, VIRTUAL_START ? virtual_motion.data[p] : vec2(DN_REFLECT_INVALID));
     if (best_distance < DN_REFLECT_INVALID) {
       mv = refine_subpixel() - vec2(pos);
       match = best_distance;

@@ -11,6 +11,15 @@
 //  - the specular chain's depth and normal: at a mirror whose chain hit is
 //    foreground, the virtual depth and the reflected surface's normal (its
 //    edges are the reflection's, paper 001 §4.1), else the primary ones;
+//  - with VIRTUAL_START, the virtual point's motion (reflect_motion's third
+//    start): the camera ray extended by the reflection's length, at a mirror
+//    X = C + (position - C) * reflection_depth / depth (the virtual depth
+//    unfolds the whole chain), at a glossy pixel position + the unit view
+//    direction * reflection_distance; projected with the previous frame's
+//    view-projection, minus the pixel centre (1e30 where any of it is
+//    missing or the point is behind the previous camera). C is the camera
+//    centre, inverse_view_projection * (0, 0, 1, 0) dehomogenised (the point
+//    every perspective projection sends to w = 0);
 //  - with FOOTPRINT, the spatial bandwidth of Eq. 6 (svgf_atrous's
 //    SPATIAL_BANDWIDTH): at a glossy pixel with a finite footprint f >= 0,
 //    sigma = max(exp(-f / footprint_omega), DN_REFLECT_MIN_BANDWIDTH) in
@@ -31,6 +40,33 @@
 // Eq. 6's floor: a huge footprint must not leave a kernel of p alone.
 const float DN_REFLECT_MIN_BANDWIDTH = 0.05;
 
+// The motion in pixels, to the previous frame, of world point x seen at
+// pixel p; DN_REFLECT_INVALID when x is behind the previous camera.
+vec2 motion_of(vec3 x, uint p) {
+  vec4 clip = frame.previous_view_projection * vec4(x, 1.0);
+  if (!(clip.w > 0.0)) return vec2(DN_REFLECT_INVALID);
+  vec2 ndc = clip.xy / clip.w;
+  vec2 prev = vec2((ndc.x * 0.5 + 0.5) * float(frame.size.x), (0.5 - ndc.y * 0.5) * float(frame.size.y));
+  vec2 mv = prev - (vec2(float(p % frame.size.x), float(p / frame.size.x)) + 0.5);
+  return dn_is_finite(mv) ? mv : vec2(DN_REFLECT_INVALID);
+}
+
+// The virtual point's motion of a mirror (cls) or glossy pixel; primary hit o.
+vec2 virtual_motion_of(uint p, float cls, vec3 o, float z) {
+  vec4 h = frame.inverse_view_projection * vec4(0.0, 0.0, 1.0, 0.0);
+  vec3 c = h.xyz / h.w;
+  if (!dn_is_finite(c) || !dn_is_finite(o) || !dn_is_foreground(z)) return vec2(DN_REFLECT_INVALID);
+  if (cls == DN_REFLECT_MIRROR) {
+    float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
+    if (!dn_is_foreground(vz)) return vec2(DN_REFLECT_INVALID);
+    return motion_of(c + (o - c) * (vz / z), p);
+  }
+  float t = DN_LOAD1(reflection_distance, REFLECTION_DISTANCE_HALF, p);
+  float len = length(o - c);
+  if (!dn_reflect_ray_exists(t) || !(len > 0.0)) return vec2(DN_REFLECT_INVALID);
+  return motion_of(o + (o - c) * (t / len), p);
+}
+
 float reflection_class(uint p, float z) {
   float r = DN_LOAD1(roughness, ROUGHNESS_HALF, p);
   if (!dn_is_foreground(z) || !dn_is_finite(r)) return DN_REFLECT_NONE;
@@ -49,6 +85,7 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   float z = DN_LOAD1(depth, DEPTH_HALF, p);
+  const float primary_depth = z;
   vec3 n = DN_LOAD3(normal, NORMAL_HALF, p);
   float cls = reflection_class(p, z);
   vec3 f = vec3(fb_factor.data[3u * p], fb_factor.data[3u * p + 1u], fb_factor.data[3u * p + 2u]);
@@ -78,6 +115,10 @@ void main() {
     } else {
       cls = DN_REFLECT_NONE;
     }
+  }
+  if (VIRTUAL_START) {
+    vec3 o = DN_LOAD3(position, POSITION_HALF, p);
+    virtual_motion.data[p] = cls != DN_REFLECT_NONE ? virtual_motion_of(p, cls, o, primary_depth) : vec2(DN_REFLECT_INVALID);
   }
   if (FOOTPRINT) {
     float fp = DN_LOAD1(reflection_footprint, REFLECTION_FOOTPRINT_HALF, p);

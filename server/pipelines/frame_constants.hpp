@@ -16,6 +16,7 @@ struct FrameConstants {
   uint32_t size[4];    // width, height, pixel count, flags
   float motion[4];     // xy: scale from the client's motion vectors to pixels towards the previous frame
   float inverse_view_projection[16];  // (projection * view)^-1 of the frame, column-major: clip -> world
+  float previous_view_projection[16];  // projection * view of the previous frame: world -> its clip (identity before one)
   Parameters params;   // last: grows with parameters.def (no slot cap)
 };
 static_assert(sizeof(FrameConstants) % 16 == 0);

@@ -25,16 +25,18 @@ const char* channel_name(protocol::ChannelId id) {
   return c ? c->name.data() : "?";
 }
 
-// (projection * view)^-1; the identity when it is singular or not finite
-// (a client that sends no real camera), so no pass ever reads NaN from it.
-void inverse_view_projection(const protocol::FrameInfo& info, float out[16]) {
-  const glm::mat4 vp = glm::make_mat4(info.projection.data()) * glm::make_mat4(info.view.data());
+// projection * view and its inverse; both the identity when it is singular
+// or not finite (a client that sends no real camera), so no pass ever reads
+// NaN from them.
+void view_projection(const protocol::FrameInfo& info, float forward[16], float inverse[16]) {
+  glm::mat4 vp = glm::make_mat4(info.projection.data()) * glm::make_mat4(info.view.data());
   glm::mat4 inv = glm::inverse(vp);
   bool finite = std::isfinite(glm::determinant(vp)) && glm::determinant(vp) != 0.0f;
   for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) finite = finite && std::isfinite(inv[c][r]);
-  if (!finite) inv = glm::mat4(1.0f);
-  std::memcpy(out, glm::value_ptr(inv), 16 * sizeof(float));
+    for (int r = 0; r < 4; ++r) finite = finite && std::isfinite(inv[c][r]) && std::isfinite(vp[c][r]);
+  if (!finite) vp = inv = glm::mat4(1.0f);
+  std::memcpy(forward, glm::value_ptr(vp), 16 * sizeof(float));
+  std::memcpy(inverse, glm::value_ptr(inv), 16 * sizeof(float));
 }
 
 }  // namespace
@@ -416,7 +418,8 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
       throw std::invalid_argument("unknown motion convention");
   }
   constants.params = spec_->parameters;
-  inverse_view_projection(frame.info, constants.inverse_view_projection);
+  std::memcpy(constants.previous_view_projection, view_projection_, sizeof view_projection_);
+  view_projection(frame.info, view_projection_, constants.inverse_view_projection);
   uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);
 

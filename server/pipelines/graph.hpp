@@ -195,6 +195,8 @@ class GraphPipeline final : public Pipeline {
   // a frame fails (its work may still be pending) and reused by the next.
   gpu::TransientPool::Lease scratch_;
   uint64_t frames_ = 0;          // frames completed; parity = frames_ % 2
+  // projection * view of the last frame sent (FrameConstants::previous_view_projection).
+  float view_projection_[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   bool history_valid_ = false;   // false until a frame completed, and after any failure
   std::mutex mutex_;
 };

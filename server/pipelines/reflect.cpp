@@ -10,6 +10,8 @@
 //  - edge-stops and tests its history on the reflected surface's normal and
 //    virtual depth at mirrors, with the depth and normal tests off at glossy
 //    pixels (clipping guards those);
+//  - finds that motion from three starts with virtual_start: the pixel, its
+//    primary motion and the virtual point's motion (NRD's);
 //  - with footprint_omega > 0 and a reflection_footprint plane, is filtered
 //    with Eq. 6's ray-differential spatial bandwidth at glossy pixels;
 // with the reflection features of docs/protocol.md §7.5 as inputs. Passes in
@@ -40,6 +42,10 @@ constexpr const char* kMotion = "reflect_motion";
 // Eq. 6's sigma per pixel, fp32 (reflect_prepare), when the session sends
 // reflection_footprint and footprint_omega > 0.
 constexpr const char* kBandwidth = "reflect_bandwidth";
+// The virtual point's motion per pixel, vec2 fp32 (reflect_prepare), the
+// search's third start, with virtual_start.
+constexpr const char* kVirtualMotion = "reflect_virtual_motion";
+constexpr uint64_t kVirtualMotionBytes = 8;
 constexpr uint64_t kBandwidthBytes = 4;
 constexpr uint64_t kMotionBytes = 16;
 // History (this frame's and the previous frame's copy): the search features,
@@ -92,6 +98,8 @@ GraphSpec build(const SessionConfig& config) {
   g.add_scratch(kFeatureNormal, kFeatureNormalBytes);
   g.add_scratch(kMotion, kMotionBytes);
   if (footprint) g.add_scratch(kBandwidth, kBandwidthBytes);
+  const bool virtual_start = g.parameters.reflect_virtual_start != 0.0f;
+  if (virtual_start) g.add_scratch(kVirtualMotion, kVirtualMotionBytes);
   g.add_history(kFeatures, kFeaturesBytes);
   g.add_output(config);
 
@@ -119,15 +127,17 @@ GraphSpec build(const SessionConfig& config) {
         .bind("bandwidth", kBandwidth)
         .set("FOOTPRINT", 1u)
         .set("REFLECTION_FOOTPRINT_HALF", half(ChannelId::ReflectionFootprint));
+  if (virtual_start) prepare.bind("virtual_motion", kVirtualMotion).set("VIRTUAL_START", 1u);
   prepare.pixels_per_invocation = 1;
 
-  g.add_pass("reflect_motion", "reflect_motion")
-      .bind("features", kFeatures)
+  PassSpec& search = g.add_pass("reflect_motion", "reflect_motion");
+  search.bind("features", kFeatures)
       .bind("prev_features", kFeatures, Slot::Previous)
       .bind("motion", "motion")
       .bind("result", kMotion)
-      .set("MOTION_HALF", half(ChannelId::Motion))
-      .pixels_per_invocation = 1;
+      .set("MOTION_HALF", half(ChannelId::Motion));
+  if (virtual_start) search.bind("virtual_motion", kVirtualMotion).set("VIRTUAL_START", 1u);
+  search.pixels_per_invocation = 1;
 
   add_svgf_passes(g, config, v);
   if (!v.display.empty()) {

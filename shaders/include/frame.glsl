@@ -19,6 +19,7 @@ layout(std140, set = 0, binding = 0) uniform FrameConstants {
   uvec4 size;       // x: width, y: height, z: pixel count, w: flags (DN_FLAG_*)
   vec4 motion;      // xy: scale that turns the client's motion vectors into pixels to the previous frame
   mat4 inverse_view_projection;  // (projection * view)^-1: clip space -> world (identity without a camera)
+  mat4 previous_view_projection; // projection * view of the previous frame: world -> its clip space (identity before one)
   DnParameters params;           // last: it grows with parameters.def
 } frame;
 

@@ -68,8 +68,11 @@ IntegerMatch diamond(const Distance& distance, int px, int py, const std::array<
   Search s{distance, {}};
   s.best.x = px, s.best.y = py;
   s.consider(px, py);  // start 1: the same pixel
-  if (std::isfinite(motion[0]) && std::isfinite(motion[1]))
-    s.consider(int(std::lround(px + motion[0])), int(std::lround(py + motion[1])));  // start 2: the primary motion
+  // Starts 2 and 3: the pixels nearest p + the primary motion and p + the
+  // virtual point's motion, where the motion is usable.
+  for (const auto& m : {motion, options.virtual_motion})
+    if (std::isfinite(m[0]) && std::isfinite(m[1]) && std::fabs(m[0]) < 1e6 && std::fabs(m[1]) < 1e6)
+      s.consider(int(std::floor(px + m[0] + 0.5)), int(std::floor(py + m[1] + 0.5)));
   static constexpr int axes[4][2] = {{2, 0}, {-2, 0}, {0, 2}, {0, -2}};
   static constexpr int diagonals[4][2] = {{1, 1}, {-1, 1}, {1, -1}, {-1, -1}};
   const auto& large = options.large == LargeDiamond::Axes2 ? axes : diagonals;

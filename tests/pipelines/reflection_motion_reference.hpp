@@ -3,7 +3,8 @@
 // C.2 R3, C.3, C.4): for pixel p, the pixel q of the previous frame whose
 // first non-specular hit position (pure specular, Eq. 1) or representative
 // ray (glossy, Eq. 4-5) is closest to p's, found by a diamond search from
-// two starts (p itself and p + the primary motion), then refined to
+// two starts (p itself and p + the primary motion; a third, the virtual
+// point's motion, as an option), then refined to
 // sub-pixel precision. Double precision;
 // the groundwork of issue 12's `reflect` pipeline (its pass will be compared
 // with this).
@@ -60,6 +61,10 @@ struct SearchOptions {
   LargeDiamond large = LargeDiamond::Axes2;
   int first_step = 4;       // 4 -> 2 -> 1
   int max_iterations = 32;  // cap against ties (the search also stops on no strict improvement at step 1)
+  // A third start, p's virtual point's motion (reflect.virtual_start, NRD's
+  // virtual motion); NaN: none.
+  std::array<double, 2> virtual_motion{std::numeric_limits<double>::quiet_NaN(),
+                                       std::numeric_limits<double>::quiet_NaN()};
 };
 
 struct IntegerMatch {

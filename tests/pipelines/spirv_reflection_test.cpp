@@ -62,6 +62,7 @@ std::vector<Member> frame_constants_members() {
   return {{"size", offsetof(FrameConstants, size)},
           {"motion", offsetof(FrameConstants, motion)},
           {"inverse_view_projection", offsetof(FrameConstants, inverse_view_projection)},
+          {"previous_view_projection", offsetof(FrameConstants, previous_view_projection)},
           {"params", offsetof(FrameConstants, params)}};
 }
 

@@ -74,7 +74,8 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   std::vector<std::string> reflect_names;
   for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
   std::vector<std::string> expected = svgf_names;
-  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "footprint_omega",
+  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "virtual_start",
+                                  "footprint_omega",
                                   "firefly_median"});
   EXPECT_EQ(reflect_names, expected);
   EXPECT_EQ(all[0].name, "passthrough");
