@@ -110,6 +110,24 @@ vec2 refine_subpixel() {
   return vec2(origin) + vec2(w.y + w.w, w.z + w.w);
 }
 
+// Eq. 1 threshold (mirror_match_threshold > 0): the match is kept when its
+// distance is within the threshold times the spacing of the previous
+// frame's hits at the match (the smallest distance to an axis neighbour's
+// hit of the same class; no neighbour: kept).
+bool mirror_match_kept(ivec2 q, float d) {
+  float threshold = DN_PARAM_VALUE(reflect, mirror_match_threshold);
+  if (!(threshold > 0.0)) return true;
+  vec3 wq = prev_features.data[2u * (uint(q.y) * frame.size.x + uint(q.x))].xyz;
+  float spacing = DN_REFLECT_INVALID;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 r = q + SMALL[k];
+    if (!dn_inside(r, frame.size.xy)) continue;
+    vec4 a = prev_features.data[2u * (uint(r.y) * frame.size.x + uint(r.x))];
+    if (a.w == DN_REFLECT_MIRROR) spacing = min(spacing, dn_reflect_hit_distance(wq, a.xyz));
+  }
+  return !(spacing < DN_REFLECT_INVALID) || d <= threshold * spacing;
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -119,12 +137,16 @@ void main() {
   pb = features.data[2u * p + 1u];
   bool searched = pa.w != DN_REFLECT_NONE && (pa.w == DN_REFLECT_MIRROR || dn_reflect_ray_exists(pb.w)) &&
                   (frame.size.w & DN_FLAG_RESET) == 0u;
-  float match = -1.0;
+  float match = DN_REFLECT_NO_MATCH;
   if (searched) {
     diamond_search(pos, mv, VIRTUAL_START ? virtual_motion.data[p] : vec2(DN_REFLECT_INVALID));
     if (best_distance < DN_REFLECT_INVALID) {
-      mv = refine_subpixel() - vec2(pos);
-      match = best_distance;
+      if (pa.w == DN_REFLECT_MIRROR && !mirror_match_kept(best, best_distance)) {
+        match = DN_REFLECT_REJECTED;
+      } else {
+        mv = refine_subpixel() - vec2(pos);
+        match = best_distance;
+      }
     }
   }
   result.data[p] = vec4(mv, pa.w, match);

@@ -130,10 +130,12 @@ void main() {
   bool has_normal = dot(n, n) > 0.0;
   vec2 grad = dn_svgf_gradients(pos, z, n);
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  bool history_allowed = READ_HISTORY;
   if (REFLECTION) {
     vec4 r = reflection.data[p];
     mv = r.xy;
     geometry_tests = r.z != DN_REFLECT_GLOSSY;
+    history_allowed = history_allowed && r.w != DN_REFLECT_REJECTED;  // reflect's Eq. 1 threshold
   }
 
   vec3 prev = vec3(0.0);
@@ -142,7 +144,7 @@ void main() {
   bool valid = false;
   ivec2 origin;
   vec4 weights;
-  if (READ_HISTORY && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_is_finite(mv) &&
+  if (history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_is_finite(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 sc = vec3(0.0);
     vec2 sm = vec2(0.0);

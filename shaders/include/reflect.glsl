@@ -16,6 +16,12 @@ const float DN_REFLECT_GLOSSY = 2.0;  // Eq. 4-5 on the representative ray
 
 const float DN_REFLECT_INVALID = 1e30;  // the distance of a candidate that cannot match
 
+// reflect_motion's .w beside a match distance (>= 0): no match (the primary
+// motion moves the history), or a mirror match rejected by the Eq. 1
+// threshold (the history restarts).
+const float DN_REFLECT_NO_MATCH = -1.0;
+const float DN_REFLECT_REJECTED = -2.0;
+
 // Eq. 1: |W_p - PrevW_q|.
 float dn_reflect_hit_distance(vec3 wp, vec3 wq) { return length(wp - wq); }
 

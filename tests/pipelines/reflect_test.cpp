@@ -450,6 +450,64 @@ TEST_F(ReflectTest, VirtualMotionIsTheVirtualPointsProjection) {
   }
 }
 
+// The Eq. 1 threshold (reflect.mirror_match_threshold): a mirror pixel's
+// match is rejected exactly when its hit distance exceeds the threshold
+// times the spacing of the previous frame's hits at the match (the smallest
+// distance to an axis neighbour's mirror hit), decided here from the CPU
+// reference's search; a rejected pixel's specular history restarts (length
+// 1), and glossy pixels are never rejected.
+TEST_F(ReflectTest, MirrorMatchThresholdRejectsDistantMatches) {
+  const int w = 96, h = 54;
+  const double threshold = 0.5;
+  for (int scene_id : {6, 1}) {
+    SCOPED_TRACE("scene " + std::to_string(scene_id));
+    const std::vector<Rendered> seq = render_sequence(scene_id, 1, 3, 4, w, h);
+    const Rendered &a = seq[1], &b = seq[2];
+    const CapturedRun run = run_captured(ctx(), pointers(seq), {{"mirror_match_threshold", threshold}});
+    const std::vector<float> got = run.captured("reflect_motion", "reflect_motion");
+    const std::vector<float> vm = run.captured("reflect_prepare", "reflect_virtual_motion");
+    const std::vector<float> temporal = run.captured("svgf_reproject_specular", "svgf_temporal");
+    const Fields prev = fields_of(a.fb), cur = fields_of(b.fb);
+    int kept = 0, rejected = 0, disagree = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        const Class c = class_of(b.fb, i);
+        if (c == Glossy) ASSERT_NE(got[4 * i + 3], -2.0f) << "glossy pixel " << i;
+        if (c != Mirror) continue;
+        test::reflect::SearchOptions options;
+        options.virtual_motion = {vm[2 * i], vm[2 * i + 1]};
+        const auto m = test::reflect::diamond_search(cur.hits, prev.hits, x, y,
+                                                     {b.fb.motion[2 * i], b.fb.motion[2 * i + 1]}, options);
+        if (!std::isfinite(m.distance)) continue;
+        double spacing = std::numeric_limits<double>::infinity();
+        for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int qx = m.x + dx, qy = m.y + dy;
+          if (!prev.hits.inside(qx, qy) || !prev.hits.valid[prev.hits.index(qx, qy)]) continue;
+          const auto& p0 = prev.hits.position[prev.hits.index(m.x, m.y)];
+          const auto& p1 = prev.hits.position[prev.hits.index(qx, qy)];
+          spacing = std::min(spacing, std::hypot(p0[0] - p1[0], p0[1] - p1[1], p0[2] - p1[2]));
+        }
+        // Near-ties of fp32 against double decide nothing here.
+        if (std::isfinite(spacing) && std::fabs(m.distance - threshold * spacing) < 1e-4 * spacing) continue;
+        const bool want = std::isfinite(spacing) && m.distance > threshold * spacing;
+        const bool is = got[4 * i + 3] == -2.0f;
+        if (want != is) ++disagree;
+        if (is) {
+          ++rejected;
+          EXPECT_EQ(temporal[4 * i + 2], 1.0f) << "a rejected pixel's history restarts, pixel " << i;
+        } else {
+          ++kept;
+        }
+      }
+    std::printf("[ info     ] scene %d: %d mirror matches kept, %d rejected at threshold %.1f\n", scene_id, kept,
+                rejected, threshold);
+    EXPECT_EQ(disagree, 0);
+    EXPECT_GT(rejected, 0);
+    EXPECT_GT(kept, 0);
+  }
+}
+
 // Hard cases (docs/pipelines.md "reflect"): bad reflection features (NaN and
 // infinite hits, zero and NaN directions, NaN and negative distances, NaN
 // roughness, zero and NaN reflected albedo) and bad radiance at some pixels

@@ -75,7 +75,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
   std::vector<std::string> expected = svgf_names;
   expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "virtual_start",
-                                  "footprint_omega",
+                                  "mirror_match_threshold", "footprint_omega",
                                   "firefly_median"});
   EXPECT_EQ(reflect_names, expected);
   EXPECT_EQ(all[0].name, "passthrough");
