@@ -47,4 +47,12 @@ awk -F'\t' '$2 == "noisy" { noisy = $6 } $2 == "accumulate" { acc = $6 } $2 == "
 for png in speed_error.png scene1.png; do
   test "$(wc -c < "$dir/out/$png")" -gt 1000 || { echo "$png missing or empty"; exit 1; }
 done
+# bench/pass_cost.sh on the same frames: a median for every pass of both
+# pipelines, reflect's own passes among them.
+DN_BUILD_DIR="$build" "$src/bench/pass_cost.sh" --input "$dir/out/scene1/input" --frames 3 --warmup 1 --repeat 1 \
+  --out "$dir/pass_cost" > "$dir/pass_cost.log" 2>&1 || { cat "$dir/pass_cost.log"; exit 1; }
+for pass in svgf_reproject_specular reflect_prepare reflect_motion reflect_median; do
+  grep -Eq "^\| $pass \|( [0-9.]* \|)* [0-9]+\.[0-9]+ \|$" "$dir/pass_cost/passes.md" ||
+    { echo "pass_cost: no time for $pass"; cat "$dir/pass_cost/passes.md"; exit 1; }
+done
 echo "speed_error_test: $(($(wc -l < "$results") - 1)) rows"
