@@ -63,10 +63,13 @@ TEST(GraphSpec, OptionalBindingsMayStayUnbound) {
   g.add_scratch("illum", 16);
   g.add_scratch("guide", 16);
   g.add_scratch("out", 16);
+  g.add_scratch("temporal", 16);
   auto& pass = g.add_pass("a", "svgf_atrous");
-  pass.bind("guide", "guide").bind("src", "illum").bind("dst", "out");  // colour_history: optional
+  // colour_history and bandwidth: optional
+  pass.bind("guide", "guide").bind("src", "illum").bind("dst", "out").bind("temporal", "temporal");
   EXPECT_NO_THROW(g.check());
   EXPECT_FALSE(g.passes[0].bindings()[3].bound());
+  EXPECT_FALSE(g.passes[0].bindings()[5].bound());
 }
 
 // Every declared constant appears, by id, set or default: equal
@@ -77,12 +80,13 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 5u);
+  ASSERT_EQ(sa.size(), 6u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
   EXPECT_EQ(sa[3], (gpu::SpecConstant{3, 4}));
   EXPECT_EQ(sa[4], (gpu::SpecConstant{4, 0}));  // CLASS_EDGES' default
+  EXPECT_EQ(sa[5], (gpu::SpecConstant{5, 0}));  // SPATIAL_BANDWIDTH's default
 }
 
 // Every configuration the tests use builds a graph that passes check().
