@@ -345,7 +345,9 @@ TEST_F(ReflectTest, MotionAccuracyAgainstBruteForceOverAFlythrough) {
       const double mean = share_sum[c] / share_frames[c];
       std::printf("[ info     ] scene %d %s: %.1f %% within 1 px of brute force (mean over %d frames)\n", scene_id,
                   c == Mirror ? "mirror" : "glossy", 100.0 * mean, share_frames[c]);
-      if (scene_id == 6) EXPECT_GT(mean, 0.9) << (c == Mirror ? "mirror" : "glossy");
+      if (scene_id == 6) {
+        EXPECT_GT(mean, 0.9) << (c == Mirror ? "mirror" : "glossy");
+      }
     }
   }
   if (tsv) std::fclose(tsv);
@@ -473,7 +475,9 @@ TEST_F(ReflectTest, MirrorMatchThresholdRejectsDistantMatches) {
       for (int x = 0; x < w; ++x) {
         const size_t i = size_t(y) * w + x;
         const Class c = class_of(b.fb, i);
-        if (c == Glossy) ASSERT_NE(got[4 * i + 3], -2.0f) << "glossy pixel " << i;
+        if (c == Glossy) {
+          ASSERT_NE(got[4 * i + 3], -2.0f) << "glossy pixel " << i;
+        }
         if (c != Mirror) continue;
         test::reflect::SearchOptions options;
         options.virtual_motion = {vm[2 * i], vm[2 * i + 1]};
