@@ -51,19 +51,25 @@ vec2 motion_of(vec3 x, uint p) {
   return dn_is_finite(mv) ? mv : vec2(DN_REFLECT_INVALID);
 }
 
-// The virtual point's motion of a mirror (cls) or glossy pixel; primary hit o.
-vec2 virtual_motion_of(uint p, float cls, vec3 o, float z) {
+// The camera centre (see above).
+vec3 camera_centre() {
   vec4 h = frame.inverse_view_projection * vec4(0.0, 0.0, 1.0, 0.0);
-  vec3 c = h.xyz / h.w;
-  if (!dn_is_finite(c) || !dn_is_finite(o) || !dn_is_foreground(z)) return vec2(DN_REFLECT_INVALID);
-  if (cls == DN_REFLECT_MIRROR) {
-    float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
-    if (!dn_is_foreground(vz)) return vec2(DN_REFLECT_INVALID);
-    return motion_of(c + (o - c) * (vz / z), p);
-  }
-  float t = DN_LOAD1(reflection_distance, REFLECTION_DISTANCE_HALF, p);
+  return h.xyz / h.w;
+}
+
+// The virtual point's motion at a mirror: the camera ray through the primary
+// hit o unfolded by the chain, virtual depth vz over primary depth z.
+vec2 mirror_virtual_motion(uint p, vec3 o, float vz, float z) {
+  vec3 c = camera_centre();
+  if (!dn_is_finite(c) || !dn_is_finite(o) || !dn_is_foreground(vz)) return vec2(DN_REFLECT_INVALID);
+  return motion_of(c + (o - c) * (vz / z), p);
+}
+
+// At a glossy pixel: that ray extended past o by the representative ray's hit distance t.
+vec2 glossy_virtual_motion(uint p, vec3 o, float t) {
+  vec3 c = camera_centre();
   float len = length(o - c);
-  if (!dn_reflect_ray_exists(t) || !(len > 0.0)) return vec2(DN_REFLECT_INVALID);
+  if (!dn_is_finite(c) || !dn_reflect_ray_exists(t) || !(len > 0.0)) return vec2(DN_REFLECT_INVALID);
   return motion_of(o + (o - c) * (t / len), p);
 }
 
@@ -91,12 +97,14 @@ void main() {
   vec3 f = vec3(fb_factor.data[3u * p], fb_factor.data[3u * p + 1u], fb_factor.data[3u * p + 2u]);
 
   vec4 a = vec4(0.0), b = vec4(0.0);
+  vec2 vmv = vec2(DN_REFLECT_INVALID);  // VIRTUAL_START
   if (cls == DN_REFLECT_MIRROR) {
     vec3 w = DN_LOAD3(reflection_position, REFLECTION_POSITION_HALF, p);
     if (dn_is_finite(w)) {
       a = vec4(w, cls);
       f *= guarded(DN_LOAD3(reflection_albedo, REFLECTION_ALBEDO_HALF, p));
       float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
+      if (VIRTUAL_START) vmv = mirror_virtual_motion(p, DN_LOAD3(position, POSITION_HALF, p), vz, primary_depth);
       if (dn_is_foreground(vz)) {
         z = vz;
         n = DN_LOAD3(reflection_normal, REFLECTION_NORMAL_HALF, p);
@@ -112,14 +120,12 @@ void main() {
     if (dn_is_finite(o) && dn_is_finite(len) && len > 0.5) {
       a = vec4(o, cls);
       b = vec4(d / len, dn_reflect_ray_exists(t) ? t : 0.0);
+      if (VIRTUAL_START) vmv = glossy_virtual_motion(p, o, t);
     } else {
       cls = DN_REFLECT_NONE;
     }
   }
-  if (VIRTUAL_START) {
-    vec3 o = DN_LOAD3(position, POSITION_HALF, p);
-    virtual_motion.data[p] = cls != DN_REFLECT_NONE ? virtual_motion_of(p, cls, o, primary_depth) : vec2(DN_REFLECT_INVALID);
-  }
+  if (VIRTUAL_START) virtual_motion.data[p] = vmv;
   if (FOOTPRINT) {
     float fp = DN_LOAD1(reflection_footprint, REFLECTION_FOOTPRINT_HALF, p);
     bool take = cls == DN_REFLECT_GLOSSY && dn_is_finite(fp) && fp >= 0.0;
