@@ -39,15 +39,15 @@ constexpr uint64_t kFeatureDepthBytes = 4;
 constexpr const char* kFeatureNormal = "reflect_normal";
 constexpr uint64_t kFeatureNormalBytes = 12;
 constexpr const char* kMotion = "reflect_motion";
+constexpr uint64_t kMotionBytes = 16;
 // Eq. 6's sigma per pixel, fp32 (reflect_prepare), when the session sends
 // reflection_footprint and footprint_omega > 0.
 constexpr const char* kBandwidth = "reflect_bandwidth";
+constexpr uint64_t kBandwidthBytes = 4;
 // The virtual point's motion per pixel, vec2 fp32 (reflect_prepare), the
 // search's third start, with virtual_start.
 constexpr const char* kVirtualMotion = "reflect_virtual_motion";
 constexpr uint64_t kVirtualMotionBytes = 8;
-constexpr uint64_t kBandwidthBytes = 4;
-constexpr uint64_t kMotionBytes = 16;
 // History (this frame's and the previous frame's copy): the search features,
 // two vec4 per pixel (shaders/include/reflect.glsl).
 constexpr const char* kFeatures = "reflect_features";
