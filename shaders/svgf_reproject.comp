@@ -26,9 +26,9 @@
 // the raw 3x3 range of the current signal where the two overlap (the raw
 // range where they do not: a small highlight's blur widens the first beyond
 // the highlight's surroundings and cuts its peak), then widened to p's own
-// current value d. False when no pixel of the 5x5 window is foreground (then
-// nothing is clipped).
-bool clip_box(ivec2 pos, vec3 d, out vec3 lo, out vec3 hi) {
+// current value d and by `widen` on both sides. False when no pixel of the
+// 5x5 window is foreground (then nothing is clipped).
+bool clip_box(ivec2 pos, vec3 d, float widen, out vec3 lo, out vec3 hi) {
   vec3 pre_lo = vec3(1e38), pre_hi = vec3(-1e38), raw_lo = d, raw_hi = d;
   bool any = false;
   for (int yy = -2; yy <= 2; ++yy)
@@ -50,9 +50,28 @@ bool clip_box(ivec2 pos, vec3 d, out vec3 lo, out vec3 hi) {
     }
   vec3 nlo = max(pre_lo, raw_lo), nhi = min(pre_hi, raw_hi);
   bvec3 overlap = lessThanEqual(nlo, nhi);
-  lo = min(mix(raw_lo, nlo, overlap), d);
-  hi = max(mix(raw_hi, nhi, overlap), d);
+  lo = min(mix(raw_lo, nlo, overlap), d) - vec3(widen);
+  hi = max(mix(raw_hi, nhi, overlap), d) + vec3(widen);
   return any;
+}
+
+// The history's sample noise at p for the rejection test and the static
+// clip: the standard deviation from the luminance moments, the largest over
+// the 3x3 history pixels around p's previous position `prev` (with history)
+// and p's own reprojected moments. One pixel's moments average about five
+// frames, and at 1 spp a penumbra or sparse indirect light often shows five
+// alike in a row: its own sigma then says "quiet" and the next sample
+// contradicts it (still-camera temporal error 1.3-2x, docs/results.md).
+float history_sigma(ivec2 prev, vec2 own) {
+  float sigma = dn_moments_sigma(own);
+  for (int yy = -1; yy <= 1; ++yy)
+    for (int xx = -1; xx <= 1; ++xx) {
+      ivec2 q = prev + ivec2(xx, yy);
+      if (!dn_inside(q, frame.size.xy)) continue;
+      uvec4 bits = prev_aux.data[uint(q.y) * frame.size.x + uint(q.x)];
+      if (uintBitsToFloat(bits.z) > 0.0) sigma = max(sigma, dn_moments_sigma(uintBitsToFloat(bits.xy)));
+    }
+  return sigma;
 }
 
 // History rejection (clip.glsl): the history is contradicted by the
@@ -62,15 +81,15 @@ bool clip_box(ivec2 pos, vec3 d, out vec3 lo, out vec3 hi) {
 // sparse bright sample (1-spp indirect light) does not, and rejecting on it
 // made the history of every such pixel restart over and over (still-camera
 // temporal error 2-8x, docs/results.md).
-bool history_rejected(ivec2 pos, float l, float lp, float lh, vec2 moments) {
-  if (!dn_history_contradicted(lp, lh, moments) || !dn_history_contradicted(l, lh, moments)) return false;
+bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma) {
+  if (!dn_history_contradicted(lp, lh, sigma) || !dn_history_contradicted(l, lh, sigma)) return false;
   int agree = 0;
   for (int yy = -1; yy <= 1; ++yy)
     for (int xx = -1; xx <= 1; ++xx) {
       ivec2 q = pos + ivec2(xx, yy);
       if ((xx == 0 && yy == 0) || !dn_inside(q, frame.size.xy)) continue;
       float lq = dn_luminance(dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x)));
-      if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, moments)) ++agree;
+      if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, sigma)) ++agree;
     }
   return agree >= DN_REJECT_NEIGHBOURS;
 }
@@ -175,13 +194,29 @@ void main() {
   // current frame contradicts, else clip it to the current neighbourhood.
   if (valid && clipped_here(p)) {
     vec4 pre = neighbourhood.data[p];
+    ivec2 prev_pixel = ivec2(floor(dn_previous_position(p, size.x, mv)));
+    float sigma = -1.0;  // history_sigma, read once and only where needed
     // Not with REFLECTION: that history follows the reflection, and the
     // thesis clips it without rejecting (scene 6 glossy temporal error
     // 0.00379 with rejection, 0.00310 without; RMSE within 0.1 %).
-    if (!REFLECTION && pre.w > 0.0 && history_rejected(pos, l, dn_luminance(pre.rgb), dn_luminance(prev), prev_m))
-      valid = false;
+    // p's own sigma first: the 3x3 one is never smaller, so a history p's
+    // own moments do not contradict is kept without reading the other eight.
+    if (!REFLECTION && pre.w > 0.0) {
+      float own = dn_moments_sigma(prev_m), lp = dn_luminance(pre.rgb), lh = dn_luminance(prev);
+      if (dn_history_contradicted(lp, lh, own) && dn_history_contradicted(l, lh, own)) {
+        sigma = history_sigma(prev_pixel, prev_m);
+        valid = !history_rejected(pos, l, lp, lh, sigma);
+      }
+    }
+    // A static pixel's surface and its reflections have not moved, so its
+    // history is clipped only beyond its noise: the 1-spp box misses the mean
+    // of sparse or two-valued light often (still-camera temporal error
+    // 1.1-2.3x without this, docs/results.md); a change of the light itself
+    // beyond the noise is still clipped or rejected.
+    float still = clamp(1.0 - length(mv) / DN_STATIC_MOTION, 0.0, 1.0);
+    if (still > 0.0 && sigma < 0.0) sigma = history_sigma(prev_pixel, prev_m);
     vec3 lo, hi;
-    if (valid && clip_box(pos, d, lo, hi)) {
+    if (valid && clip_box(pos, d, still * max(sigma, 0.0), lo, hi)) {
       vec3 clipped = dn_clip_to_box(prev, lo, hi);
       // A clipped history's luminance moments restart from its clipped
       // colour: the old ones still hold the light the clip removed.

@@ -22,16 +22,29 @@ vec3 dn_clip_to_box(vec3 h, vec3 lo, vec3 hi) {
 const int DN_REJECT_NEIGHBOURS = 3;
 
 // History rejection (disagreement): a current luminance lp and the
-// reprojected history's lh differ by more than the history's own sample
-// noise explains, 4 sigma = 4 sqrt(m2 - m1^2), plus half the larger of the
-// two. A reflection that moved against the surface's motion (a highlight
-// that arrived or left) is such a pixel; stationary noise, and a static edge
-// that the prefilter blurs, are not. Scale-equivariant. svgf_reproject asks
-// it of the prefiltered current, of p's own and of its neighbours' values.
-bool dn_history_contradicted(float lp, float lh, vec2 moments) {
+// reprojected history's lh differ by more than the history's sample noise
+// explains, 4 sigma, plus half the larger of the two. A reflection that
+// moved against the surface's motion (a highlight that arrived or left) is
+// such a pixel; stationary noise, and a static edge that the prefilter
+// blurs, are not. Scale-equivariant. svgf_reproject asks it of the
+// prefiltered current, of p's own and of its neighbours' values, with sigma
+// from dn_history_sigma. (Luminances are >= 0 here, so once sigma reaches
+// larger / 8 nothing is contradicted.)
+bool dn_history_contradicted(float lp, float lh, float sigma) {
   float larger = max(lp, lh);
-  float sigma = min(sqrt(max(0.0, moments.y - moments.x * moments.x)), 0.125 * larger);
   return abs(lp - lh) > 4.0 * sigma + 0.5 * larger;
 }
+
+// The standard deviation of luminance moments (m1, m2), 0 where m2 - m1^2
+// is below fp32's resolution of m1^2 (a young history: what is left there is
+// rounding, which differs between implementations).
+float dn_moments_sigma(vec2 m) {
+  float v = m.y - m.x * m.x;
+  return v > 1e-6 * m.x * m.x ? sqrt(v) : 0.0;
+}
+
+// Motion below which a pixel counts as static (px per frame): its history
+// is not clipped within its noise (svgf_reproject's clip_box).
+const float DN_STATIC_MOTION = 0.05;
 
 #endif

@@ -70,17 +70,18 @@ test::HostFrame host(const FbFrame& f, bool reset) {
 }
 
 // Path-traced frames of dnrender scene 1 (roughness-mapped coated floor,
-// metal spheres) along its orbit, 1 spp.
+// metal spheres) along its orbit, 1 spp; `still`: the camera holds its first
+// position (zero motion: history clipping's static rule).
 class RenderedFrames {
  public:
-  RenderedFrames(int w, int h) : scene_(render::build_scene(1)) {
+  RenderedFrames(int w, int h, bool still = false) : scene_(render::build_scene(1)), still_(still) {
     settings_.width = w;
     settings_.height = h;
   }
   FbFrame frame(int t) {
-    const int path = 3 * t;
+    const int path = still_ ? 0 : 3 * t;
     const render::Camera cam = render::frame_camera(1, path, settings_);
-    const render::Camera prev = render::frame_camera(1, t == 0 ? path - 1 : path - 3, settings_);
+    const render::Camera prev = render::frame_camera(1, still_ ? path : t == 0 ? path - 1 : path - 3, settings_);
     render::FrameBuffers fb = render::render_frame(*scene_, cam, prev, t, settings_);
     return FbFrame{fb.width,      fb.height, fb.diffuse, fb.specular, fb.albedo, fb.specular_f0, fb.roughness,
                    fb.normal,     fb.depth,  fb.motion,  fb.emission, cam.view,  cam.projection};
@@ -88,6 +89,7 @@ class RenderedFrames {
 
  private:
   std::unique_ptr<render::Scene> scene_;
+  bool still_;
   render::RenderSettings settings_;
 };
 
@@ -157,17 +159,17 @@ test::SvgfFrame reference_input(const FbFrame& f, bool reset, const std::vector<
 // Captured buffers hold fp32 words.
 std::vector<float> as_floats(const std::vector<uint8_t>& bytes) { return test::decode_output(bytes, Format::F32); }
 
-TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) {
+void expect_matches_cpu_reference(gpu::Context& ctx, bool still, int frame_count) {
   const int w = 96, h = 54;
-  auto pipe = pipelines::create(ctx(), fb_config(w, h));
+  auto pipe = pipelines::create(ctx, fb_config(w, h));
   auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
   ASSERT_NE(graph, nullptr);
   graph->set_capture(true);
-  const HostFactor host_factor(ctx());
+  const HostFactor host_factor(ctx);
   test::SvgfReference ref(w, h, test::SvgfParams{});
-  RenderedFrames frames(w, h);
+  RenderedFrames frames(w, h, still);
   double worst_factor = 0.0, worst_output = 0.0;
-  for (int t = 0; t < 5; ++t) {
+  for (int t = 0; t < frame_count; ++t) {
     SCOPED_TRACE(testing::Message() << "frame " << t);
     const FbFrame f = frames.frame(t);
     const auto factor = host_factor.factor(f);
@@ -181,9 +183,16 @@ TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) {
     worst_factor = std::max(worst_factor, rf);
     worst_output = std::max(worst_output, ro);
   }
-  std::printf("[ info     ] svgf-fb vs CPU reference: factor %.2g, output %.2g (worst relative RMS over 5 frames)\n",
-              worst_factor, worst_output);
+  std::printf("[ info     ] svgf-fb vs CPU reference, %s camera: factor %.2g, output %.2g (worst relative RMS over %d "
+              "frames)\n",
+              still ? "still" : "moving", worst_factor, worst_output, frame_count);
 }
+
+TEST_F(SvgfFbTest, MatchesCpuReferenceOnRenderedFrames) { expect_matches_cpu_reference(ctx(), false, 5); }
+
+// A still camera: the histories grow long, the rejection reads its 3x3
+// history sigma and the clip box is widened by it (static pixels).
+TEST_F(SvgfFbTest, MatchesCpuReferenceOnAStillCamera) { expect_matches_cpu_reference(ctx(), true, 8); }
 
 // Paper 000 Eq. 11: a renderer that computes F_beta itself sends
 // L_W = specular / F_beta (same floor) as specular_lighting with F_beta as

@@ -235,16 +235,30 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
       // Clipped chains: reject a history that the prefiltered current, p's
       // own current value and at least 3 of its 8 raw neighbours (on p's side)
-      // contradict, each beyond 4 sigma of the history's moments plus half the
-      // larger luminance.
+      // contradict, each beyond 4 sigma of the history's noise plus half the
+      // larger luminance; sigma: the largest of p's reprojected moments and
+      // the 3x3 history pixels around p's previous pixel.
+      // Threshold decisions: made in single precision, as the device makes
+      // them, so rounding does not flip them (m2 - m1^2 cancels in fp32).
+      const int prev_x = static_cast<int>(std::floor(px)), prev_y = static_cast<int>(std::floor(py));
+      auto moments_sigma = [](float m1, float m2) {  // clip.glsl's dn_moments_sigma
+        const float v = m2 - m1 * m1;
+        return v > 1e-6f * m1 * m1 ? std::sqrt(v) : 0.0f;
+      };
+      auto history_sigma = [&]() {
+        float sigma = moments_sigma(float(pm1), float(pm2));
+        for (int yy = -1; yy <= 1; ++yy)
+          for (int xx = -1; xx <= 1; ++xx) {
+            const int qx = prev_x + xx, qy = prev_y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || !(z_[qy * w + qx] > 0.0)) continue;
+            sigma = std::max(sigma, moments_sigma(float(m1_[qy * w + qx]), float(m2_[qy * w + qx])));
+          }
+        return sigma;
+      };
       if (valid && clip && clipped_here(i) && has_pre[i]) {
-        // Threshold decisions: made in single precision, as the device makes
-        // them, so rounding does not flip them (m2 - m1^2 cancels in fp32).
-        const float lh = float(luminance(pc)), m1 = float(pm1), m2 = float(pm2);
+        const float lh = float(luminance(pc)), sigma = history_sigma();
         auto contradicts = [&](float lc) {
-          const float larger = std::max(lc, lh);
-          const float sigma = std::min(std::sqrt(std::max(0.0f, m2 - m1 * m1)), 0.125f * larger);
-          return std::fabs(lc - lh) > 4.0f * sigma + 0.5f * larger;
+          return std::fabs(lc - lh) > 4.0f * sigma + 0.5f * std::max(lc, lh);
         };
         const float l = float(luminance(&d[3 * i]));
         if (contradicts(float(luminance(&pre[3 * i]))) && contradicts(l)) {
@@ -263,7 +277,10 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // Toward the box centre until inside (clip.glsl).
         // The prefiltered box narrowed by the raw 3x3 range of the current
         // signal where the two overlap (else the raw range), then widened to
-        // p's own current value (a highlight keeps its peak).
+        // p's own current value (a highlight keeps its peak); at a static
+        // pixel (motion below 0.05 px) widened by its history's sigma.
+        const double still = std::clamp(1.0 - std::hypot(mvx, mvy) / 0.05, 0.0, 1.0);
+        const double widen = still > 0.0 ? still * history_sigma() : 0.0;
         double v[3], m = 0.0, blo[3], bhi[3];
         for (int k = 0; k < 3; ++k) {
           double rlo = d[3 * i + k], rhi = d[3 * i + k];
@@ -275,8 +292,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
               rhi = std::max(rhi, d[3 * (qy * w + qx) + k]);
             }
           const double nlo = std::max(lo[3 * i + k], rlo), nhi = std::min(hi[3 * i + k], rhi);
-          blo[k] = std::min(nlo <= nhi ? nlo : rlo, d[3 * i + k]);
-          bhi[k] = std::max(nlo <= nhi ? nhi : rhi, d[3 * i + k]);
+          blo[k] = std::min(nlo <= nhi ? nlo : rlo, d[3 * i + k]) - widen;
+          bhi[k] = std::max(nlo <= nhi ? nhi : rhi, d[3 * i + k]) + widen;
         }
         for (int k = 0; k < 3; ++k) {
           const double centre = 0.5 * (blo[k] + bhi[k]);
