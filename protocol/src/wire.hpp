@@ -22,8 +22,8 @@ inline constexpr size_t kMaxVersionBytes = 256;   // WELCOME.server_version, WEL
 inline constexpr size_t kMaxDescriptionBytes = 512;  // WELCOME.pipeline_parameters[i][j].description (1.1)
 inline constexpr size_t kMaxPipelines = 64;
 inline constexpr size_t kMaxParameters = 64;      // OPEN_SESSION.parameters, WELCOME.pipeline_parameters[i]
-inline constexpr size_t kMaxChannels = 32;
-inline constexpr size_t kMaxPlanes = 32;
+inline constexpr size_t kMaxChannels = 64;  // ids are < 64 and unique (1.4: 39 input channels defined)
+inline constexpr size_t kMaxPlanes = 64;  // one per declared channel (kMaxChannels)
 inline constexpr size_t kMaxTimings = 64;
 inline constexpr size_t kMaxStats = 256;
 

@@ -75,7 +75,7 @@ TEST(PayloadRules, OpenSessionChannelFormatOutOfRange) {
 TEST(PayloadRules, OpenSessionChannelIds) {
   const std::vector<ChannelDecl> ch = {{ChannelId::Radiance, Format::F32}, {ChannelId::Depth, Format::F32}};
   // Unknown id.
-  for (int bad : {22, 31, 33, 63, 64, 255}) {  // 12-14: the lighting forms, 15-21: reflection features (docs/protocol.md §7)
+  for (int bad : {22, 31, 51, 63, 64, 255}) {  // 12-14: the lighting forms, 15-21: reflection features, 33-50: extra samples (docs/protocol.md §7)
     auto bytes = encode(open_session(ch));
     bytes[P + kOsChannels + 2] = static_cast<uint8_t>(bad);
     auto e = expect_error(bytes);
@@ -333,9 +333,9 @@ TEST(PayloadRules, ListCountsCheckedBeforeReserving) {
   e = expect_error(b);
   EXPECT_EQ(e.field, "STATS.values");
   EXPECT_NE(e.message.find("limit"), std::string::npos);
-  // Planes: count 33 > 32.
+  // Planes: count 65 > 64.
   b = encode(Result{});
-  put_u16(b, P + 18, 33);
+  put_u16(b, P + 18, 65);
   EXPECT_EQ(expect_error(b).field, "RESULT.planes");
 }
 

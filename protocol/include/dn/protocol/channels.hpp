@@ -48,7 +48,29 @@ enum class ChannelId : uint8_t {
   ReflectionDistance = 20,   // r    distance along that ray to its first hit
   ReflectionFootprint = 21,  // r    ray-differential footprint width at that hit (world units)
   Output = 32,         // rgb  denoised radiance, only in RESULT
+  // Extra samples (1.4; paper 001 §5): the channels above are sample 0, the
+  // guide ray through the pixel centre; sample j = 1..3 is one more primary
+  // ray of the pixel, at `offset` from the centre. Six ids per sample, in
+  // this order (sample_channel() computes them).
+  Sample1Radiance = 33,  // rgb  its radiance (radiance-mode sessions)
+  Sample1Diffuse = 34,   // rgb  its diffuse radiance (split sessions)
+  Sample1Specular = 35,  // rgb  its specular radiance (split sessions)
+  Sample1Normal = 36,    // xyz  world-space unit normal of its primary hit
+  Sample1Depth = 37,     // r    linear view depth of its primary hit
+  Sample1Offset = 38,    // xy   its position minus the pixel centre, pixels, in [-0.5, 0.5]
+  Sample2Radiance = 39, Sample2Diffuse = 40, Sample2Specular = 41, Sample2Normal = 42, Sample2Depth = 43,
+  Sample2Offset = 44,
+  Sample3Radiance = 45, Sample3Diffuse = 46, Sample3Specular = 47, Sample3Normal = 48, Sample3Depth = 49,
+  Sample3Offset = 50,
 };
+
+// The extra-sample channels: what each of a sample's six ids carries.
+enum class SampleField : uint8_t { Radiance = 0, Diffuse = 1, Specular = 2, Normal = 3, Depth = 4, Offset = 5 };
+inline constexpr uint32_t kMaxExtraSamples = 3;
+// The id of `field` of extra sample j (1 .. kMaxExtraSamples).
+inline constexpr ChannelId sample_channel(uint32_t j, SampleField field) {
+  return static_cast<ChannelId>(33u + 6u * (j - 1u) + static_cast<uint32_t>(field));
+}
 
 inline constexpr uint32_t kChannelIdLimit = 64;  // ids are < 64 so sets fit in a uint64 mask
 
@@ -76,6 +98,15 @@ inline constexpr ChannelInfo kChannels[] = {
     {ChannelId::ReflectionDistance, "reflection_distance", 1, 3},
     {ChannelId::ReflectionFootprint, "reflection_footprint", 1, 3},
     {ChannelId::Output, "output", 3},
+    {ChannelId::Sample1Radiance, "sample1_radiance", 3, 4}, {ChannelId::Sample1Diffuse, "sample1_diffuse", 3, 4},
+    {ChannelId::Sample1Specular, "sample1_specular", 3, 4}, {ChannelId::Sample1Normal, "sample1_normal", 3, 4},
+    {ChannelId::Sample1Depth, "sample1_depth", 1, 4},       {ChannelId::Sample1Offset, "sample1_offset", 2, 4},
+    {ChannelId::Sample2Radiance, "sample2_radiance", 3, 4}, {ChannelId::Sample2Diffuse, "sample2_diffuse", 3, 4},
+    {ChannelId::Sample2Specular, "sample2_specular", 3, 4}, {ChannelId::Sample2Normal, "sample2_normal", 3, 4},
+    {ChannelId::Sample2Depth, "sample2_depth", 1, 4},       {ChannelId::Sample2Offset, "sample2_offset", 2, 4},
+    {ChannelId::Sample3Radiance, "sample3_radiance", 3, 4}, {ChannelId::Sample3Diffuse, "sample3_diffuse", 3, 4},
+    {ChannelId::Sample3Specular, "sample3_specular", 3, 4}, {ChannelId::Sample3Normal, "sample3_normal", 3, 4},
+    {ChannelId::Sample3Depth, "sample3_depth", 1, 4},       {ChannelId::Sample3Offset, "sample3_offset", 2, 4},
 };
 
 inline constexpr const ChannelInfo* find_channel(ChannelId id) {
