@@ -21,6 +21,7 @@
 
 #include "pipelines/fb_factor.hpp"
 #include "pipelines/split_signals.hpp"
+#include "pipelines/supersample.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -145,13 +146,14 @@ GraphSpec build(const SessionConfig& config) {
     median.bind("src", kDisplay)
         .bind("features", kFeatures)
         .bind("depth", "depth")
-        .bind("result", "output")
+        .bind("result", v.extra_samples ? kSupersampleDisplay : "output")
         .set("DEPTH_HALF", half(ChannelId::Depth))
-        .set("OUTPUT_HALF", is_half(config.output_format));
+        .set("OUTPUT_HALF", v.extra_samples ? 0u : is_half(config.output_format));
     if (v.emission)
       median.bind("emission", "emission")
           .set("HAS_EMISSION", 1u)
           .set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+    if (v.extra_samples) add_supersample_resolve(g, config, kSupersampleDisplay);
   }
   return g;
 }
@@ -175,7 +177,7 @@ PipelineDefinition reflect_definition() {
   d.description.optional_channels = protocol::channel_bit(ChannelId::Diffuse) |
                                      protocol::channel_bit(ChannelId::DiffuseLighting) |
                                      protocol::channel_bit(ChannelId::Emission) |
-                                     protocol::channel_bit(ChannelId::ReflectionFootprint);
+                                     protocol::channel_bit(ChannelId::ReflectionFootprint) | extra_sample_channel_bits();
   d.parameter_groups = {"svgf", "reflect"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};

@@ -1,5 +1,7 @@
 #include "pipelines/split_signals.hpp"
 
+#include "pipelines/supersample.hpp"
+
 namespace dn::pipelines {
 namespace {
 
@@ -99,7 +101,7 @@ std::optional<ConfigError> check_split_channels(const SessionConfig& config, con
     return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
                        who + (radiance_allowed ? " requires channel radiance, or diffuse and specular (either form)"
                                                : " requires diffuse and specular (either form)")};
-  return std::nullopt;
+  return check_extra_samples(config);
 }
 
 std::optional<ConfigError> check_split_only(const SessionConfig& config) {

@@ -10,6 +10,7 @@
 
 #include "pipelines/definitions.hpp"
 #include "pipelines/split_signals.hpp"
+#include "pipelines/supersample.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -61,7 +62,7 @@ PipelineDefinition svgf_definition() {
                                      protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
   d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) | split_channel_bits() |
                                      protocol::channel_bit(ChannelId::Emission) |
-                                     protocol::channel_bit(ChannelId::Roughness);
+                                     protocol::channel_bit(ChannelId::Roughness) | extra_sample_channel_bits();
   d.parameter_groups = {"svgf"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;

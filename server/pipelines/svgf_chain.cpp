@@ -1,5 +1,7 @@
 #include "pipelines/svgf_chain.hpp"
 
+#include "pipelines/supersample.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -53,12 +55,22 @@ uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
 }
 
 // The two passes of the separable 7x7 prefilter history clipping takes its box from.
-void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfSignal& s, bool demodulate) {
+// The buffer a chain reads its signal from: the plane, or with extra samples
+// supersample_mix's fp32 result.
+std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s) {
+  return v.extra_samples ? mixed_signal(s.input) : s.input;
+}
+uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s) {
+  return v.extra_samples ? 0u : is_half(channel_format(config, s.channel));
+}
+
+void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s,
+                        bool demodulate) {
   PassSpec& rows = g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter");
-  rows.bind("signal", s.input)
+  rows.bind("signal", signal_buffer(v, s))
       .bind("depth", "depth")
       .bind("dst", kClipPartial)
-      .set("SIGNAL_HALF", is_half(channel_format(config, s.channel)))
+      .set("SIGNAL_HALF", signal_half(config, v, s))
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("DEMODULATE", demodulate)
       .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
@@ -87,10 +99,10 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   const uint32_t normal_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Normal));
   const uint32_t depth_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Depth));
   const bool clip = v.clip && s.clip;
-  if (clip) add_clip_prefilter(g, config, s, demodulate);
+  if (clip) add_clip_prefilter(g, config, v, s, demodulate);
 
   PassSpec& reproject = g.add_pass("svgf_reproject" + s.suffix, "svgf_reproject");
-  reproject.bind("signal", s.input)
+  reproject.bind("signal", signal_buffer(v, s))
       .bind("normal", normal)
       .bind("depth", depth)
       .bind("motion", "motion")
@@ -99,7 +111,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .bind("illum", current)
       .bind("guide", kGuide)
       .bind("temporal", kTemporal)
-      .set("SIGNAL_HALF", is_half(channel_format(config, s.channel)))
+      .set("SIGNAL_HALF", signal_half(config, v, s))
       .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
       .set("NORMAL_HALF", normal_half)
       .set("DEPTH_HALF", depth_half)
@@ -165,6 +177,7 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   // would clip diffuse noise too (and bias sparse samples toward black).
   v.roughness = has_channel(config, protocol::ChannelId::Roughness);
   v.clip = p.svgf_clip_roughness > 0.0f && v.roughness;
+  v.extra_samples = extra_samples(config);
   return v;
 }
 
@@ -197,6 +210,11 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   g.add_input(config, ChannelId::Motion, "motion");
   if (v.emission) g.add_input(config, ChannelId::Emission, "emission");
   if (v.roughness && !g.find("roughness")) g.add_input(config, ChannelId::Roughness, "roughness");
+  if (v.extra_samples) {
+    std::vector<ChannelId> channels;
+    for (const SvgfSignal& s : v.signals) channels.push_back(s.channel);
+    add_supersample_inputs(g, config, channels);
+  }
 }
 
 void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
@@ -206,6 +224,12 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
   if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
+  if (v.extra_samples) {
+    std::vector<std::string> inputs;
+    for (const SvgfSignal& s : v.signals) inputs.push_back(s.input);
+    add_supersample_buffers(g, inputs);
+    g.add_scratch(kSupersampleDisplay, kSupersampleDisplayBytes);
+  }
   g.add_scratch(kIllumA, kIlluminationBytes);
   if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
   if (v.signals.size() > 1) g.add_scratch(kIllumC, kIlluminationBytes);
@@ -222,6 +246,10 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
 
 void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
   check_supported(v);
+  if (v.extra_samples) {
+    add_supersample_assign(g, config);
+    for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
+  }
   std::vector<std::string> results;
   results.push_back(add_chain(g, config, v, 0, kIllumA, kIllumB));
   if (v.signals.size() > 1) results.push_back(add_chain(g, config, v, 1, kIllumC, results[0] == kIllumA ? kIllumB : kIllumA));
@@ -231,8 +259,10 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   // once the a-trous chains are done) instead of Output; svgf_taa blends them.
   // Without it, the TAA bindings stay unbound.
   const Modulator& first = v.signals[0].modulator;
-  const std::string result = v.display.empty() ? "output" : v.display;
-  const uint32_t result_half = v.display.empty() ? is_half(config.output_format) : 0u;
+  // Output, or a scratch frame for the caller's pass or the resolve.
+  const bool direct = v.display.empty() && !v.extra_samples;
+  const std::string result = !v.display.empty() ? v.display : v.extra_samples ? kSupersampleDisplay : "output";
+  const uint32_t result_half = direct ? is_half(config.output_format) : 0u;
   PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
   remodulate.bind("illum", results[0])
       .bind("albedo", first.buffer)
@@ -268,6 +298,7 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .bind("result", result)
         .bind("history", kTaaHistory)
         .set("OUTPUT_HALF", result_half);
+  if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
 }
 
 }  // namespace dn::pipelines

@@ -91,8 +91,13 @@ struct SvgfVariant {
   bool clip = false;                 // clip the signals marked clip where roughness < clip_roughness (needs roughness)
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (rgb fp32, add_svgf_buffers adds
-  // it) for a pass of the caller's that writes Output (reflect's median).
+  // it) for a pass of the caller's that writes Output (reflect's median; with
+  // extra samples, the caller's pass writes kSupersampleDisplay instead and
+  // adds supersample_resolve).
   std::string display;
+  // Extra samples per pixel (guide-ray supersampling, supersample.hpp): the
+  // signals are mixed before their chains and the displayed frame resolved.
+  uint32_t extra_samples = 0;
 };
 
 // The svgf parameter group's part of a variant (iterations, feedback tap,

@@ -9,6 +9,7 @@
 #include "pipelines/definitions.hpp"
 #include "pipelines/fb_factor.hpp"
 #include "pipelines/split_signals.hpp"
+#include "pipelines/supersample.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -51,7 +52,7 @@ PipelineDefinition svgf_fb_definition() {
       protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
   d.description.optional_channels = protocol::channel_bit(ChannelId::Diffuse) |
                                      protocol::channel_bit(ChannelId::DiffuseLighting) |
-                                     protocol::channel_bit(ChannelId::Emission);
+                                     protocol::channel_bit(ChannelId::Emission) | extra_sample_channel_bits();
   d.parameter_groups = {"svgf"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};
