@@ -1,7 +1,8 @@
 #version 450
 // supersample_assign: each extra sample of a pixel finds the most similar of
 // the four guide pixels whose centres surround it (paper 001 §5: "by depth
-// and normal"; the metric is ours, include/supersample.glsl). A background
+// and normal"; the metric is ours, include/supersample.glsl: depth and normal
+// weights times the sample's bilinear weight for the guide). A background
 // sample matches background guides; a sample no guide matches (score 0)
 // stays with its own pixel's guide. One invocation per pixel.
 //
@@ -36,6 +37,10 @@ uint assign(ivec2 pos, vec3 n, float z, vec2 offset) {
       float c = dot(n, DN_LOAD3(normal, NORMAL_HALF, gi));
       w = exp(-abs(z - zg) / (DN_SAMPLE_DEPTH_SCALE * max(z, zg))) * pow(max(c, 0.0), DN_SAMPLE_NORMAL_POWER);
     }
+    // Proximity: the sample's bilinear weight for this guide, so that among
+    // equally similar guides the nearest takes it (no drift toward one corner).
+    vec2 d = abs(s - (vec2(g) + 0.5));
+    w *= (1.0 - d.x) * (1.0 - d.y);
     if (w > best) {  // strict: ties keep the earlier candidate
       best = w;
       pick = g;

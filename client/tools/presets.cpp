@@ -132,6 +132,11 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
                          ChannelId::ReflectionDepth, ChannelId::ReflectionDirection, ChannelId::ReflectionDistance,
                          ChannelId::ReflectionFootprint})
       p.channels.push_back(spec(id, {{{L(std::string(protocol::find_channel(id)->name))}}}));
+    for (uint32_t j = 1; j <= protocol::kMaxExtraSamples; ++j)
+      for (uint32_t f = 0; f < 6; ++f) {
+        const ChannelId id = protocol::sample_channel(j, static_cast<protocol::SampleField>(f));
+        p.channels.push_back(spec(id, {{{L(std::string(protocol::find_channel(id)->name))}}}));
+      }
     return p;
   }
   if (name == "cycles") {
@@ -493,6 +498,14 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
            (takes(ChannelId::SpecularLighting) && resolvable(ChannelId::SpecularLighting) &&
             takes(ChannelId::SpecularAlbedo) && resolvable(ChannelId::SpecularAlbedo)));
       auto skip = [&](ChannelId id) {
+        if (const auto field = protocol::sample_field(id)) {
+          // Extra samples carry the colour of the session's signals; the
+          // lighting forms take none.
+          if (diffuse_lighting || specular_lighting) return true;
+          if (*field == protocol::SampleField::Radiance) return !radiance_mode;
+          if (*field == protocol::SampleField::Diffuse || *field == protocol::SampleField::Specular) return radiance_mode;
+          return false;
+        }
         if (!is_split(id)) return false;
         if (radiance_mode) return true;
         if (id == ChannelId::Diffuse) return diffuse_lighting;

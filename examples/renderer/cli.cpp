@@ -37,6 +37,9 @@ const char* const kUsage =
     "  --jitter           per-frame Halton sub-pixel camera jitter (written as dn.jitter)\n"
     "  --gbuffer-grid K   albedo/specular_f0/roughness/normal: pixel-footprint averages of K x K\n"
     "                     stratified G-buffer rays (default 4); 0: point-sampled at the radiance ray\n"
+    "  --extra-samples N  guide-ray supersampling (paper 001 §5; needs --spp 1): N = 1..3 more primary\n"
+    "                     samples per pixel, each with its own path, normal, depth and offset\n"
+    "                     (sample<j>_* layers, protocol channels 33-50)\n"
     "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1)\n"
     "  --reflection       also the reflection features of mirror and glossy pixels (reflection_* layers,\n"
     "                     protocol channels 15-21)\n"
@@ -103,6 +106,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--threads") o.render.threads = parse_int(a, value(), 1, 1024);
     else if (a == "--jitter") o.render.jitter = true;
     else if (a == "--gbuffer-grid") o.render.gbuffer_grid = parse_int(a, value(), 0, 16);
+    else if (a == "--extra-samples") o.render.extra_samples = parse_int(a, value(), 0, 3);
     else if (a == "--stats") o.render.channels.statistics = true;
     else if (a == "--reflection") o.render.channels.reflection = true;
     else if (a == "--out") o.out = value();
@@ -119,6 +123,8 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
   }
   if (!o.server.empty() && o.pipeline.empty()) throw UsageError("--server needs --pipeline");
   if (o.png && o.out.empty()) throw UsageError("--png needs --out");
+  if (o.render.extra_samples > 0 && o.render.spp != 1.0)
+    throw UsageError("--extra-samples needs --spp 1 (sample 0 is the guide ray through the pixel centre)");
   if (o.reference2 && !o.reference_spp) throw UsageError("--reference2 needs --reference");
   if (o.server.empty() && !o.pipeline.empty()) throw UsageError("--pipeline needs --server");
   return o;

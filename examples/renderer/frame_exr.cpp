@@ -51,6 +51,16 @@ void write_frame_exr(const std::string& path, const FrameBuffers& fb, const Came
   layer("reflection_direction", fb.reflection_direction, "XYZ", F);
   layer("reflection_distance", fb.reflection_distance, "Y", F);
   layer("reflection_footprint", fb.reflection_footprint, "Y", F);
+  for (size_t j = 0; j < fb.extra.size(); ++j) {
+    const std::string s = "sample" + std::to_string(j + 1) + "_";
+    const FrameBuffers::ExtraSample& e = fb.extra[j];
+    layer(s + "radiance", e.radiance, "RGB", F);
+    layer(s + "diffuse", e.diffuse, "RGB", F);
+    layer(s + "specular", e.specular, "RGB", F);
+    layer(s + "normal", e.normal, "XYZ", F);
+    layer(s + "depth", e.depth, "Z", F);
+    layer(s + "offset", e.offset, "XY", F);
+  }
 
   image::ExrWriteOptions options;
   options.camera.view = to_array(camera.view);

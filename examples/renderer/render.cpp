@@ -42,7 +42,7 @@ glm::vec3 base_colour(const SurfaceParams& s) { return s.has_diffuse ? s.diffuse
 struct Planes {
   FrameBuffers& fb;
   const ChannelSet& want;
-  void allocate(size_t n, int samples_stride) {
+  void allocate(size_t n, int samples_stride, int extra_samples) {
     auto alloc = [n](std::vector<float>& v, bool on, int comps) {
       if (on) v.assign(n * comps, 0.0f);
       else v.clear();
@@ -71,6 +71,15 @@ struct Planes {
     alloc(fb.reflection_depth, want.reflection, 1);
     alloc(fb.reflection_distance, want.reflection, 1);
     alloc(fb.reflection_footprint, want.reflection, 1);
+    fb.extra.resize(size_t(extra_samples));
+    for (auto& e : fb.extra) {
+      alloc(e.radiance, true, 3);
+      alloc(e.diffuse, want.split, 3);
+      alloc(e.specular, want.split, 3);
+      alloc(e.normal, true, 3);
+      alloc(e.depth, true, 1);
+      alloc(e.offset, true, 2);
+    }
     fb.samples_stride = want.record_samples ? samples_stride : 0;
     alloc(fb.samples, want.record_samples, samples_stride * 3);
   }
@@ -611,6 +620,24 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
     // Not sampled: no radiance, but emission is known from the G-buffer ray.
     put3(fb.emission, i, hit0.found ? scene.emitted(hit0, dir0) : scene.environment());
   }
+  for (size_t j = 0; j < fb.extra.size(); ++j) {
+    // After sample 0's path, from the same stream: a render without extra
+    // samples keeps its ordinary planes bit for bit.
+    FrameBuffers::ExtraSample& e = fb.extra[j];
+    const glm::vec2 offset = rng.next2() - 0.5f;
+    const glm::vec3 dir = pc.rays.direction(x + 0.5f + pc.jitter.x + offset.x, y + 0.5f + pc.jitter.y + offset.y);
+    const Hit hit = scene.intersect(eye, dir, ctx);
+    const PathResult p = trace_path(scene, dir, hit, rng, path_settings, ctx);
+    put3(e.radiance, i, p.total());
+    if (!e.diffuse.empty()) {
+      put3(e.diffuse, i, p.diffuse);
+      put3(e.specular, i, p.specular);
+    }
+    put3(e.normal, i, hit.found ? facing_normal(hit.normal, -dir) : glm::vec3(0.0f));
+    e.depth[i] = hit.found ? -(pc.view * glm::vec4(hit.position, 1.0f)).z : kInf;
+    e.offset[2 * i] = offset.x;
+    e.offset[2 * i + 1] = offset.y;
+  }
   if (want.sample_count) fb.sample_count[i] = static_cast<float>(count);
   if (want.statistics) {
     fb.stat_count[i] = static_cast<float>(count);
@@ -656,7 +683,7 @@ void render_frame_into(const Scene& scene, const Camera& camera, const Camera& p
   fb.width = settings.width;
   fb.height = settings.height;
   Planes{fb, settings.channels}.allocate(size_t(settings.width) * settings.height,
-                                         static_cast<int>(std::ceil(settings.spp)));
+                                         static_cast<int>(std::ceil(settings.spp)), settings.extra_samples);
   const CameraRays rays(camera, settings.width, settings.height);
   const PixelContext pc{scene,
                         settings,

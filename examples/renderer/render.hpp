@@ -31,6 +31,11 @@ struct RenderSettings {
   // gbuffer_grid x gbuffer_grid jittered stratified grid of G-buffer-only rays
   // (primary hit + material, no path). 0: point-sampled from the radiance sample 0 ray.
   int gbuffer_grid = 4;
+  // Guide-ray supersampling (paper 001 §5, docs/protocol.md §7.6): with spp 1,
+  // this many further primary samples per pixel (0 to 3), each at a uniform
+  // random position in the pixel, with its own path and primary hit
+  // (FrameBuffers::extra); the ordinary planes stay sample 0's.
+  int extra_samples = 0;
   int max_depth = 8;      // path vertices after the primary hit
   bool next_event = true; // false: BSDF sampling only (tests compare the two estimators)
   int threads = 0;        // 0: hardware concurrency
@@ -58,6 +63,16 @@ struct FrameBuffers {
   // footprint (the representative ray), every other pixel zeros.
   std::vector<float> reflection_position, reflection_albedo, reflection_normal, reflection_direction;  // 3
   std::vector<float> reflection_depth, reflection_distance, reflection_footprint;                      // 1
+  // RenderSettings::extra_samples: per extra sample its radiance (and the
+  // split's diffuse and specular), the facing normal and view depth of its
+  // primary hit (0 and +inf on a miss) and its position minus the jittered
+  // pixel centre (protocol channels sample<j>_*).
+  struct ExtraSample {
+    std::vector<float> radiance, diffuse, specular, normal;  // 3
+    std::vector<float> depth;                                // 1
+    std::vector<float> offset;                               // 2
+  };
+  std::vector<ExtraSample> extra;
   std::vector<float> samples;  // record_samples: samples_stride RGB samples per pixel, unused slots 0
   int samples_stride = 0;
   uint64_t rays = 0;  // Embree rays traced (rtcIntersect1 + rtcOccluded1)

@@ -36,9 +36,21 @@ const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
     case ChannelId::ReflectionDirection: return &fb.reflection_direction;
     case ChannelId::ReflectionDistance: return &fb.reflection_distance;
     case ChannelId::ReflectionFootprint: return &fb.reflection_footprint;
-    default: return nullptr;
+    default: break;
   }
+  for (uint32_t j = 1; j <= fb.extra.size(); ++j) {
+    const FrameBuffers::ExtraSample& e = fb.extra[j - 1];
+    using protocol::SampleField;
+    if (id == protocol::sample_channel(j, SampleField::Radiance)) return &e.radiance;
+    if (id == protocol::sample_channel(j, SampleField::Diffuse)) return &e.diffuse;
+    if (id == protocol::sample_channel(j, SampleField::Specular)) return &e.specular;
+    if (id == protocol::sample_channel(j, SampleField::Normal)) return &e.normal;
+    if (id == protocol::sample_channel(j, SampleField::Depth)) return &e.depth;
+    if (id == protocol::sample_channel(j, SampleField::Offset)) return &e.offset;
+  }
+  return nullptr;
 }
+
 
 }  // namespace
 
@@ -106,6 +118,12 @@ void FrameStreamer::open(const FrameBuffers& sample) {
     if (c.id == ChannelId::Output || !(takes & bit(c.id)) || !has(c.id)) continue;
     if (split && c.id == ChannelId::Radiance) continue;
     if (!split && (c.id == ChannelId::Diffuse || c.id == ChannelId::Specular)) continue;
+    if (const auto field = protocol::sample_field(c.id)) {
+      // Extra samples carry the colour the session's signals are sent in.
+      using protocol::SampleField;
+      if (*field == SampleField::Radiance && split) continue;
+      if ((*field == SampleField::Diffuse || *field == SampleField::Specular) && !split) continue;
+    }
     desc.channel(c.id);
     state_->channels.push_back(c.id);
     channel_names_.emplace_back(c.name);

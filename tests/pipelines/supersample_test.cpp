@@ -79,7 +79,7 @@ struct SsFrame {
   }
 };
 
-// The documented assignment (include/supersample.glsl) in double precision:
+// The documented assignment (shaders/supersample_assign.comp) in double precision:
 // the guide offset code of sample s of pixel p, and the margin between the
 // best and the second-best score (decisions closer than that may round
 // either way on the device).
@@ -106,6 +106,7 @@ int host_assign(const SsFrame& f, int p, const SsFrame::Sample& s, double& margi
       for (int i = 0; i < 3; ++i) c += double(s.normal[3 * p + i]) * f.normal[3 * g + i];
       w = std::exp(-std::fabs(z - zg) / (0.01 * std::max(z, zg))) * std::pow(std::max(c, 0.0), 128.0);
     }
+    w *= (1.0 - std::fabs(sx - (gx + 0.5))) * (1.0 - std::fabs(sy - (gy + 0.5)));
     if (w > best) {
       second = best;
       best = w;

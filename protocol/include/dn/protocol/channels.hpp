@@ -71,6 +71,12 @@ inline constexpr uint32_t kMaxExtraSamples = 3;
 inline constexpr ChannelId sample_channel(uint32_t j, SampleField field) {
   return static_cast<ChannelId>(33u + 6u * (j - 1u) + static_cast<uint32_t>(field));
 }
+// What an extra-sample channel carries; nothing for every other id.
+inline constexpr std::optional<SampleField> sample_field(ChannelId id) {
+  const uint32_t v = static_cast<uint32_t>(id);
+  if (v < 33u || v >= 33u + 6u * kMaxExtraSamples) return std::nullopt;
+  return static_cast<SampleField>((v - 33u) % 6u);
+}
 
 inline constexpr uint32_t kChannelIdLimit = 64;  // ids are < 64 so sets fit in a uint64 mask
 
