@@ -32,6 +32,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
 TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
   const auto& all = pipelines::available_pipelines();
   ASSERT_EQ(all.size(), 5u);
+  // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for every SVGF-chain pipeline.
+  uint64_t extra_samples = 0;
+  for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
   EXPECT_EQ(all[2].name, "svgf");
   EXPECT_EQ(all[2].required_channels, protocol::channel_bit(ChannelId::Albedo) |
                                           protocol::channel_bit(ChannelId::Normal) |
@@ -42,7 +45,8 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
             protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Diffuse) |
                 protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::DiffuseLighting) |
                 protocol::channel_bit(ChannelId::SpecularLighting) | protocol::channel_bit(ChannelId::SpecularAlbedo) |
-                protocol::channel_bit(ChannelId::Emission) | protocol::channel_bit(ChannelId::Roughness));
+                protocol::channel_bit(ChannelId::Emission) | protocol::channel_bit(ChannelId::Roughness) |
+                extra_samples);
   std::vector<std::string> svgf_names;
   for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
@@ -57,7 +61,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
                 protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
   EXPECT_EQ(all[3].optional_channels, protocol::channel_bit(ChannelId::Diffuse) |
                                           protocol::channel_bit(ChannelId::DiffuseLighting) |
-                                          protocol::channel_bit(ChannelId::Emission));
+                                          protocol::channel_bit(ChannelId::Emission) | extra_samples);
   std::vector<std::string> fb_names;
   for (const auto& p : all[3].parameters) fb_names.push_back(p.name);
   EXPECT_EQ(fb_names, svgf_names);
@@ -149,8 +153,8 @@ TEST(Validate, RejectsUnusedDuplicateAndMalformedChannels) {
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[1].id", "twice");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Output, Format::F32}});
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "32");
-  c = test::make_config("passthrough", 8, 8, {{static_cast<ChannelId>(40), Format::F32}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "40");
+  c = test::make_config("passthrough", 8, 8, {{static_cast<ChannelId>(51), Format::F32}});
+  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "51");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, static_cast<Format>(3)}});
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].format", "radiance");
 }

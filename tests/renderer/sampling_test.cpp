@@ -1,6 +1,8 @@
 // Fewer than one sample per pixel: a deterministic per-pixel mask.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "scenes.hpp"
 #include "test_support.hpp"
 
@@ -56,6 +58,48 @@ TEST(RendererSampling, FramesAreDeterministicAcrossThreadCounts) {
   const FrameBuffers two = render_frame(*scene, cam, cam, 1, st);
   EXPECT_EQ(one.radiance, two.radiance);
   EXPECT_GT(one.rays, uint64_t(48 * 27));
+}
+
+// Guide rays (--extra-samples): the ordinary planes are sample 0's, bit for
+// bit those of a render without extra samples; each extra sample's depth is
+// the primary hit at its own offset (primary_position, an independent ray
+// cast), its normal a unit vector on a hit, its offset inside the pixel.
+TEST(RendererSampling, ExtraSamplesAreGuideRaysPlusTheirOwnHits) {
+  const std::unique_ptr<Scene> scene = build_scene(1);
+  RenderSettings st = test::small_settings(64, 36, 1.0);
+  const Camera cam = frame_camera(1, 3, st), prev = frame_camera(1, 2, st);
+  const FrameBuffers plain = render_frame(*scene, cam, prev, 3, st);
+  st.extra_samples = 2;
+  const FrameBuffers fb = render_frame(*scene, cam, prev, 3, st);
+  EXPECT_EQ(fb.radiance, plain.radiance);
+  EXPECT_EQ(fb.diffuse, plain.diffuse);
+  EXPECT_EQ(fb.depth, plain.depth);
+  EXPECT_EQ(fb.normal, plain.normal);
+  ASSERT_EQ(fb.extra.size(), 2u);
+  const int n = st.width * st.height;
+  int hits = 0, checked = 0;
+  for (const auto& e : fb.extra) {
+    ASSERT_EQ(e.offset.size(), size_t(2 * n));
+    for (int i = 0; i < n; ++i) {
+      const float ox = e.offset[2 * i], oy = e.offset[2 * i + 1];
+      ASSERT_TRUE(ox >= -0.5f && ox < 0.5f && oy >= -0.5f && oy < 0.5f) << ox << ", " << oy;
+      glm::vec3 position;
+      const bool hit = primary_position(*scene, cam, st.width, st.height, i % st.width + 0.5f + ox,
+                                        i / st.width + 0.5f + oy, position);
+      ++checked;
+      if (!hit) {
+        EXPECT_TRUE(std::isinf(e.depth[i])) << i;
+        continue;
+      }
+      ++hits;
+      const float depth = -(cam.view * glm::vec4(position, 1.0f)).z;
+      EXPECT_NEAR(e.depth[i], depth, 1e-4f * depth) << i;
+      EXPECT_NEAR(glm::length(test::at3(e.normal, i)), 1.0f, 1e-4f) << i;
+    }
+    // Different positions from sample 0: the samples are not the guide again.
+    EXPECT_NE(e.radiance, fb.radiance);
+  }
+  EXPECT_GT(hits, checked / 2);
 }
 
 }  // namespace

@@ -27,4 +27,10 @@ for f in 0000 0001 0002; do
   test -s "$dir/out/frame_$f.exr"
   test -s "$dir/out/denoised_$f.exr"
 done
-echo "stream_test: 3 frames denoised"
+# Guide rays (--extra-samples): the session declares the extra samples' planes.
+"$render" --scene 2 --frames 2 --width 64 --height 36 --extra-samples 2 --server "unix://$sock" --pipeline svgf \
+  --out "$dir/guide" --quiet
+for f in 0000 0001; do
+  test -s "$dir/guide/denoised_$f.exr"
+done
+echo "stream_test: 3 frames denoised, 2 with extra samples"
