@@ -30,6 +30,7 @@ class SupersampleTest : public test::GpuTest {};
 // One frame: the guides (sample 0) and n extra samples, radiance mode.
 struct SsFrame {
   int w = 0, h = 0, n = 0;
+  Format format = Format::F32;  // of every plane
   std::vector<float> radiance, albedo, normal, depth, motion;
   struct Sample {
     std::vector<float> radiance, normal, depth, offset;
@@ -52,28 +53,28 @@ struct SsFrame {
     }
   }
   std::vector<protocol::ChannelDecl> channels(bool with_samples) const {
-    std::vector<protocol::ChannelDecl> c = {{ChannelId::Radiance, Format::F32}, {ChannelId::Albedo, Format::F32},
-                                            {ChannelId::Normal, Format::F32},   {ChannelId::Depth, Format::F32},
-                                            {ChannelId::Motion, Format::F32}};
+    std::vector<protocol::ChannelDecl> c = {{ChannelId::Radiance, format}, {ChannelId::Albedo, format},
+                                            {ChannelId::Normal, format},   {ChannelId::Depth, format},
+                                            {ChannelId::Motion, format}};
     for (int j = 1; with_samples && j <= n; ++j)
       for (SampleField f : {SampleField::Radiance, SampleField::Normal, SampleField::Depth, SampleField::Offset})
-        c.push_back({sample_channel(j, f), Format::F32});
+        c.push_back({sample_channel(j, f), format});
     return c;
   }
   test::HostFrame host(bool with_samples, uint32_t flags) const {
     test::HostFrame f;
     f.info.flags = flags;
-    f.add(ChannelId::Radiance, Format::F32, radiance);
-    f.add(ChannelId::Albedo, Format::F32, albedo);
-    f.add(ChannelId::Normal, Format::F32, normal);
-    f.add(ChannelId::Depth, Format::F32, depth);
-    f.add(ChannelId::Motion, Format::F32, motion);
+    f.add(ChannelId::Radiance, format, radiance);
+    f.add(ChannelId::Albedo, format, albedo);
+    f.add(ChannelId::Normal, format, normal);
+    f.add(ChannelId::Depth, format, depth);
+    f.add(ChannelId::Motion, format, motion);
     for (int j = 1; with_samples && j <= n; ++j) {
       const Sample& s = samples[j - 1];
-      f.add(sample_channel(j, SampleField::Radiance), Format::F32, s.radiance);
-      f.add(sample_channel(j, SampleField::Normal), Format::F32, s.normal);
-      f.add(sample_channel(j, SampleField::Depth), Format::F32, s.depth);
-      f.add(sample_channel(j, SampleField::Offset), Format::F32, s.offset);
+      f.add(sample_channel(j, SampleField::Radiance), format, s.radiance);
+      f.add(sample_channel(j, SampleField::Normal), format, s.normal);
+      f.add(sample_channel(j, SampleField::Depth), format, s.depth);
+      f.add(sample_channel(j, SampleField::Offset), format, s.offset);
     }
     return f;
   }
@@ -240,27 +241,34 @@ TEST_F(SupersampleTest, AssignMixAndResolveFollowTheDocumentedRules) {
 }
 
 // Extra samples that repeat the guide (offset 0, same hit, same radiance)
-// leave every output as the session without them gives it.
+// leave every output as the session without them gives it, with fp32 and
+// with fp16 planes.
 TEST_F(SupersampleTest, SamplesThatRepeatTheGuideChangeNothing) {
   const int w = 48, h = 32, n = 3;
-  auto with = pipelines::create(ctx(), test::make_config("svgf", w, h, SsFrame(w, h, n).channels(true)));
-  auto without = pipelines::create(ctx(), test::make_config("svgf", w, h, SsFrame(w, h, n).channels(false)));
-  double worst = 0.0;
-  for (int t = 0; t < 4; ++t) {
-    SsFrame f = random_frame(w, h, n, 100 + t);
-    for (int p = 0; p < w * h; ++p) f.motion[2 * p] = -1.0f;  // a pan: history is reprojected
-    for (auto& s : f.samples) {
-      s.radiance = f.radiance;
-      s.normal = f.normal;
-      s.depth = f.depth;
-      std::fill(s.offset.begin(), s.offset.end(), 0.0f);
+  for (Format format : {Format::F32, Format::F16}) {
+    SsFrame shape(w, h, n);
+    shape.format = format;
+    auto with = pipelines::create(ctx(), test::make_config("svgf", w, h, shape.channels(true)));
+    auto without = pipelines::create(ctx(), test::make_config("svgf", w, h, shape.channels(false)));
+    double worst = 0.0;
+    for (int t = 0; t < 4; ++t) {
+      SsFrame f = random_frame(w, h, n, 100 + t);
+      f.format = format;
+      for (int p = 0; p < w * h; ++p) f.motion[2 * p] = -1.0f;  // a pan: history is reprojected
+      for (auto& s : f.samples) {
+        s.radiance = f.radiance;
+        s.normal = f.normal;
+        s.depth = f.depth;
+        std::fill(s.offset.begin(), s.offset.end(), 0.0f);
+      }
+      const uint32_t flags = t == 0 ? protocol::kFrameReset : 0u;
+      const auto a = run(*with, f.host(true, flags)), b = run(*without, f.host(false, flags));
+      worst = std::max(worst, test::relative_rms(a, std::vector<double>(b.begin(), b.end())));
     }
-    const uint32_t flags = t == 0 ? protocol::kFrameReset : 0u;
-    const auto a = run(*with, f.host(true, flags)), b = run(*without, f.host(false, flags));
-    worst = std::max(worst, test::relative_rms(a, std::vector<double>(b.begin(), b.end())));
+    std::printf("[ info     ] guide-repeating samples, %s planes: worst relative RMS %.2g over 4 frames\n",
+                format == Format::F16 ? "fp16" : "fp32", worst);
+    EXPECT_LE(worst, 1e-5);
   }
-  std::printf("[ info     ] guide-repeating samples: worst relative RMS %.2g over 4 frames\n", worst);
-  EXPECT_LE(worst, 1e-5);
 }
 
 // A sub-pixel edge between a near bright surface and a far dark one: the
