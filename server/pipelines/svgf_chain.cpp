@@ -1,10 +1,10 @@
 #include "pipelines/svgf_chain.hpp"
 
-#include "pipelines/supersample.hpp"
-
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+
+#include "pipelines/supersample.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -54,7 +54,6 @@ uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
   return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
 }
 
-// The two passes of the separable 7x7 prefilter history clipping takes its box from.
 // The buffer a chain reads its signal from: the plane, or with extra samples
 // supersample_mix's fp32 result.
 std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s) {
@@ -64,6 +63,7 @@ uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const Sv
   return v.extra_samples ? 0u : is_half(channel_format(config, s.channel));
 }
 
+// The two passes of the separable 7x7 prefilter history clipping takes its box from.
 void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s,
                         bool demodulate) {
   PassSpec& rows = g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter");
