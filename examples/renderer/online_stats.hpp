@@ -1,6 +1,7 @@
 // Per-pixel online statistics of paper 003 (Sakai et al. 2024), Alg. 1:
 // Welford/Meng updates of the mean and the sums M2, M3 of Box-Cox (lambda = 1/2)
-// transformed samples, plus the mean of the raw samples.
+// transformed samples, plus the mean of the raw samples; merge() combines two
+// partial accumulators exactly.
 #pragma once
 
 #include <cmath>
@@ -21,12 +22,35 @@ struct OnlineStats {
     const float delta = box_cox_half(x) - mean;
     const float delta_n = delta / n;
     mean += delta_n;
-    // M3 first: it uses the M2 of the previous n. The exact one-sample update
-    // (Pebay 2008; Meng 2015) adds delta^3 (n-1)(n-2)/n^2; the paper's printed
-    // delta (delta^2 - (delta/n)^2) does not vanish for two samples, where M3 must.
+    // M3 first: this classical form (Pebay 2008) uses the M2 of the previous n
+    // and adds delta^3 (n-1)(n-2)/n^2 - 3 delta_n M2. The paper's Alg. 1 writes
+    // the same update with the already updated M2; either order alone is
+    // exact, mixing them is not (tests/renderer/statistics_test.cpp).
     const float term = delta * delta_n * (n - 1.0f);
     m3 += term * delta_n * (n - 2.0f) - 3.0f * delta_n * m2;
     m2 += term;
+  }
+
+  // Folds accumulator b into this one, as if b's samples had been add()ed
+  // here: per-frame or per-thread partials and temporal reuse need it
+  // (notes A.2 P0b; Chan et al. 1979, Pebay 2008). The formulas are exact for
+  // any split. An empty side contributes nothing and is never divided by.
+  void merge(const OnlineStats& b) {
+    if (b.n == 0.0f) return;
+    if (n == 0.0f) {
+      *this = b;
+      return;
+    }
+    const float na = n, nb = b.n, nt = na + nb;
+    const float delta = b.mean - mean;
+    const float share_b = nb / nt;
+    const float nab = na * share_b;  // nA nB / n, without forming nA nB
+    // M3 first: its cross term needs both M2s as they were before the merge.
+    m3 += b.m3 + delta * delta * delta * nab * (na - nb) / nt + 3.0f * delta * (na * b.m2 - nb * m2) / nt;
+    m2 += b.m2 + delta * delta * nab;
+    mean += delta * share_b;
+    raw_mean += (b.raw_mean - raw_mean) * share_b;  // the weighted mean of the two
+    n = nt;
   }
 };
 
