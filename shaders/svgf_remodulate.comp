@@ -3,7 +3,7 @@
 // (+ the filtered specular in split mode, + sanitized emission, never
 // filtered) in the session's output format (docs/pipelines.md, "svgf in
 // detail", 4). One invocation per pixel pair.
-// With TAA (taa_alpha > 0, spec constant 6) it writes, instead of Output, the
+// With TAA (taa_alpha or taa_static_alpha > 0, spec constant 6) it writes, instead of Output, the
 // current colour and the bilinearly reprojected previous final output for
 // svgf_taa (docs/pipelines.md, "svgf in detail", 5): the TAA history is read
 // only here and rewritten only by svgf_taa, so one persistent copy suffices.
@@ -32,17 +32,30 @@ vec3 taa_history_at(ivec2 q) {
   return vec3(taa_history.data[i], taa_history.data[i + 1u], taa_history.data[i + 2u]);
 }
 
+// The weight of the current frame in svgf_taa's blend: taa_alpha where the
+// pixel moves (1, no blend, when 0), at most taa_static_alpha where it is
+// static: nothing moved, so averaging the output over frames only takes out
+// the flicker the a-trous leaves (docs/pipelines.md, "svgf in detail", 5).
+float taa_weight(vec2 mv) {
+  float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
+  float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
+  if (still <= 0.0 || still >= moving) return moving;
+  return mix(moving, still, dn_stillness(mv));
+}
+
 // TAA: the previous final output at p + mv, bilinear over the taps inside the
-// image (renormalized); none when reset, background, motion not finite or the
-// accepted weight < DN_MIN_TAP_WEIGHT (off-screen).
+// image (renormalized); none (weight 1) when reset, background, motion not
+// finite or the accepted weight < DN_MIN_TAP_WEIGHT (off-screen), and not
+// read where the blend weight is 1 anyway (a moving pixel without taa_alpha).
 void taa_prepare(uint p, vec3 c) {
   uvec2 size = frame.size.xy;
   vec3 prev = vec3(0.0);
   bool valid = false;
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  float weight = dn_is_finite(mv) ? taa_weight(mv) : 1.0;
   ivec2 origin;
   vec4 weights;
-  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) && dn_is_finite(mv) &&
+  if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 s = vec3(0.0);
     float sw = 0.0;
@@ -57,7 +70,7 @@ void taa_prepare(uint p, vec3 c) {
       prev = s / sw;
     }
   }
-  taa_current.data[p] = vec4(c, valid ? 1.0 : 0.0);
+  taa_current.data[p] = vec4(c, valid ? weight : 1.0);
   taa_previous.data[p] = vec4(prev, 0.0);
 }
 

@@ -213,7 +213,7 @@ void main() {
     // of sparse or two-valued light often (still-camera temporal error
     // 1.1-2.3x without this, docs/results.md); a change of the light itself
     // beyond the noise is still clipped or rejected.
-    float still = clamp(1.0 - length(mv) / DN_STATIC_MOTION, 0.0, 1.0);
+    float still = dn_stillness(mv);
     if (still > 0.0 && sigma < 0.0) sigma = history_sigma(prev_pixel, prev_m);
     vec3 lo, hi;
     if (valid && clip_box(pos, d, still * max(sigma, 0.0), lo, hi)) {

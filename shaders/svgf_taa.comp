@@ -1,11 +1,12 @@
 #version 450
-// svgf_taa: the optional final temporal anti-aliasing blend (taa_alpha > 0;
-// docs/pipelines.md, "svgf in detail", 5). Per pixel: where svgf_remodulate
-// found a usable history, the reprojected previous final output is clamped
-// per RGB channel to the min/max of the current colour over the 3x3
-// neighbourhood (the taps inside the image) and out = mix(clamped, current,
-// taa_alpha); elsewhere out = current. out goes to Output (session format)
-// and to the TAA history (fp32). One invocation per pixel pair.
+// svgf_taa: the final temporal anti-aliasing blend (taa_alpha or
+// taa_static_alpha > 0; docs/pipelines.md, "svgf in detail", 5). Per pixel:
+// where svgf_remodulate found a usable history (its blend weight a < 1), the
+// reprojected previous final output is clamped per RGB channel to the
+// min/max of the current colour over the 3x3 neighbourhood (the taps inside
+// the image) and out = mix(clamped, current, a); elsewhere out = current.
+// out goes to Output (session format) and to the TAA history (fp32). One
+// invocation per pixel pair.
 //
 // Resources: passes/svgf_taa.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -17,7 +18,7 @@
 vec3 blend(uint p) {
   vec4 c = current.data[p];
   vec3 out_c = c.rgb;
-  if (c.a > 0.5) {
+  if (c.a < 1.0) {
     ivec2 size = ivec2(frame.size.xy);
     ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
     vec3 lo = c.rgb, hi = c.rgb;
@@ -30,7 +31,7 @@ vec3 blend(uint p) {
         hi = max(hi, v);
       }
     vec3 prev = clamp(previous.data[p].rgb, lo, hi);
-    out_c = mix(prev, c.rgb, DN_PARAM_VALUE(svgf, taa_alpha));
+    out_c = mix(prev, c.rgb, c.a);
   }
   history.data[3u * p] = out_c.r;
   history.data[3u * p + 1u] = out_c.g;

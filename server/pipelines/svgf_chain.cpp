@@ -171,7 +171,7 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   SvgfVariant v;
   v.iterations = static_cast<uint32_t>(p.svgf_atrous_iterations);
   v.feedback_tap = static_cast<uint32_t>(p.svgf_feedback_tap);
-  v.taa = p.svgf_taa_alpha > 0.0f;
+  v.taa = p.svgf_taa_alpha > 0.0f || p.svgf_taa_static_alpha > 0.0f;
   v.emission = has_channel(config, protocol::ChannelId::Emission);
   // Clipping needs to know the glossy pixels: without a roughness plane it
   // would clip diffuse noise too (and bias sparse samples toward black).

@@ -43,8 +43,4 @@ float dn_moments_sigma(vec2 m) {
   return v > 1e-6 * m.x * m.x ? sqrt(v) : 0.0;
 }
 
-// Motion below which a pixel counts as static (px per frame): its history
-// is not clipped within its noise (svgf_reproject's clip_box).
-const float DN_STATIC_MOTION = 0.05;
-
 #endif

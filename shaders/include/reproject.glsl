@@ -8,6 +8,14 @@
 // is treated as lost (a documented constant, not a tunable).
 const float DN_MIN_TAP_WEIGHT = 1e-3;
 
+// Motion below which a pixel counts as static (px per frame): its history is
+// not clipped within its noise (svgf_reproject's clip_box) and its final
+// output is stabilised by taa_static_alpha (svgf_remodulate).
+const float DN_STATIC_MOTION = 0.05;
+
+// 1 for a static pixel, falling linearly to 0 at DN_STATIC_MOTION.
+float dn_stillness(vec2 mv) { return clamp(1.0 - length(mv) / DN_STATIC_MOTION, 0.0, 1.0); }
+
 vec2 dn_previous_position(uint pixel, uint width, vec2 motion_px) {
   return vec2(float(pixel % width), float(pixel / width)) + 0.5 + motion_px;
 }

@@ -221,7 +221,8 @@ TEST_F(SupersampleTest, AssignMixAndResolveFollowTheDocumentedRules) {
   EXPECT_LE(worst, 1e-5) << "mixed signal against the host's Eq. 7";
 
   // Resolve: the mean of the pixel's displayed colour and its samples' guides'.
-  const auto display = floats(graph->captured("svgf_remodulate", "supersample_display"));
+  // The displayed frame as the final TAA blend (taa_static_alpha) writes it.
+  const auto display = floats(graph->captured("svgf_taa", "supersample_display"));
   double worst_resolve = 0.0;
   for (int p = 0; p < w * h; ++p) {
     double r[3] = {display[3 * p], display[3 * p + 1], display[3 * p + 2]}, c = 1.0;

@@ -13,10 +13,10 @@ using test::Format;
 
 constexpr int kFrames = 10;
 
-// Two alternating frames of the panning scene; split mode sends diffuse + a
-// decorrelated specular instead of radiance.
-std::vector<test::HostFrame> svgf_inputs(int w, int h, Format in, bool split) {
-  test::PanningScene scene(w, h, 1, 1.5f, 0.5f, 0.2f, 0.5f);
+// Two alternating frames of the panning scene (a still camera when !moving);
+// split mode sends diffuse + a decorrelated specular instead of radiance.
+std::vector<test::HostFrame> svgf_inputs(int w, int h, Format in, bool split, bool moving = true) {
+  test::PanningScene scene(w, h, 1, moving ? 1.5f : 0.0f, moving ? 0.5f : 0.0f, moving ? 0.2f : 0.0f, 0.5f);
   std::vector<test::HostFrame> inputs;
   for (int t = 0; t < 2; ++t) {
     test::SceneFrame s = scene.frame(t);
@@ -50,10 +50,10 @@ std::vector<protocol::ChannelDecl> svgf_channels(Format in, bool split) {
 }
 
 void run(const std::string& label, int w, int h, Format in, bool split,
-         std::vector<protocol::Parameter> parameters = {}) {
+         std::vector<protocol::Parameter> parameters = {}, bool moving = true) {
   auto config = test::make_config("svgf", w, h, svgf_channels(in, split), in, std::move(parameters));
   auto pipe = pipelines::create(test::context(), config);
-  const auto times = test::time_passes(*pipe, svgf_inputs(w, h, in, split), kFrames);
+  const auto times = test::time_passes(*pipe, svgf_inputs(w, h, in, split, moving), kFrames);
   char full[96];
   std::snprintf(full, sizeof full, "%s %dx%d %s", label.c_str(), w, h, in == Format::F16 ? "fp16" : "fp32");
   test::print_pass_times(full, times, pipe->device_bytes());
@@ -66,10 +66,15 @@ TEST(Perf, SvgfPassTimes) {
     for (Format in : {Format::F32, Format::F16}) run("svgf", w, h, in, false);
 }
 
-// The final TAA blend (taa_alpha 0.1), 640x360 fp32.
+// The final TAA blend, 640x360 fp32: everywhere (taa_alpha 0.1), the
+// default static blend alone on a moving and on a still camera, and none.
 TEST(Perf, SvgfTaaPassTimes) {
   if (!test::perf_requested()) GTEST_SKIP() << "set DN_PERF=1";
   run("svgf taa", 640, 360, Format::F32, false, {{"taa_alpha", 0.1}});
+  run("svgf static blend, moving", 640, 360, Format::F32, false);
+  run("svgf static blend, still", 640, 360, Format::F32, false, {}, false);
+  run("svgf no taa", 640, 360, Format::F32, false, {{"taa_static_alpha", 0}});
+  run("svgf no taa, still", 640, 360, Format::F32, false, {{"taa_static_alpha", 0}}, false);
 }
 
 // Split mode (diffuse + specular), 640x360 fp32.

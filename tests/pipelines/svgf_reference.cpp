@@ -476,11 +476,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] * sf[3 * i + k] : 0.0) + e[3 * i + k];
 
   remodulated_ = out;
-  // Pass 5 (taa_alpha > 0): previous final output at p + mv (bilinear over
-  // the taps inside the image, renormalized, at least 1e-3 of weight) for a
-  // foreground pixel without reset, clamped per channel to the 3x3 min/max of
-  // the current colour, out = mix(clamped, current, taa_alpha).
-  if (p_.taa_alpha > 0.0) {
+  // Pass 5 (taa_alpha or taa_static_alpha > 0): previous final output at
+  // p + mv (bilinear over the taps inside the image, renormalized, at least
+  // 1e-3 of weight) for a foreground pixel without reset, clamped per channel
+  // to the 3x3 min/max of the current colour, out = mix(clamped, current, a):
+  // a = taa_alpha (1 when 0) where |mv| >= 0.05 px, falling linearly to
+  // taa_static_alpha at |mv| = 0 when that is smaller; no blend when a = 1.
+  if (p_.taa_alpha > 0.0 || p_.taa_static_alpha > 0.0) {
+    const double moving = p_.taa_alpha > 0.0 ? p_.taa_alpha : 1.0;
     const std::vector<double>& cur_c = remodulated_;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -500,6 +503,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           sw += wk;
         }
         if (!(sw >= static_cast<double>(1e-3f))) continue;
+        const double still = std::clamp(1.0 - std::hypot(mvx, mvy) / 0.05, 0.0, 1.0);
+        const double a = p_.taa_static_alpha > 0.0 && p_.taa_static_alpha < moving
+                             ? moving + (p_.taa_static_alpha - moving) * still
+                             : moving;
+        if (a >= 1.0) continue;
         for (int c = 0; c < 3; ++c) {
           double lo = cur_c[3 * i + c], hi = lo;
           for (int dy = -1; dy <= 1; ++dy)
@@ -510,7 +518,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
               hi = std::max(hi, cur_c[3 * (qy * w + qx) + c]);
             }
           const double prev = std::clamp(s[c] / sw, lo, hi);
-          out[3 * i + c] = prev * (1.0 - p_.taa_alpha) + cur_c[3 * i + c] * p_.taa_alpha;
+          out[3 * i + c] = prev * (1.0 - a) + cur_c[3 * i + c] * a;
         }
       }
     taa_ = out;

@@ -31,6 +31,7 @@ struct Variant {
   MotionConvention conv;
   bool emission;
   std::vector<protocol::Parameter> params;
+  float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
 };
 
 void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
@@ -56,13 +57,14 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
     if (p.name == "phi_normal") params.phi_normal = p.value;
     if (p.name == "phi_depth") params.phi_depth = p.value;
     if (p.name == "taa_alpha") params.taa_alpha = p.value;
+    if (p.name == "taa_static_alpha") params.taa_static_alpha = p.value;
     if (p.name == "clip_roughness") params.clip_roughness = p.value;
     if (p.name == "variance_of_mean") params.variance_of_mean = static_cast<int>(p.value);
     if (p.name == "luminance_ramp") params.luminance_ramp = static_cast<int>(p.value);
     if (p.name == "propagate_variance") params.propagate_variance = static_cast<int>(p.value);
   }
   test::SvgfReference ref(v.w, v.h, params);
-  SvgfSceneGen scene(v.w, v.h, 4321, 1.37f, -0.61f, 0.45f, 0.8f, 0.003);
+  SvgfSceneGen scene(v.w, v.h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
   const int frames = 7;
   double worst = 0.0;
   for (int t = 0; t < frames; ++t) {
@@ -102,6 +104,12 @@ INSTANTIATE_TEST_SUITE_P(
                 {{"taa_alpha", 0.1}}},
         Variant{"taa_fp16_uv", 97, 61, Format::F16, Format::F16, MotionConvention::UvToPrevious, false,
                 {{"taa_alpha", 0.25}, {"atrous_iterations", 2}}},
+        // Nearly still (|mv| around the 0.05 px static limit): the static
+        // blend's weight between 1 (or taa_alpha) and taa_static_alpha.
+        Variant{"nearly_still", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true, {},
+                0.01f, 0.02f, 0.02f},
+        Variant{"nearly_still_taa", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
+                {{"taa_alpha", 0.8}, {"taa_static_alpha", 0.3}}, 0.02f, -0.01f, 0.03f},
         // History clipping off (clip_roughness 0) and the per-sample
         // variance (variance_of_mean 0): Falcor's svgf.
         Variant{"no_clip", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
@@ -391,7 +399,7 @@ TEST_F(SvgfTest, TimingsNameEveryPass) {
   for (const auto& t : timings) names.push_back(t.name);
   EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject", "svgf_variance", "svgf_atrous_0",
                                              "svgf_atrous_1", "svgf_atrous_2", "svgf_atrous_3", "svgf_remodulate",
-                                             "download"}));
+                                             "svgf_taa", "download"}));
 }
 
 TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
@@ -400,11 +408,14 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy), scratch 4*16 (2 illumination, guide, temporal),
-  // output 12 = 156 B/px, + the uniform block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 156 + pipelines::GraphSpec::kUniformBytes);
-  // fp16 planes: 6+6+6+2+4 + 32 + 64 + 6 = 126 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 126 + pipelines::GraphSpec::kUniformBytes);
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 12 (the TAA blend's, fp32 rgb), scratch 4*16
+  // (2 illumination, guide, temporal), output 12 = 168 B/px, + the uniform block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 168 + pipelines::GraphSpec::kUniformBytes);
+  // fp16 planes: 6+6+6+2+4 + 44 + 64 + 6 = 138 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 138 + pipelines::GraphSpec::kUniformBytes);
+  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 156 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
+            64u * 48 * 156 + pipelines::GraphSpec::kUniformBytes);
 }
 
 TEST(SvgfValidate, ChannelsAndParameters) {
@@ -516,7 +527,7 @@ TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
                                              "svgf_atrous_0_diffuse", "svgf_atrous_1_diffuse",
                                              "svgf_reproject_specular", "svgf_variance_specular",
                                              "svgf_atrous_0_specular", "svgf_atrous_1_specular", "svgf_remodulate",
-                                             "download"}));
+                                             "svgf_taa", "download"}));
 }
 
 TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
@@ -526,12 +537,12 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16), scratch 5*16 (3 illumination,
-  // guide, temporal), output 12 = 216 B/px, + the uniform block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 216 + pipelines::GraphSpec::kUniformBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 64 + 80 + 6 = 180 B/px.
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 12 (TAA), scratch 5*16
+  // (3 illumination, guide, temporal), output 12 = 228 B/px, + the uniform block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 228 + pipelines::GraphSpec::kUniformBytes);
+  // fp16 planes: 6+6+6+6+2+4 + 76 + 80 + 6 = 192 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 180 + pipelines::GraphSpec::kUniformBytes);
+            64u * 48 * 192 + pipelines::GraphSpec::kUniformBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -635,9 +646,10 @@ std::vector<std::string> pass_names(pipelines::Pipeline& p, const test::HostFram
   return names;
 }
 
-// taa_alpha = 0 (the default) is the graph without TAA: same passes, same
-// bytes, bit-identical output; taa_alpha > 0 adds svgf_taa after
-// svgf_remodulate and 12 B/px of persistent history, nothing else.
+// taa_alpha = taa_static_alpha = 0 is the graph without TAA; either > 0
+// (taa_static_alpha's default 0.5) adds svgf_taa after svgf_remodulate and
+// 12 B/px of persistent history, nothing else. Where every pixel moves by
+// more than 0.05 px the static blend alone changes no bit of the output.
 TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
   const int w = 64, h = 40;
   SvgfSceneGen scene(w, h, 77, 1.3f, 0.4f, 0.3f, 0.5f);
@@ -646,7 +658,8 @@ TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
     frames.push_back(host_frame(scene.frame(t), w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true));
   auto frame = [&](int t) -> const test::HostFrame& { return frames[t]; };
   auto base = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {}, true));
-  auto off = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0}}, true));
+  auto off = pipelines::create(
+      ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0}, {"taa_static_alpha", 0}}, true));
   auto on = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0.1}}, true));
   const std::vector<std::string> without = {"upload",        "svgf_reproject", "svgf_variance", "svgf_atrous_0",
                                             "svgf_atrous_1", "svgf_atrous_2",  "svgf_atrous_3", "svgf_remodulate",
@@ -655,9 +668,9 @@ TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
   std::vector<std::string> with = without;
   with.insert(with.end() - 1, "svgf_taa");
   EXPECT_EQ(pass_names(*on, frame(0)), with);
-  EXPECT_EQ(off->device_bytes(), base->device_bytes());
-  EXPECT_EQ(on->device_bytes(), base->device_bytes() + round_up4_bytes(uint64_t{w} * h * 12));
-  run(*base, frame(0));
+  EXPECT_EQ(pass_names(*base, frame(0)), with);
+  EXPECT_EQ(on->device_bytes(), base->device_bytes());
+  EXPECT_EQ(base->device_bytes(), off->device_bytes() + round_up4_bytes(uint64_t{w} * h * 12));
   for (int t = 1; t < 5; ++t) EXPECT_EQ(run(*off, frame(t)), run(*base, frame(t))) << "frame " << t;
 }
 
@@ -692,7 +705,7 @@ TEST_F(SvgfTest, TaaStaysInsideTheNeighbourhoodOfAStepEdge) {
     return r;
   };
   auto on = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0.1}}));
-  auto off = pipelines::create(ctx(), svgf_config(w, h));
+  auto off = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_static_alpha", 0}}));
   test::SvgfParams params;
   params.taa_alpha = 0.1;
   test::SvgfReference ref(w, h, params);
