@@ -223,7 +223,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   desc.output_format = output_format;
   desc.parameters = params;
   desc.max_in_flight = uint32_t(in_flight);
-  for (const auto& ch : plan) desc.channel(ch.id, fp16 ? Format::F16 : Format::F32);
+  for (const auto& ch : plan) desc.channel(ch.id, wire_format(ch.id, fp16));
 
   if (!quiet) {
     std::fprintf(stderr, "dn: %s (%s), %dx%d, pipeline %s, preset %s, %zu frame%s\n", conn.endpoint().c_str(),

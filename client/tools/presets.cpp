@@ -137,6 +137,9 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         const ChannelId id = protocol::sample_channel(j, static_cast<protocol::SampleField>(f));
         p.channels.push_back(spec(id, {{{L(std::string(protocol::find_channel(id)->name))}}}));
       }
+    // dnrender --stats: stat_count.Y, stat_mean.R/G/B, ... (docs/protocol.md §7.7).
+    for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3})
+      p.channels.push_back(spec(id, {{{L(std::string(protocol::find_channel(id)->name))}}}));
     return p;
   }
   if (name == "cycles") {
@@ -413,6 +416,8 @@ std::vector<ChannelId> parse_channel_list(const std::string& list) {
 
 namespace {
 
+constexpr ChannelId kStatistics[] = {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3};
+
 bool is_split(ChannelId id) {
   return id == ChannelId::Diffuse || id == ChannelId::Specular || id == ChannelId::DiffuseLighting ||
          id == ChannelId::SpecularLighting || id == ChannelId::SpecularAlbedo;
@@ -497,7 +502,11 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
           (wants(ChannelId::SpecularLighting) ||
            (takes(ChannelId::SpecularLighting) && resolvable(ChannelId::SpecularLighting) &&
             takes(ChannelId::SpecularAlbedo) && resolvable(ChannelId::SpecularAlbedo)));
+      // The sample statistics go all four or none (docs/protocol.md §7.7).
+      bool statistics = true;
+      for (ChannelId id : kStatistics) statistics = statistics && (wants(id) || (takes(id) && resolvable(id)));
       auto skip = [&](ChannelId id) {
+        if (protocol::is_sample_statistic(id)) return !statistics;
         if (const auto field = protocol::sample_field(id)) {
           // Extra samples carry the colour of the session's signals; the
           // lighting forms take none.
@@ -542,6 +551,10 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
   // Protocol order (by id) keeps the session's declaration stable.
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return uint8_t(a.id) < uint8_t(b.id); });
   return out;
+}
+
+protocol::Format wire_format(ChannelId id, bool fp16) {
+  return fp16 && !protocol::is_sample_statistic(id) ? protocol::Format::F16 : protocol::Format::F32;
 }
 
 void convert_cycles_depth(std::span<float> depth) {

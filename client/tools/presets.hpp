@@ -130,7 +130,8 @@ std::string describe_tried(const ChannelSpec& spec, const std::string& layer_pre
 // channel and the layers tried when one is missing), every --channel override,
 // and the pipeline's optional channels the file has. The split-radiance
 // channels (diffuse, specular) are left out when radiance is sent, unless
-// required or overridden. `only` (from --channels) replaces the automatic
+// required or overridden; the sample statistics (51-54) are taken as
+// optional channels only all four together. `only` (from --channels) replaces the automatic
 // choice. `pipeline` may be null (server did not list it): then `only` or the
 // overrides, else radiance/albedo/normal/depth/motion when present.
 std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vector<ChannelSpec>& overrides,
@@ -154,6 +155,11 @@ struct RoughGuidePlan {
 };
 std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std::vector<ResolvedChannel>& plan,
                                                 const std::vector<std::string>& exr_channels);
+
+// The format a channel is declared in: F16 with --fp16, except the sample
+// statistics (ids 51-54), which the protocol takes in F32 only
+// (docs/protocol.md §7.7; an F16 one is refused, INVALID_CHANNEL).
+protocol::Format wire_format(protocol::ChannelId id, bool fp16);
 
 // Parses "radiance,albedo,..." (protocol channel names).
 std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);

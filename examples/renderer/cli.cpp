@@ -40,7 +40,8 @@ const char* const kUsage =
     "  --extra-samples N  guide-ray supersampling (paper 001 §5; needs --spp 1): N = 1..3 more primary\n"
     "                     samples per pixel, each with its own path, normal, depth and offset\n"
     "                     (sample<j>_* layers, protocol channels 33-50)\n"
-    "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1)\n"
+    "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1); with\n"
+    "                     --server streamed as protocol channels 51-54 when the pipeline takes them\n"
     "  --reflection       also the reflection features of mirror and glossy pixels (reflection_* layers,\n"
     "                     protocol channels 15-21)\n"
     "  --out DIR          write DIR/frame_%04d.exr (dnrender layout, docs/client.md)\n"
@@ -186,9 +187,21 @@ int run_cli(const CliOptions& o) {
     StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
     streamer = std::make_unique<FrameStreamer>(so);
     // Without --out nothing but the session sees the frame: render only what the pipeline takes.
-    // With it, the files get the asked-for channels, plus the reflection features if the pipeline takes them.
-    if (o.out.empty()) settings.channels = streamer->channels_needed();
-    else settings.channels.reflection |= streamer->channels_needed().reflection;
+    // With it, the files get the asked-for channels, plus the reflection features and the sample
+    // statistics if the pipeline takes them.
+    const ChannelSet needed = streamer->channels_needed();
+    if (o.out.empty()) settings.channels = needed;
+    else {
+      settings.channels.reflection |= needed.reflection;
+      settings.channels.statistics |= needed.statistics;
+    }
+    // The server refuses a channel its pipeline does not take (INVALID_CHANNEL), so --stats
+    // streams the statistics (ids 51-54) only to a pipeline whose masks list them.
+    if (o.render.channels.statistics && !needed.statistics)
+      std::fprintf(stderr,
+                   "dnrender: --stats is ignored for streaming: pipeline %s takes no sample statistics "
+                   "(stat_count, stat_mean, stat_m2, stat_m3)%s\n",
+                   o.pipeline.c_str(), o.out.empty() ? "; they are not rendered" : "; they are still written to --out");
   }
   std::vector<double> ms, mrays, rays_per_pixel;
   FrameBuffers fb;

@@ -8,6 +8,10 @@
 
 namespace dn::render {
 
+// A sample as the statistics take it (docs/protocol.md §7.7): NaN, +-inf and
+// negative values count as 0, as StatMC does.
+inline float sanitize_sample(float x) { return std::isfinite(x) && x > 0.0f ? x : 0.0f; }
+
 // Box-Cox with lambda = 1/2: (x^0.5 - 1) / 0.5. Negative input is clamped to 0.
 inline float box_cox_half(float x) { return 2.0f * std::sqrt(x > 0.0f ? x : 0.0f) - 2.0f; }
 

@@ -607,7 +607,7 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
     sum.emission += p.emission;
     const glm::vec3 total = p.total();
     if (want.statistics)
-      for (int c = 0; c < 3; ++c) stats[c].add(total[c]);
+      for (int c = 0; c < 3; ++c) stats[c].add(sanitize_sample(total[c]));
     if (want.record_samples && s < fb.samples_stride) put3(fb.samples, i * fb.samples_stride + s, total);
   }
   if (count > 0) {

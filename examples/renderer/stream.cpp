@@ -13,9 +13,7 @@ namespace dn::render {
 
 using protocol::ChannelId;
 
-namespace {
-
-const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
+const std::vector<float>* stream_plane(const FrameBuffers& fb, ChannelId id) {
   switch (id) {
     case ChannelId::Radiance: return &fb.radiance;
     case ChannelId::Diffuse: return &fb.diffuse;
@@ -36,6 +34,10 @@ const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
     case ChannelId::ReflectionDirection: return &fb.reflection_direction;
     case ChannelId::ReflectionDistance: return &fb.reflection_distance;
     case ChannelId::ReflectionFootprint: return &fb.reflection_footprint;
+    case ChannelId::StatCount: return &fb.stat_count;
+    case ChannelId::StatMean: return &fb.stat_mean;
+    case ChannelId::StatM2: return &fb.stat_m2;
+    case ChannelId::StatM3: return &fb.stat_m3;
     default: break;
   }
   for (uint32_t j = 1; j <= fb.extra.size(); ++j) {
@@ -50,9 +52,6 @@ const std::vector<float>* plane_of(const FrameBuffers& fb, ChannelId id) {
   }
   return nullptr;
 }
-
-
-}  // namespace
 
 ChannelSet channels_for(uint64_t takes, bool send_split) {
   auto takes_any = [&](std::initializer_list<ChannelId> ids) {
@@ -71,8 +70,37 @@ ChannelSet channels_for(uint64_t takes, bool send_split) {
   set.reflection = takes_any({ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo, ChannelId::ReflectionNormal,
                               ChannelId::ReflectionDepth, ChannelId::ReflectionDirection,
                               ChannelId::ReflectionDistance, ChannelId::ReflectionFootprint});
-  set.statistics = false;
+  set.statistics = takes_any({ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3});
   return set;
+}
+
+std::vector<ChannelId> stream_channels(uint64_t takes, const FrameBuffers& sample, bool send_split) {
+  auto has = [&](ChannelId id) {
+    const auto* p = stream_plane(sample, id);
+    return p && !p->empty();
+  };
+  auto bit = [](ChannelId id) { return protocol::channel_bit(id); };
+  const bool split = has(ChannelId::Diffuse) && has(ChannelId::Specular) && (takes & bit(ChannelId::Diffuse)) &&
+                     (takes & bit(ChannelId::Specular)) && (send_split || !(takes & bit(ChannelId::Radiance)));
+  // The sample statistics go all four or none (docs/protocol.md §7.7).
+  bool statistics = true;
+  for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3})
+    statistics = statistics && (takes & bit(id)) && has(id);
+  std::vector<ChannelId> ids;
+  for (const auto& c : protocol::kChannels) {
+    if (c.id == ChannelId::Output || !(takes & bit(c.id)) || !has(c.id)) continue;
+    if (split && c.id == ChannelId::Radiance) continue;
+    if (!split && (c.id == ChannelId::Diffuse || c.id == ChannelId::Specular)) continue;
+    if (protocol::is_sample_statistic(c.id) && !statistics) continue;
+    if (const auto field = protocol::sample_field(c.id)) {
+      // Extra samples carry the colour the session's signals are sent in.
+      using protocol::SampleField;
+      if (*field == SampleField::Radiance && split) continue;
+      if ((*field == SampleField::Diffuse || *field == SampleField::Specular) && !split) continue;
+    }
+    ids.push_back(c.id);
+  }
+  return ids;
 }
 
 struct FrameStreamer::State {
@@ -104,32 +132,23 @@ void FrameStreamer::open(const FrameBuffers& sample) {
   const StreamOptions& options = options_;
   const protocol::PipelineInfo* info = &state_->pipeline;
   const uint64_t takes = info->required_channels | info->optional_channels;
-  auto has = [&](ChannelId id) { const auto* p = plane_of(sample, id); return p && !p->empty(); };
-  auto bit = [](ChannelId id) { return protocol::channel_bit(id); };
-  const bool split = has(ChannelId::Diffuse) && has(ChannelId::Specular) && (takes & bit(ChannelId::Diffuse)) &&
-                     (takes & bit(ChannelId::Specular)) &&
-                     (options.send_split || !(takes & bit(ChannelId::Radiance)));
+  auto has = [&](ChannelId id) {
+    const auto* p = stream_plane(sample, id);
+    return p && !p->empty();
+  };
   client::SessionDesc desc;
   desc.width = static_cast<uint32_t>(sample.width);
   desc.height = static_cast<uint32_t>(sample.height);
   desc.pipeline = options.pipeline;
   desc.max_in_flight = static_cast<uint32_t>(options.in_flight);
-  for (const auto& c : protocol::kChannels) {
-    if (c.id == ChannelId::Output || !(takes & bit(c.id)) || !has(c.id)) continue;
-    if (split && c.id == ChannelId::Radiance) continue;
-    if (!split && (c.id == ChannelId::Diffuse || c.id == ChannelId::Specular)) continue;
-    if (const auto field = protocol::sample_field(c.id)) {
-      // Extra samples carry the colour the session's signals are sent in.
-      using protocol::SampleField;
-      if (*field == SampleField::Radiance && split) continue;
-      if ((*field == SampleField::Diffuse || *field == SampleField::Specular) && !split) continue;
-    }
-    desc.channel(c.id);
-    state_->channels.push_back(c.id);
-    channel_names_.emplace_back(c.name);
+  // Every plane is sent as fp32 (the sample statistics must be: docs/protocol.md §7.7).
+  for (ChannelId id : stream_channels(takes, sample, options.send_split)) {
+    desc.channel(id, protocol::Format::F32);
+    state_->channels.push_back(id);
+    channel_names_.emplace_back(protocol::find_channel(id)->name);
   }
   for (const auto& c : protocol::kChannels)
-    if ((info->required_channels & bit(c.id)) && !has(c.id))
+    if ((info->required_channels & protocol::channel_bit(c.id)) && !has(c.id))
       throw std::runtime_error("pipeline " + options.pipeline + " requires channel " + std::string(c.name) +
                                ", which this render does not produce");
   state_->session.emplace(state_->connection.open_session(desc));
@@ -152,7 +171,7 @@ void FrameStreamer::submit(int frame, const FrameBuffers& fb, const Camera& came
   in.no_output = options_.out_dir.empty();
   if (reset) in.reset();
   if (!state_->session) open(fb);
-  for (ChannelId id : state_->channels) in.add(id, std::span<const float>(*plane_of(fb, id)));
+  for (ChannelId id : state_->channels) in.add(id, std::span<const float>(*stream_plane(fb, id)));
   state_->session->submit(in);
   write_ready(false);
 }

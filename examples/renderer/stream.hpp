@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "camera.hpp"
+#include "dn/protocol/channels.hpp"
 #include "render.hpp"
 
 namespace dn::render {
@@ -25,9 +26,20 @@ struct StreamOptions {
 
 // What to render for a pipeline that takes the channel mask `takes`
 // (required | optional): split lighting and emission only when they will be
-// sent, G-buffers, motion and the reflection features only when the pipeline
-// reads some of them. Statistics have no protocol channel: never needed.
+// sent, G-buffers, motion, the reflection features (ids 15-21) and the sample
+// statistics (ids 51-54) only when the pipeline reads some of them.
 ChannelSet channels_for(uint64_t takes, bool send_split);
+
+// The plane of `fb` that channel `id` is streamed from (nullptr: none; empty:
+// not rendered). The sample statistics are fb.stat_count/_mean/_m2/_m3.
+const std::vector<float>* stream_plane(const FrameBuffers& fb, protocol::ChannelId id);
+
+// The channels a session declares for a pipeline taking `takes`, given a
+// rendered frame: the taken ones the frame has, radiance or the split
+// (send_split), the extra samples' colour in the session's form, and the
+// sample statistics only all four together. In protocol order; each is
+// streamed as fp32.
+std::vector<protocol::ChannelId> stream_channels(uint64_t takes, const FrameBuffers& sample, bool send_split);
 
 class FrameStreamer {
  public:

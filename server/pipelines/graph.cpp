@@ -144,6 +144,15 @@ void GraphSpec::add_shared(std::string name, SharedResource resource) {
   buffers.push_back(std::move(b));
 }
 
+void GraphSpec::add_constant(std::string name, std::vector<uint8_t> data) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Constant;
+  b.bytes = round_up4(data.size());
+  b.data = std::move(data);
+  buffers.push_back(std::move(b));
+}
+
 PassSpec& GraphSpec::add_pass(std::string name, std::string_view shader) {
   return passes.emplace_back(std::move(name), shader);
 }
@@ -172,7 +181,7 @@ void GraphSpec::check() const {
         throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
                                " to the previous copy of " + ref.buffer + ", which is not History");
       const bool writes = pass.declaration().bindings[i].access != shaders::Access::read;
-      if (writes && (b->role == BufferRole::Input || b->role == BufferRole::Shared))
+      if (writes && (b->role == BufferRole::Input || b->role == BufferRole::Shared || b->role == BufferRole::Constant))
         throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
                                " (written) to read-only buffer " + ref.buffer);
     }
@@ -218,7 +227,7 @@ void GraphPipeline::set_capture(bool on) {
     for (const auto& ref : pass.spec->bindings()) {
       if (!ref.bound()) continue;
       const BufferSpec* b = spec_->find(ref.buffer);
-      if (b->role == BufferRole::Input || b->role == BufferRole::Shared) continue;
+      if (b->role == BufferRole::Input || b->role == BufferRole::Shared || b->role == BufferRole::Constant) continue;
       pass.captures.push_back({ref.buffer, ref.slot,
                                gpu::Buffer(context_, b->bytes, gpu::BufferKind::StorageDownload,
                                            pass.spec->name() + ":" + ref.buffer)});
@@ -278,13 +287,17 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
         continue;
       }
       gpu::BufferKind kind = gpu::BufferKind::Storage;
-      if (b.role == BufferRole::Input) kind = gpu::BufferKind::StorageUpload;
+      if (b.role == BufferRole::Input || b.role == BufferRole::Constant) kind = gpu::BufferKind::StorageUpload;
       if (b.role == BufferRole::Output) kind = gpu::BufferKind::StorageDownload;
       n.copies[0] = gpu::Buffer(context, b.bytes, kind, b.name);
       device_bytes_ += b.bytes;
       if (b.role == BufferRole::History) {
         n.copies[1] = gpu::Buffer(context, b.bytes, kind, b.name + "[1]");
         device_bytes_ += b.bytes;
+      }
+      if (b.role == BufferRole::Constant) {
+        n.copies[0].write(b.data);
+        constants_staged_ = constants_staged_ || n.copies[0].staged();
       }
     }
     uniform_ = gpu::Buffer(context, GraphSpec::kUniformBytes, gpu::BufferKind::Uniform, "frame_constants");
@@ -439,9 +452,11 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
                       VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
                           VK_ACCESS_TRANSFER_WRITE_BIT);
   timestamps_->write(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0);
-  if (any_staged_input) {
-    for (auto& n : nodes_)
+  if (any_staged_input || constants_staged_) {
+    for (auto& n : nodes_) {
       if (n.spec->role == BufferRole::Input) n.copies[0].record_upload(cmd, n.spec->plane_bytes);
+      if (n.spec->role == BufferRole::Constant && constants_staged_) n.copies[0].record_upload(cmd, n.spec->bytes);
+    }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
   }
@@ -493,6 +508,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
 
   ++frames_;
   history_valid_ = true;
+  constants_staged_ = false;  // the device copy is made
 }
 
 }  // namespace dn::pipelines

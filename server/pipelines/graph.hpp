@@ -16,6 +16,9 @@
 //  - Persistent: per-session state kept across frames in a single copy (no
 //             ping-pong): for state whose every read in a frame comes before
 //             the pass that overwrites it (Slot is ignored)
+//  - Constant: per-session read-only data the definition computes on the
+//             host from the session's parameters (a table), uploaded once
+//             before the first frame
 // Every binding of a pass is a storage buffer, bound by the name its shader
 // declares (pass.hpp); binding 0 is the FrameConstants uniform buffer.
 #pragma once
@@ -42,7 +45,7 @@ namespace dn::pipelines {
 
 // Shared: a read-only device buffer the context holds for every session
 // (BufferSpec::shared gives it); bound, never allocated or counted per session.
-enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared };
+enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared, Constant };
 
 // A context-wide resource: made on first use, then the same buffer for every
 // session of that context (e.g. fb_lut_buffer, the F_beta table).
@@ -61,6 +64,7 @@ struct BufferSpec {
   protocol::ChannelId channel = protocol::ChannelId::Radiance;  // Input/Output
   protocol::Format format = protocol::Format::F32;       // Input/Output
   SharedResource shared = nullptr;                       // Shared
+  std::vector<uint8_t> data;                             // Constant: its contents
 };
 
 struct GraphSpec {
@@ -92,6 +96,7 @@ struct GraphSpec {
   // (gpu/levels.hpp: each level rounds up; level 0 is the full resolution).
   gpu::Extent level(uint32_t factor, uint32_t level) const;
   void add_shared(std::string name, SharedResource resource);
+  void add_constant(std::string name, std::vector<uint8_t> data);
 
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).
@@ -198,6 +203,7 @@ class GraphPipeline final : public Pipeline {
   // projection * view of the last frame sent (FrameConstants::previous_view_projection).
   float view_projection_[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   bool history_valid_ = false;   // false until a frame completed, and after any failure
+  bool constants_staged_ = false;  // a staged Constant still needs its device copy
   std::mutex mutex_;
 };
 

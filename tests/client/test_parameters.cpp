@@ -130,7 +130,7 @@ TEST(ClientParameters, OneOneServerTablesReachTheClientAndHelloSaysOneTwo) {
   EXPECT_EQ(svgf->parameters[1].description, "Number of a-trous iterations.");
   conn.close();
   server.join();
-  EXPECT_EQ(hello_minor, 4);  // the client's own version, 1.4
+  EXPECT_EQ(hello_minor, 5);  // the client's own version, 1.5
 }
 
 TEST(ClientParameters, MisspeltParameterFailsLocallyWithOneOneServer) {

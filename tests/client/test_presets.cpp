@@ -249,6 +249,101 @@ TEST(ChannelMap, DnrenderLayoutAndExplicitList) {
   std::remove(path.c_str());
 }
 
+// dnrender --stats layers -> the sample statistics (docs/protocol.md §7.7):
+// sent for a pipeline that takes them, all four or none, and in F32 even with --fp16.
+TEST(ChannelMap, DnrenderStatisticsAllFourInF32) {
+  const int w = 3, h = 2, n = w * h;
+  // Distinct values per layer and component, as dnrender writes them (float).
+  std::map<std::string, std::vector<float>> layers;
+  auto fill = [&](const std::string& layer, const std::string& comps, float base) {
+    for (size_t c = 0; c < comps.size(); ++c) {
+      auto& v = layers[layer + "." + comps[c]];
+      for (int i = 0; i < n; ++i) v.push_back(base + 0.25f * float(c) + 0.0625f * float(i));
+    }
+  };
+  fill("radiance", "RGB", 1.0f);
+  fill("albedo", "RGB", 0.5f);
+  fill("normal", "XYZ", 0.0f);
+  fill("stat_count", "Y", 8.0f);
+  fill("stat_mean", "RGB", -1.5f);
+  fill("stat_m2", "RGB", 70000.0f);  // above binary16's 65504
+  fill("stat_m3", "RGB", -3.0f);
+  fill("stat_raw_mean", "RGB", 1.0f);
+  auto write = [&](const std::string& path, const std::string& without) {
+    std::vector<ExrChannelOut> out;
+    for (const auto& [name, data] : layers)
+      if (without.empty() || name.rfind(without + ".", 0) != 0) out.push_back({name, data.data(), 1, ExrPixelType::Float});
+    dn::image::write_exr(path, w, h, out);
+  };
+  const std::string path = tmp("dnrender_stats.exr"), partial = tmp("dnrender_stats_partial.exr");
+  write(path, "");
+  write(partial, "stat_m3");
+  ExrReader r(path), rp(partial);
+  const Preset preset = make_preset("auto", r.channels());
+  EXPECT_EQ(preset.name, "dnrender");
+  const uint64_t statistics =
+      bits({ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3});
+  auto ids_of = [](const std::vector<ResolvedChannel>& plan) {
+    std::vector<ChannelId> ids;
+    for (const auto& c : plan) ids.push_back(c.id);
+    return ids;
+  };
+
+  // stat's channel set: required, each from its own layer.
+  const auto stat = pipeline(bits({ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal}) | statistics, 0);
+  const auto plan = plan_channels(preset, {}, &stat, std::nullopt, r.channels(), path);
+  ASSERT_EQ(ids_of(plan), (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal,
+                                                  ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2,
+                                                  ChannelId::StatM3}));
+  EXPECT_EQ(plan[3].describe(), "stat_count.Y");
+  EXPECT_EQ(plan[4].describe(), "stat_mean.{R,G,B}");
+  EXPECT_EQ(plan[5].describe(), "stat_m2.{R,G,B}");
+  EXPECT_EQ(plan[6].describe(), "stat_m3.{R,G,B}");
+  const LoadedFrame f = load_frame(r, plan, 0);
+  const std::pair<ChannelId, std::string> sources[] = {{ChannelId::StatCount, "stat_count"},
+                                                        {ChannelId::StatMean, "stat_mean"},
+                                                        {ChannelId::StatM2, "stat_m2"},
+                                                        {ChannelId::StatM3, "stat_m3"}};
+  for (const auto& [id, layer] : sources) {
+    const auto& data = plane(f, id).data;
+    const std::string comps = id == ChannelId::StatCount ? "Y" : "RGB";
+    ASSERT_EQ(data.size(), size_t(n) * comps.size()) << layer;
+    for (int i = 0; i < n; ++i)
+      for (size_t c = 0; c < comps.size(); ++c)
+        EXPECT_EQ(data[i * comps.size() + c], layers[layer + "." + comps[c]][i]) << layer << " pixel " << i;
+  }
+  // Declared F32 with --fp16 too; every other channel follows --fp16.
+  for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3}) {
+    EXPECT_EQ(wire_format(id, true), dn::protocol::Format::F32);
+    EXPECT_EQ(wire_format(id, false), dn::protocol::Format::F32);
+  }
+  EXPECT_EQ(wire_format(ChannelId::Radiance, true), dn::protocol::Format::F16);
+  EXPECT_EQ(wire_format(ChannelId::Radiance, false), dn::protocol::Format::F32);
+
+  // A required statistic the file lacks stops the run, naming it.
+  try {
+    plan_channels(preset, {}, &stat, std::nullopt, rp.channels(), partial);
+    FAIL() << "stat_m3 is missing";
+  } catch (const ChannelMapError& e) {
+    EXPECT_NE(std::string(e.what()).find("requires channel 'stat_m3'"), std::string::npos) << e.what();
+  }
+  // A pipeline that does not take them gets none.
+  const auto svgf = pipeline(bits({ChannelId::Radiance, ChannelId::Albedo}), bits({ChannelId::Normal}));
+  EXPECT_EQ(ids_of(plan_channels(preset, {}, &svgf, std::nullopt, r.channels(), path)),
+            (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal}));
+  // Taken as optional: all four when the file has all four, none when it lacks one.
+  const auto optional = pipeline(bits({ChannelId::Radiance}), statistics);
+  EXPECT_EQ(ids_of(plan_channels(preset, {}, &optional, std::nullopt, r.channels(), path)),
+            (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::StatCount, ChannelId::StatMean,
+                                    ChannelId::StatM2, ChannelId::StatM3}));
+  EXPECT_EQ(ids_of(plan_channels(preset, {}, &optional, std::nullopt, rp.channels(), partial)),
+            (std::vector<ChannelId>{ChannelId::Radiance}));
+  // stat_raw_mean is no protocol channel: the raw mean is `radiance`.
+  EXPECT_EQ(dn::protocol::find_channel("stat_raw_mean"), nullptr);
+  std::remove(path.c_str());
+  std::remove(partial.c_str());
+}
+
 TEST(ChannelMap, OverrideSyntax) {
   ChannelSpec s = parse_channel_override("normal=N.X,N.Y,N.Z");
   EXPECT_EQ(s.id, ChannelId::Normal);

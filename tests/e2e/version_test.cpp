@@ -1,7 +1,8 @@
 // Minor versions against a real dnserver (docs/protocol.md §10): after the
 // handshake each side sends only what min(client minor, server minor)
 // defines. Channel ids 12-14 (the lighting forms) are 1.2: a 1.1 client is
-// not offered them and may not declare them.
+// not offered them and may not declare them; likewise ids 51-54 (the sample
+// statistics) and a 1.4 client.
 #include <gtest/gtest.h>
 
 #include "raw_client.hpp"
@@ -72,6 +73,68 @@ TEST(Versions, OneOneClientDeclaringAOneTwoChannelIsRefusedByName) {
   RawClient c12(server.tcp_url());
   welcome_for(c12, 2);
   EXPECT_NO_THROW(c12.open(o, 3));
+}
+
+constexpr uint64_t kOneFiveChannels =
+    protocol::channel_bit(ChannelId::StatCount) | protocol::channel_bit(ChannelId::StatMean) |
+    protocol::channel_bit(ChannelId::StatM2) | protocol::channel_bit(ChannelId::StatM3);
+
+// Ids 51-54, the sample statistics, are 1.5 (docs/protocol.md §7.7): a 1.4
+// client sees them in no mask and is not offered a pipeline that requires them.
+TEST(Versions, OneFourClientIsNotOfferedTheSampleStatistics) {
+  ServerProcess server;
+  RawClient old_client(server.tcp_url());
+  const protocol::Welcome w14 = welcome_for(old_client, 4);
+  RawClient new_client(server.tcp_url());
+  const protocol::Welcome w15 = welcome_for(new_client, 5);
+  for (const auto& p : w14.pipelines) {
+    SCOPED_TRACE(p.name);
+    EXPECT_EQ((p.required_channels | p.optional_channels) & kOneFiveChannels, 0u);
+  }
+  size_t i14 = 0, hidden = 0;
+  for (const auto& p : w15.pipelines) {
+    SCOPED_TRACE(p.name);
+    if (p.required_channels & kOneFiveChannels) {  // not offered to 1.4
+      ++hidden;
+      continue;
+    }
+    ASSERT_LT(i14, w14.pipelines.size());
+    EXPECT_EQ(w14.pipelines[i14].name, p.name);
+    EXPECT_EQ(w14.pipelines[i14].required_channels, p.required_channels);
+    EXPECT_EQ(w14.pipelines[i14].optional_channels, p.optional_channels & ~kOneFiveChannels);
+    ++i14;
+  }
+  EXPECT_EQ(i14, w14.pipelines.size());
+  EXPECT_GT(hidden, 0u) << "stat requires the statistics: a 1.5 client only";
+}
+
+TEST(Versions, OneFourClientDeclaringAStatisticIsRefusedByName) {
+  ServerProcess server;
+  protocol::OpenSession o;
+  o.width = 16;
+  o.height = 8;
+  o.pipeline = "accumulate";
+  o.output_format = protocol::Format::F32;
+  o.channels = {{ChannelId::Radiance, protocol::Format::F32}, {ChannelId::StatCount, protocol::Format::F32}};
+  auto refusal = [&](uint8_t minor) {
+    RawClient c(server.tcp_url());
+    welcome_for(c, minor);
+    c.send_bytes(as_minor(o, 2, minor));
+    auto r = c.receive();
+    if (!r) throw std::runtime_error("no reply");
+    const auto* e = std::get_if<protocol::Error>(&r->message);
+    if (!e) throw std::runtime_error("a SESSION was opened");
+    return *e;
+  };
+  const protocol::Error e14 = refusal(4);
+  EXPECT_EQ(e14.code, protocol::ErrorCode::InvalidChannel);
+  EXPECT_EQ(e14.field, "OPEN_SESSION.channels[1]");
+  EXPECT_NE(e14.message.find("'stat_count' (id 51) is defined from protocol 1.5"), std::string::npos) << e14.message;
+  // A 1.5 client may name it, but accumulate does not take it: still refused, for that reason.
+  const protocol::Error e15 = refusal(5);
+  EXPECT_EQ(e15.code, protocol::ErrorCode::InvalidChannel);
+  EXPECT_EQ(e15.field, "OPEN_SESSION.channels[1].id");
+  EXPECT_NE(e15.message.find("does not use channel stat_count"), std::string::npos) << e15.message;
 }
 
 }  // namespace

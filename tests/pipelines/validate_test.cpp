@@ -29,9 +29,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectAndStat) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 5u);
+  ASSERT_EQ(all.size(), 6u);
   // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for every SVGF-chain pipeline.
   uint64_t extra_samples = 0;
   for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
@@ -97,6 +97,18 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbAndReflect) {
     EXPECT_FALSE(p.description.empty()) << p.name;
   }
   EXPECT_EQ(names, (std::vector<std::string>{"alpha_min", "max_history", "depth_tolerance", "normal_threshold"}));
+  // stat: the raw mean, the guides and the four sample statistics (docs/protocol.md §7.7), nothing optional.
+  EXPECT_EQ(all[5].name, "stat");
+  EXPECT_EQ(all[5].required_channels,
+            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
+                protocol::channel_bit(ChannelId::Normal) | protocol::channel_bit(ChannelId::StatCount) |
+                protocol::channel_bit(ChannelId::StatMean) | protocol::channel_bit(ChannelId::StatM2) |
+                protocol::channel_bit(ChannelId::StatM3));
+  EXPECT_EQ(all[5].optional_channels, 0u);
+  std::vector<std::string> stat_names;
+  for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
+  EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
+                                                  "variance_floor", "membership", "asymmetric"}));
 }
 
 TEST(Pipelines, ParameterDefaultsAreTheSpecifiedOnes) {
@@ -153,8 +165,8 @@ TEST(Validate, RejectsUnusedDuplicateAndMalformedChannels) {
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[1].id", "twice");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Output, Format::F32}});
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "32");
-  c = test::make_config("passthrough", 8, 8, {{static_cast<ChannelId>(51), Format::F32}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "51");
+  c = test::make_config("passthrough", 8, 8, {{static_cast<ChannelId>(55), Format::F32}});
+  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "55");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, static_cast<Format>(3)}});
   expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].format", "radiance");
 }

@@ -11,7 +11,7 @@ namespace {
 std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, minor})             // version 1.0 ... 1.4
+      .raw({0x01, minor})             // version 1.0 ... 1.5
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -105,11 +105,11 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello(4));  // the sender's own version: 1.4
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(5));  // the sender's own version: 1.5
 }
 
 TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
-  for (int minor : {0, 1, 2, 3, 4}) {
+  for (int minor : {0, 1, 2, 3, 4, 5}) {
     Decoded d;
     std::vector<uint8_t> storage;
     const auto bytes = golden_hello(minor);
@@ -173,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(4));
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(5));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session(4);
+  const auto bytes = golden_open_session(5);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;

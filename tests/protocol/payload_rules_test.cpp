@@ -75,7 +75,7 @@ TEST(PayloadRules, OpenSessionChannelFormatOutOfRange) {
 TEST(PayloadRules, OpenSessionChannelIds) {
   const std::vector<ChannelDecl> ch = {{ChannelId::Radiance, Format::F32}, {ChannelId::Depth, Format::F32}};
   // Unknown id.
-  for (int bad : {22, 31, 51, 63, 64, 255}) {  // 12-14: the lighting forms, 15-21: reflection features, 33-50: extra samples (docs/protocol.md §7)
+  for (int bad : {22, 31, 55, 63, 64, 255}) {  // 12-14: the lighting forms, 15-21: reflection features, 33-50: extra samples, 51-54: sample statistics (docs/protocol.md §7)
     auto bytes = encode(open_session(ch));
     bytes[P + kOsChannels + 2] = static_cast<uint8_t>(bad);
     auto e = expect_error(bytes);
@@ -92,6 +92,64 @@ TEST(PayloadRules, OpenSessionChannelIds) {
   auto e = expect_error(bytes);
   EXPECT_EQ(e.field, "OPEN_SESSION.channels[1].id");
   EXPECT_NE(e.message.find("radiance"), std::string::npos) << e.message;
+}
+
+// Which ids each minor defines (docs/protocol.md §7, §10): 1.5 adds the
+// sample statistics 51-54 (§7.7) and nothing else; 55-63 stay undefined.
+TEST(PayloadRules, ChannelIdsOfEachMinor) {
+  auto ids = [](uint32_t lo, uint32_t hi) {
+    uint64_t m = 0;
+    for (uint32_t id = lo; id <= hi; ++id) m |= uint64_t{1} << id;
+    return m;
+  };
+  EXPECT_EQ(channels_defined_in(2) & ~channels_defined_in(1), ids(12, 14));
+  EXPECT_EQ(channels_defined_in(3) & ~channels_defined_in(2), ids(15, 21));
+  EXPECT_EQ(channels_defined_in(4) & ~channels_defined_in(3), ids(33, 50));
+  EXPECT_EQ(channels_defined_in(5) & ~channels_defined_in(4), ids(51, 54));
+  EXPECT_EQ(channels_defined_in(kVersionMinor), channels_defined_in(255));  // this version defines every id it knows
+  EXPECT_EQ(channels_defined_in(kVersionMinor) & ids(22, 31), 0u);
+  EXPECT_EQ(channels_defined_in(kVersionMinor) & ids(55, 63), 0u);
+  const struct {
+    ChannelId id;
+    const char* name;
+    uint32_t components;
+  } stats[] = {{ChannelId::StatCount, "stat_count", 1},
+               {ChannelId::StatMean, "stat_mean", 3},
+               {ChannelId::StatM2, "stat_m2", 3},
+               {ChannelId::StatM3, "stat_m3", 3}};
+  for (uint32_t k = 0; k < 4; ++k) {
+    const ChannelInfo* c = find_channel(stats[k].id);
+    ASSERT_NE(c, nullptr) << stats[k].name;
+    EXPECT_EQ(static_cast<uint32_t>(c->id), 51 + k);
+    EXPECT_EQ(c->name, stats[k].name);
+    EXPECT_EQ(c->components, stats[k].components) << stats[k].name;
+    EXPECT_EQ(c->since_minor, 5) << stats[k].name;
+    EXPECT_EQ(find_channel(stats[k].name), c);
+    EXPECT_FALSE(sample_field(stats[k].id)) << stats[k].name;  // not an extra-sample channel
+  }
+}
+
+// The statistics decode in OPEN_SESSION in either format: F32 only is the
+// server's rule (INVALID_CHANNEL, docs/protocol.md §7.7), not the decoder's.
+TEST(PayloadRules, OpenSessionTakesTheStatisticIds) {
+  const std::vector<ChannelDecl> ch = {{ChannelId::Radiance, Format::F16},
+                                       {ChannelId::StatCount, Format::F32},
+                                       {ChannelId::StatMean, Format::F32},
+                                       {ChannelId::StatM2, Format::F32},
+                                       {ChannelId::StatM3, Format::F16}};
+  const auto bytes = encode(open_session(ch));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  const auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  const auto& o = std::get<OpenSession>(d.message);
+  ASSERT_EQ(o.channels.size(), ch.size());
+  for (size_t i = 0; i < ch.size(); ++i) {
+    EXPECT_EQ(o.channels[i].id, ch[i].id) << i;
+    EXPECT_EQ(o.channels[i].format, ch[i].format) << i;
+  }
+  // Byte 20 + 2 i is channel i's id: 51 ... 54 on the wire.
+  for (size_t i = 1; i < ch.size(); ++i) EXPECT_EQ(bytes[P + kOsChannels + 2 * i], 50 + i);
 }
 
 TEST(PayloadRules, OpenSessionReservedAndOutputFormat) {

@@ -63,7 +63,7 @@ std::vector<uint8_t> golden_welcome_1_0(int header_minor) {
 }
 
 // The 1.1 payload (1.2 appended nothing to WELCOME) under a header of
-// minor `header_minor` (the sender's own: 1 or 2).
+// minor `header_minor` (the sender's own: 1 to 5).
 std::vector<uint8_t> golden_welcome_1_1(int header_minor = 1) {
   Bytes b = welcome_header(header_minor, 125);
   welcome_1_0_fields(b);
@@ -94,7 +94,7 @@ DecodeError expect_error(const std::vector<uint8_t>& bytes) {
 TEST(Welcome, GoldenOneOneBothWays) {
   const auto bytes = golden_welcome_1_1();
   ASSERT_EQ(bytes.size(), P + 125);
-  EXPECT_EQ(encode(expected_welcome(true), 5, 0), golden_welcome_1_1(4));  // a 1.4 sender's header
+  EXPECT_EQ(encode(expected_welcome(true), 5, 0), golden_welcome_1_1(5));  // a 1.5 sender's header
   Decoded d;
   std::vector<uint8_t> storage;
   auto err = decode_message(bytes, kMaxMessage, d, storage);
@@ -115,8 +115,8 @@ TEST(Welcome, OneZeroServerStillDecodesWithoutParameters) {
 }
 
 TEST(Welcome, OneZeroClientGetsTheOneZeroPayloadUnderANewerHeader) {
-  // A 1.3 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
-  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(4));
+  // A 1.5 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
+  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(5));
   // A receiver that sent a HELLO of minor >= 1 requires the tables at minor 1.
   const auto e = expect_error(golden_welcome_1_0(1));
   EXPECT_EQ(e.code, ErrorCode::Malformed);

@@ -3,11 +3,15 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
+#include <memory>
 
 #include "cli.hpp"
 #include "dn/protocol/channels.hpp"
+#include "scenes.hpp"
 #include "stream.hpp"
+#include "test_support.hpp"
 
 namespace dn::render {
 namespace {
@@ -114,6 +118,79 @@ TEST(RendererStream, ChannelsForAPipeline) {
     EXPECT_TRUE(reflect.reflection) << id;
     EXPECT_FALSE(reflect.statistics) << id;
   }
+  // The sample statistics (ids 51-54, docs/protocol.md §7.7) only for a pipeline that takes them.
+  EXPECT_FALSE(channels_for(mask({ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::SampleCount}),
+                            false)
+                   .statistics);
+  for (int id = 51; id <= 54; ++id) {
+    const ChannelSet stat = channels_for(mask({ChannelId::Radiance, static_cast<ChannelId>(id)}), false);
+    EXPECT_TRUE(stat.statistics) << id;
+    EXPECT_FALSE(stat.reflection || stat.split) << id;
+  }
+}
+
+// What a session declares for stat's channel set, and that the statistics it
+// streams are the frame's own planes: fp32, interleaved as the protocol lays
+// them out, the same values FrameBuffers holds, over the samples whose mean
+// is the streamed radiance.
+TEST(RendererStream, StatisticsAreStreamedFromTheFrameBuffers) {
+  using protocol::ChannelId;
+  const uint64_t stat = mask({ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::StatCount,
+                              ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3});
+  const std::unique_ptr<Scene> scene = build_scene(4);  // fireflies: skewed samples
+  RenderSettings st = test::small_settings(24, 16, 4.0);
+  st.channels = channels_for(stat, false);
+  ASSERT_TRUE(st.channels.statistics && st.channels.gbuffer);
+  st.channels.sample_count = true;
+  const Camera cam = frame_camera(4, 0, st);
+  const FrameBuffers fb = render_frame(*scene, cam, cam, 0, st);
+  EXPECT_EQ(stream_channels(stat, fb, false),
+            (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::StatCount,
+                                    ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3}));
+  const size_t pixels = size_t(st.width) * st.height;
+  const std::pair<ChannelId, const std::vector<float>*> planes[] = {{ChannelId::StatCount, &fb.stat_count},
+                                                                    {ChannelId::StatMean, &fb.stat_mean},
+                                                                    {ChannelId::StatM2, &fb.stat_m2},
+                                                                    {ChannelId::StatM3, &fb.stat_m3}};
+  size_t spread = 0;
+  for (const auto& [id, expected] : planes) {
+    const std::vector<float>* streamed = stream_plane(fb, id);
+    ASSERT_EQ(streamed, expected) << protocol::find_channel(id)->name;
+    ASSERT_EQ(streamed->size(), pixels * protocol::find_channel(id)->components);
+    // The bytes of the FRAME plane: byte_length of an F32 plane of this size.
+    EXPECT_EQ(streamed->size() * sizeof(float),
+              protocol::plane_bytes(*protocol::find_channel(id), protocol::Format::F32, st.width, st.height));
+    for (float v : *streamed) ASSERT_TRUE(std::isfinite(v));
+  }
+  for (size_t i = 0; i < pixels; ++i) {
+    EXPECT_EQ(fb.stat_count[i], 4.0f) << i;
+    EXPECT_EQ(fb.stat_count[i], fb.sample_count[i]) << i;
+    for (size_t c = 0; c < 3; ++c) {
+      const size_t k = 3 * i + c;
+      // radiance is the raw mean of the samples the statistics describe
+      EXPECT_NEAR(fb.radiance[k], fb.stat_raw_mean[k], 1e-5f * (1.0f + fb.radiance[k])) << i;
+      EXPECT_GE(fb.stat_mean[k], -2.0f) << i;  // y = 2 sqrt(x) - 2 >= -2
+      EXPECT_GE(fb.stat_m2[k], 0.0f) << i;
+      spread += fb.stat_m2[k] > 0.0f;
+    }
+  }
+  EXPECT_GT(spread, pixels / 4);  // the planes carry real spreads, not zeros
+  // Radiance or split still decided as before; the statistics stay.
+  const uint64_t stat_split = stat | mask({ChannelId::Diffuse, ChannelId::Specular});
+  const std::vector<ChannelId> no_split = stream_channels(stat_split, fb, true);  // fb has no split planes
+  EXPECT_EQ(no_split.front(), ChannelId::Radiance);
+  EXPECT_EQ(no_split.size(), 7u);
+  // A pipeline that does not take them gets none, whatever the frame has.
+  const uint64_t svgf = mask({ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth,
+                              ChannelId::Motion, ChannelId::Emission});
+  for (ChannelId id : stream_channels(svgf, fb, false)) EXPECT_FALSE(protocol::is_sample_statistic(id));
+  // A frame rendered without --stats has none to send (open() then names the missing required one).
+  RenderSettings plain = st;
+  plain.channels.statistics = false;
+  const FrameBuffers fb_plain = render_frame(*scene, cam, cam, 0, plain);
+  EXPECT_TRUE(stream_plane(fb_plain, ChannelId::StatMean)->empty());
+  EXPECT_EQ(stream_channels(stat, fb_plain, false),
+            (std::vector<ChannelId>{ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal}));
 }
 
 }  // namespace

@@ -62,6 +62,13 @@ enum class ChannelId : uint8_t {
   Sample2Offset = 44,
   Sample3Radiance = 45, Sample3Diffuse = 46, Sample3Specular = 47, Sample3Normal = 48, Sample3Depth = 49,
   Sample3Offset = 50,
+  // Sample statistics (1.5; paper 003 Alg. 1): per RGB channel over the
+  // samples the pixel took (docs/protocol.md §7.7); radiance is their raw
+  // mean. fp32 only: the sums outgrow fp16 within a few hundred samples.
+  StatCount = 51,  // r    samples n
+  StatMean = 52,   // rgb  mean of the Box-Cox (lambda 1/2) transformed samples, 2 sqrt(x) - 2
+  StatM2 = 53,     // rgb  sum of squared deviations of the transformed samples (not divided by n)
+  StatM3 = 54,     // rgb  sum of cubed deviations of the transformed samples
 };
 
 // The extra-sample channels: what each of a sample's six ids carries.
@@ -76,6 +83,12 @@ inline constexpr std::optional<SampleField> sample_field(ChannelId id) {
   const uint32_t v = static_cast<uint32_t>(id);
   if (v < 33u || v >= 33u + 6u * kMaxExtraSamples) return std::nullopt;
   return static_cast<SampleField>((v - 33u) % 6u);
+}
+
+// The sample statistics (ids 51-54, docs/protocol.md §7.7): declared all
+// four or none, and in F32 only.
+inline constexpr bool is_sample_statistic(ChannelId id) {
+  return id == ChannelId::StatCount || id == ChannelId::StatMean || id == ChannelId::StatM2 || id == ChannelId::StatM3;
 }
 
 inline constexpr uint32_t kChannelIdLimit = 64;  // ids are < 64 so sets fit in a uint64 mask
@@ -113,6 +126,8 @@ inline constexpr ChannelInfo kChannels[] = {
     {ChannelId::Sample3Radiance, "sample3_radiance", 3, 4}, {ChannelId::Sample3Diffuse, "sample3_diffuse", 3, 4},
     {ChannelId::Sample3Specular, "sample3_specular", 3, 4}, {ChannelId::Sample3Normal, "sample3_normal", 3, 4},
     {ChannelId::Sample3Depth, "sample3_depth", 1, 4},       {ChannelId::Sample3Offset, "sample3_offset", 2, 4},
+    {ChannelId::StatCount, "stat_count", 1, 5},             {ChannelId::StatMean, "stat_mean", 3, 5},
+    {ChannelId::StatM2, "stat_m2", 3, 5},                   {ChannelId::StatM3, "stat_m3", 3, 5},
 };
 
 inline constexpr const ChannelInfo* find_channel(ChannelId id) {

@@ -17,7 +17,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 4;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples)
+inline constexpr uint8_t kVersionMinor = 5;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics)
 inline constexpr size_t kHeaderSize = 24;
 
 enum class MessageType : uint16_t {

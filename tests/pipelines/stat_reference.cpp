@@ -1,0 +1,99 @@
+#include "stat_reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dn::test {
+namespace {
+
+bool finite(float x) { return std::isfinite(x); }
+float sanitize(float x) { return finite(x) ? std::max(x, 0.0f) : 0.0f; }
+// A normal with any non-finite component is the zero vector (sanitize.glsl).
+double normal_component(const std::vector<float>& n, int i, int c) {
+  const bool ok = finite(n[3 * i]) && finite(n[3 * i + 1]) && finite(n[3 * i + 2]);
+  return ok ? static_cast<double>(n[3 * i + c]) : 0.0;
+}
+
+}  // namespace
+
+StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
+  const int n_px = f.width * f.height;
+  StatPrepared r;
+  r.theta.assign(4 * n_px, 0.0f);
+  r.variance.assign(3 * n_px, 0.0f);
+  constexpr float kFltEpsilon = 1.1920929e-7f;
+  for (int i = 0; i < n_px; ++i) {
+    const float n = f.count[i];
+    bool usable = finite(n) && n >= 2.0f;
+    for (int c = 0; c < 3; ++c)
+      usable = usable && finite(f.mean[3 * i + c]) && finite(f.m2[3 * i + c]) && finite(f.m3[3 * i + c]);
+    if (!usable) continue;  // n = 0: no statistics
+    for (int c = 0; c < 3; ++c) {
+      const float s2 = std::max(f.m2[3 * i + c], 0.0f) / (n - 1.0f);
+      r.variance[3 * i + c] = std::max(s2 / n, static_cast<float>(p.variance_floor));
+      const float mu = f.mean[3 * i + c];
+      r.theta[4 * i + c] = s2 > kFltEpsilon ? mu + (f.m3[3 * i + c] / n) / (6.0f * s2 * n) : mu;
+    }
+    r.theta[4 * i + 3] = n;
+  }
+  return r;
+}
+
+bool stat_member(float theta_p, float theta_q, float t2, float var_p, float var_q, bool asymmetric) {
+  const float d = theta_p - theta_q, d2 = d * d;
+  if (asymmetric) return d2 < var_p * (1.0f + 2.0f * t2) - var_q || d2 + var_p + var_q == 0.0f;
+  return d2 <= t2 * (var_p + var_q);
+}
+
+StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatParams& p,
+                       const std::vector<float>& t_squared) {
+  const int w = f.width, h = f.height, r = p.radius;
+  StatResult res;
+  res.output.assign(3 * w * h, 0.0);
+  res.members.assign(w * h, 0);
+  res.rejected.assign(w * h, 0);
+  auto rgb = [](const std::vector<float>& v, int i, int c) { return static_cast<double>(v[3 * i + c]); };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      double raw_p[3];
+      for (int c = 0; c < 3; ++c) raw_p[c] = sanitize(f.radiance[3 * i + c]);
+      double sum[3] = {0, 0, 0}, weight_sum = 1.0;
+      if (prep.theta[4 * i + 3] >= 2.0f) {
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dx = -r; dx <= r; ++dx) {
+            const int qx = x + dx, qy = y + dy, d2xy = dx * dx + dy * dy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || d2xy > r * r || d2xy == 0) continue;
+            const int q = qy * w + qx;
+            if (prep.theta[4 * q + 3] < 2.0f) continue;
+            const int nu = static_cast<int>(prep.theta[4 * i + 3] + prep.theta[4 * q + 3] + 0.5f) - 2;
+            const float t2 = t_squared[std::min<size_t>(nu, t_squared.size()) - 1];
+            bool member = true;
+            for (int c = 0; c < 3; ++c)
+              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, prep.variance[3 * i + c],
+                                             prep.variance[3 * q + c], p.asymmetric);
+            if (!member && !p.base_only) {
+              ++res.rejected[i];
+              continue;
+            }
+            ++res.members[i];
+            double da2 = 0.0, dn2 = 0.0;
+            for (int c = 0; c < 3; ++c) {
+              const double da = rgb(f.albedo, i, c) - rgb(f.albedo, q, c);
+              const double nn_p = normal_component(f.normal, i, c), nn_q = normal_component(f.normal, q, c);
+              da2 += da * da;
+              dn2 += (nn_p - nn_q) * (nn_p - nn_q);
+            }
+            const double wgt = std::exp(-d2xy / (2.0 * p.sigma_spatial * p.sigma_spatial) -
+                                        da2 / (2.0 * p.sigma_albedo * p.sigma_albedo) -
+                                        dn2 / (2.0 * p.sigma_normal * p.sigma_normal));
+            for (int c = 0; c < 3; ++c) sum[c] += wgt * (sanitize(f.radiance[3 * q + c]) - raw_p[c]);
+            weight_sum += wgt;
+          }
+      }
+      for (int c = 0; c < 3; ++c) res.output[3 * i + c] = raw_p[c] + sum[c] / weight_sum;
+    }
+  return res;
+}
+
+}  // namespace dn::test

@@ -1,0 +1,46 @@
+// Independent CPU reference of the stat pipeline, written from
+// docs/pipelines.md ("stat") with plain loops. The per-pixel inputs of the
+// test (theta, variance) and the membership decisions are made in single
+// precision in the device's operation order, so rounding cannot flip a
+// decision between the two; the weighted sums are in double.
+#pragma once
+
+#include <vector>
+
+namespace dn::test {
+
+struct StatParams {
+  double alpha = 0.005;
+  int radius = 20;
+  double sigma_spatial = 10.0, sigma_albedo = 0.02, sigma_normal = 0.1;
+  double variance_floor = 0.0;
+  bool asymmetric = false;
+  bool base_only = false;  // every tap with statistics is a member (the t -> infinity limit)
+};
+
+// One frame's planes as floats: radiance, albedo, normal, mean, m2, m3 3 per
+// pixel; count 1 per pixel.
+struct StatFrame {
+  int width = 0, height = 0;
+  std::vector<float> radiance, albedo, normal, count, mean, m2, m3;
+};
+
+struct StatPrepared {
+  std::vector<float> theta;     // 4 per pixel: rgb, n (0: no statistics)
+  std::vector<float> variance;  // 3 per pixel
+};
+
+struct StatResult {
+  std::vector<double> output;  // 3 per pixel
+  std::vector<int> members;    // per pixel: members of its disc besides itself
+  std::vector<int> rejected;   // per pixel: taps with statistics the test rejected
+};
+
+StatPrepared stat_prepare(const StatFrame& f, const StatParams& p);
+// t_squared: entry k holds t^2 for nu = k + 1 (the pipeline's table).
+StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatParams& p,
+                       const std::vector<float>& t_squared);
+// The membership decision for one channel pair (exposed for the symmetry test).
+bool stat_member(float theta_p, float theta_q, float t2, float var_p, float var_q, bool asymmetric);
+
+}  // namespace dn::test

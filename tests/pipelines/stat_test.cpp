@@ -1,0 +1,308 @@
+// The stat pipeline (paper 003) against its CPU reference (stat_reference.cpp)
+// and the properties the paper and IMPLEMENTATION-NOTES A.4 name: identity
+// and symmetry of membership, the t -> infinity limit, constant input,
+// scale invariance of the membership, the n < 2 and non-finite guards.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "gpu_test_env.hpp"
+#include "online_stats.hpp"
+#include "pipelines/graph.hpp"
+#include "pipelines/pipeline.hpp"
+#include "pipelines/student_t.hpp"
+#include "stat_reference.hpp"
+#include "svgf_inputs.hpp"
+
+namespace dn {
+namespace {
+
+using test::ChannelId;
+using test::Format;
+
+class StatTest : public test::GpuTest {};
+
+// A plane under a hard shadow edge that no G-buffer shows (lit 1.0 on the
+// left, 0.2 on the right), albedo in blocks of 8 px, one normal; each pixel's
+// `spp` samples are exponential around its true value (skewed, like path
+// tracing), scaled by `scale`. Statistics as dnrender computes them.
+test::StatFrame shadow_frame(int w, int h, int spp, uint32_t seed, float scale = 1.0f) {
+  test::StatFrame f;
+  f.width = w;
+  f.height = h;
+  const int n = w * h;
+  f.radiance.resize(3 * n);
+  f.albedo.resize(3 * n);
+  f.normal.assign(3 * n, 0.0f);
+  f.count.assign(n, static_cast<float>(spp));
+  f.mean.resize(3 * n);
+  f.m2.resize(3 * n);
+  f.m3.resize(3 * n);
+  std::mt19937 rng(seed);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      f.normal[3 * i + 2] = 1.0f;
+      const float lit = x < w / 2 ? 1.0f : 0.2f;
+      for (int c = 0; c < 3; ++c) {
+        f.albedo[3 * i + c] = 0.3f + 0.1f * static_cast<float>(((x / 8) * 3 + (y / 8) + c) % 4);
+        render::OnlineStats s;
+        for (int k = 0; k < spp; ++k) {
+          const double u = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+          s.add(scale * static_cast<float>(-std::log(u)) * lit * f.albedo[3 * i + c]);
+        }
+        f.radiance[3 * i + c] = s.raw_mean;
+        f.mean[3 * i + c] = s.mean;
+        f.m2[3 * i + c] = s.m2;
+        f.m3[3 * i + c] = s.m3;
+      }
+    }
+  return f;
+}
+
+std::vector<protocol::ChannelDecl> stat_channels(Format guides = Format::F32) {
+  return {{ChannelId::Radiance, guides}, {ChannelId::Albedo, guides},   {ChannelId::Normal, guides},
+          {ChannelId::StatCount, Format::F32}, {ChannelId::StatMean, Format::F32}, {ChannelId::StatM2, Format::F32},
+          {ChannelId::StatM3, Format::F32}};
+}
+
+test::HostFrame host_frame(const test::StatFrame& f, Format guides = Format::F32) {
+  test::HostFrame h;
+  h.add(ChannelId::Radiance, guides, f.radiance);
+  h.add(ChannelId::Albedo, guides, f.albedo);
+  h.add(ChannelId::Normal, guides, f.normal);
+  h.add(ChannelId::StatCount, Format::F32, f.count);
+  h.add(ChannelId::StatMean, Format::F32, f.mean);
+  h.add(ChannelId::StatM2, Format::F32, f.m2);
+  h.add(ChannelId::StatM3, Format::F32, f.m3);
+  return h;
+}
+
+// What the device saw when the guides went as fp16: the rounded values.
+test::StatFrame rounded(test::StatFrame f, Format guides) {
+  if (guides == Format::F16) {
+    for (auto* v : {&f.radiance, &f.albedo, &f.normal}) *v = test::decode_output(test::encode_plane(*v, Format::F16), Format::F16);
+  }
+  return f;
+}
+
+std::vector<float> t_squared(double alpha) {
+  std::vector<float> t = pipelines::student_t_table(alpha, 1024);
+  for (float& v : t) v = v * v;
+  return t;
+}
+
+std::unique_ptr<pipelines::Pipeline> make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params,
+                                          Format guides = Format::F32, Format out = Format::F32) {
+  auto config = test::make_config("stat", w, h, stat_channels(guides), out, std::move(params));
+  EXPECT_FALSE(pipelines::validate(config).has_value());
+  return pipelines::create(ctx, config);
+}
+
+struct Variant {
+  const char* name;
+  int w, h;
+  Format guides;
+  std::vector<protocol::Parameter> params;
+  test::StatParams ref;
+};
+
+TEST_F(StatTest, MatchesCpuReference) {
+  test::StatParams r6;
+  r6.radius = 6;
+  r6.sigma_spatial = 3.0;
+  test::StatParams asym = r6;
+  asym.asymmetric = true;
+  test::StatParams floor = r6;
+  floor.variance_floor = 0.01;
+  floor.alpha = 0.05;
+  const std::vector<protocol::Parameter> p6 = {{"radius", 6}, {"sigma_spatial", 3}};
+  const Variant variants[] = {
+      {"defaults", 48, 32, Format::F32, {}, test::StatParams{}},
+      {"radius6", 64, 40, Format::F32, p6, r6},
+      {"asymmetric", 64, 40, Format::F32, {{"radius", 6}, {"sigma_spatial", 3}, {"asymmetric", 1}}, asym},
+      {"floor_alpha_fp16", 61, 37, Format::F16,
+       {{"radius", 6}, {"sigma_spatial", 3}, {"variance_floor", 0.01}, {"alpha", 0.05}}, floor},
+  };
+  for (const auto& v : variants) {
+    SCOPED_TRACE(v.name);
+    auto pipe = make(ctx(), v.w, v.h, v.params, v.guides, v.guides);
+    auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+    ASSERT_NE(graph, nullptr);
+    graph->set_capture(true);
+    const test::StatFrame f = shadow_frame(v.w, v.h, 8, 11);
+    const auto got = svgf_inputs::run(*pipe, host_frame(f, v.guides), v.guides);
+    const test::StatFrame seen = rounded(f, v.guides);
+    const test::StatPrepared prep = test::stat_prepare(seen, v.ref);
+    const auto theta = test::decode_output(graph->captured("stat_prepare", "stat_theta"), Format::F32);
+    const auto variance = test::decode_output(graph->captured("stat_prepare", "stat_variance"), Format::F32);
+    size_t theta_off = 0;
+    for (int i = 0; i < v.w * v.h; ++i)
+      for (int c = 0; c < 4; ++c) {
+        const float want = prep.theta[4 * i + c];
+        if (std::fabs(theta[4 * i + c] - want) > 1e-6f * (1.0f + std::fabs(want))) ++theta_off;
+        if (c < 3 && std::fabs(variance[4 * i + c] - prep.variance[3 * i + c]) > 1e-6f * (1e-6f + prep.variance[3 * i + c]))
+          ++theta_off;
+      }
+    EXPECT_EQ(theta_off, 0u) << "stat_prepare values off the reference";
+    const test::StatResult want = test::stat_filter(seen, prep, v.ref, t_squared(v.ref.alpha));
+    const double rms = test::relative_rms(got, want.output);
+    size_t gross = 0;
+    for (size_t k = 0; k < got.size(); ++k)
+      if (std::fabs(got[k] - want.output[k]) > (v.guides == Format::F16 ? 2e-3 : 1e-4) * (1e-3 + std::fabs(want.output[k])))
+        ++gross;
+    long members = 0, rejected = 0;
+    for (size_t i = 0; i < want.members.size(); ++i) members += want.members[i], rejected += want.rejected[i];
+    std::printf("[ info     ] %s: relative RMS %.3g, %zu gross; reference members %ld, rejected %ld\n", v.name, rms,
+                gross, members, rejected);
+    EXPECT_LE(rms, v.guides == Format::F16 ? 1e-3 : 1e-5);
+    EXPECT_EQ(gross, 0u) << "pixels that disagree (a different membership decision)";
+    EXPECT_GT(rejected, 0) << "the test never rejected a tap: the frame does not exercise membership";
+    EXPECT_GT(members, 0);
+  }
+}
+
+TEST_F(StatTest, ConstantInputIsReturnedExactly) {
+  const int w = 40, h = 24;
+  test::StatFrame f = shadow_frame(w, h, 4, 5);
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < 3; ++c) {
+      f.radiance[3 * i + c] = f.radiance[c];
+      f.albedo[3 * i + c] = f.albedo[c];
+      f.mean[3 * i + c] = f.mean[c];
+      f.m2[3 * i + c] = f.m2[c];
+      f.m3[3 * i + c] = f.m3[c];
+    }
+  auto pipe = make(ctx(), w, h, {});
+  const auto got = svgf_inputs::run(*pipe, host_frame(f));
+  for (size_t k = 0; k < got.size(); ++k) ASSERT_EQ(got[k], f.radiance[k]) << "component " << k;
+}
+
+// Where the test accepts every tap (n = 2 per pixel: nu = 2, and alpha
+// 1e-6 makes t about 707), the output is the base filter's: the reference
+// with membership switched off.
+TEST_F(StatTest, AcceptingEveryTapIsTheBaseFilter) {
+  const int w = 48, h = 32;
+  const test::StatFrame f = shadow_frame(w, h, 2, 9);
+  test::StatParams p;
+  p.alpha = 1e-6;
+  p.radius = 6;
+  p.sigma_spatial = 3.0;
+  const test::StatPrepared prep = test::stat_prepare(f, p);
+  const auto table = t_squared(p.alpha);
+  const test::StatResult tested = test::stat_filter(f, prep, p, table);
+  long rejected = 0;
+  for (int r : tested.rejected) rejected += r;
+  ASSERT_EQ(rejected, 0) << "the frame must be one where the test accepts every tap";
+  p.base_only = true;
+  const test::StatResult base = test::stat_filter(f, prep, p, table);
+  auto pipe = make(ctx(), w, h, {{"alpha", 1e-6}, {"radius", 6}, {"sigma_spatial", 3}});
+  const auto got = svgf_inputs::run(*pipe, host_frame(f));
+  EXPECT_LE(test::relative_rms(got, base.output), 1e-5);
+  // membership 0 is that base filter on any frame (here one with rejections).
+  const test::StatFrame edge = shadow_frame(w, h, 16, 4);
+  p.alpha = 0.005;
+  const test::StatResult edge_base = test::stat_filter(edge, test::stat_prepare(edge, p), p, t_squared(p.alpha));
+  auto base_pipe = make(ctx(), w, h, {{"membership", 0}, {"radius", 6}, {"sigma_spatial", 3}});
+  EXPECT_LE(test::relative_rms(svgf_inputs::run(*base_pipe, host_frame(edge)), edge_base.output), 1e-5);
+}
+
+// Samples times 4 (sqrt(4 x) = 2 sqrt(x) exactly): the Box-Cox differences
+// and deviations scale by 2, so every membership decision stays and the
+// output is 4x; also 1/16.
+TEST_F(StatTest, ScalingTheSamplesKeepsMembership) {
+  const int w = 48, h = 32;
+  test::StatParams p;
+  p.radius = 6;
+  p.sigma_spatial = 3.0;
+  const auto table = t_squared(p.alpha);
+  const test::StatFrame base = shadow_frame(w, h, 8, 21);
+  const test::StatResult want = test::stat_filter(base, test::stat_prepare(base, p), p, table);
+  auto pipe = make(ctx(), w, h, {{"radius", 6}, {"sigma_spatial", 3}});
+  const auto got = svgf_inputs::run(*pipe, host_frame(base));
+  for (float scale : {4.0f, 1.0f / 16.0f}) {
+    SCOPED_TRACE(testing::Message() << "scale " << scale);
+    const test::StatFrame scaled = shadow_frame(w, h, 8, 21, scale);
+    const test::StatResult s = test::stat_filter(scaled, test::stat_prepare(scaled, p), p, table);
+    EXPECT_EQ(s.members, want.members) << "membership changed with the scale of the samples";
+    auto pipe_s = make(ctx(), w, h, {{"radius", 6}, {"sigma_spatial", 3}});
+    const auto got_s = svgf_inputs::run(*pipe_s, host_frame(scaled));
+    std::vector<double> expected(got.begin(), got.end());
+    for (double& e : expected) e *= scale;
+    EXPECT_LE(test::relative_rms(got_s, expected), 1e-5);
+  }
+}
+
+// With equal n the symmetric test is symmetric bit for bit (property (c));
+// p is always its own member.
+TEST(StatReference, MembershipIsSymmetric) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> theta(-2.0f, 6.0f), var(0.0f, 0.05f);
+  const float t2 = 2.8131f * 2.8131f;
+  int accepted = 0;
+  for (int k = 0; k < 200000; ++k) {
+    const float a = theta(rng), b = k % 3 == 0 ? a + 0.01f * theta(rng) : theta(rng), va = var(rng), vb = var(rng);
+    const bool ab = test::stat_member(a, b, t2, va, vb, false);
+    ASSERT_EQ(ab, test::stat_member(b, a, t2, vb, va, false)) << a << " " << b << " " << va << " " << vb;
+    accepted += ab;
+    ASSERT_TRUE(test::stat_member(a, a, t2, va, va, false));
+    ASSERT_TRUE(test::stat_member(a, a, t2, va, va, true));
+  }
+  EXPECT_GT(accepted, 1000);
+  EXPECT_LT(accepted, 199000);
+  // Zero variance: only exactly equal means pass, in both forms.
+  EXPECT_TRUE(test::stat_member(1.5f, 1.5f, t2, 0.0f, 0.0f, true));
+  EXPECT_FALSE(test::stat_member(1.5f, std::nextafter(1.5f, 2.0f), t2, 0.0f, 0.0f, false));
+}
+
+// n < 2 and non-finite statistics: the pixel keeps its own (sanitized) raw
+// mean and is nobody's member, so changing its radiance changes no other
+// pixel's output.
+TEST_F(StatTest, PixelsWithoutStatisticsKeepTheirOwnValue) {
+  const int w = 40, h = 24;
+  test::StatFrame f = shadow_frame(w, h, 8, 13);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int one = 5 * w + 7, none = 10 * w + 30, bad = 15 * w + 12, inf_radiance = 3 * w + 33;
+  f.count[one] = 1.0f;
+  f.count[none] = 0.0f;
+  f.m2[3 * bad + 1] = nan;
+  f.radiance[3 * inf_radiance] = std::numeric_limits<float>::infinity();
+  auto pipe = make(ctx(), w, h, {{"radius", 6}, {"sigma_spatial", 3}});
+  const auto got = svgf_inputs::run(*pipe, host_frame(f));
+  for (int i : {one, none, bad})
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(got[3 * i + c], f.radiance[3 * i + c]) << "pixel " << i;
+  for (float v : got) ASSERT_TRUE(std::isfinite(v));
+  test::StatFrame changed = f;
+  for (int i : {one, none, bad})
+    for (int c = 0; c < 3; ++c) changed.radiance[3 * i + c] = 1e6f;
+  auto pipe2 = make(ctx(), w, h, {{"radius", 6}, {"sigma_spatial", 3}});
+  const auto got2 = svgf_inputs::run(*pipe2, host_frame(changed));
+  for (int i = 0; i < w * h; ++i) {
+    if (i == one || i == none || i == bad) continue;
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(got2[3 * i + c], got[3 * i + c]) << "pixel " << i;
+  }
+}
+
+TEST(StatValidate, StatisticsOnlyInFp32) {
+  for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3}) {
+    auto channels = stat_channels();
+    for (auto& c : channels)
+      if (c.id == id) c.format = Format::F16;
+    const auto err = pipelines::validate(test::make_config("stat", 16, 16, channels));
+    ASSERT_TRUE(err.has_value());
+    EXPECT_EQ(err->code, protocol::ErrorCode::InvalidChannel);
+    EXPECT_NE(err->message.find(protocol::find_channel(id)->name), std::string::npos) << err->message;
+  }
+  auto missing = stat_channels();
+  missing.pop_back();
+  const auto err = pipelines::validate(test::make_config("stat", 16, 16, missing));
+  ASSERT_TRUE(err.has_value());
+  EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+}
+
+}  // namespace
+}  // namespace dn
