@@ -17,8 +17,8 @@ cd "$(dirname "$0")/.."
 
 scenes="1 3"
 size=128x72
-max_spp=1024
-ref_spp=16384
+max_spp=512
+ref_spp=4096
 out=out/stat_convergence
 cache=out/cache
 docs=0
@@ -90,7 +90,7 @@ done
 gnuplot <<GP
 set terminal png size 800,500 font ",11" noenhanced
 set output '$out/stat_convergence.png'
-set title 'stat: error against samples per pixel ($size, dnrender, still frame; noise-corrected RMSE)'
+set title 'stat against spp ($size, dnrender)'
 set logscale xy
 set grid
 set key outside right
