@@ -38,12 +38,13 @@ std::vector<uint8_t> t_squared_table(double alpha) {
 // The statistics are sums that outgrow fp16 within a few hundred samples
 // (docs/protocol.md §7.7): fp32 only.
 std::optional<ConfigError> check_statistics(const SessionConfig& config) {
-  for (size_t i = 0; i < config.channels.size(); ++i)
-    for (ChannelId id : kStatistics)
-      if (config.channels[i].id == id && config.channels[i].format != protocol::Format::F32)
-        return ConfigError{protocol::ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "].format",
-                           "stat takes " + std::string(protocol::find_channel(id)->name) +
-                               " in fp32 only (the sums of squared and cubed deviations overflow fp16)"};
+  for (size_t i = 0; i < config.channels.size(); ++i) {
+    const protocol::ChannelDecl& c = config.channels[i];
+    if (protocol::is_sample_statistic(c.id) && c.format != protocol::Format::F32)
+      return ConfigError{protocol::ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "].format",
+                         "stat takes " + std::string(protocol::find_channel(c.id)->name) +
+                             " in fp32 only (the sums of squared and cubed deviations overflow fp16)"};
+  }
   return std::nullopt;
 }
 

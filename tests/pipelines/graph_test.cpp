@@ -97,7 +97,7 @@ TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
     // fp16 planes, except the sample statistics stat takes in fp32 only.
     for (const auto& c : protocol::kChannels)
       if (def.description.required_channels & protocol::channel_bit(c.id))
-        channels.push_back({c.id, c.id >= ChannelId::StatCount ? Format::F32 : Format::F16});
+        channels.push_back({c.id, protocol::is_sample_statistic(c.id) ? Format::F32 : Format::F16});
     if (def.description.name == "svgf") channels.push_back({ChannelId::Radiance, Format::F32});
     // Split pipelines (specular required) take the diffuse part in either form.
     if (def.description.required_channels & protocol::channel_bit(ChannelId::Specular))
