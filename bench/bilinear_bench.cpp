@@ -30,6 +30,7 @@
 #include "gpu/context.hpp"
 #include "gpu/error.hpp"
 #include "gpu/timestamps.hpp"
+#include "dispatch_timing.hpp"
 #include "half.hpp"
 
 namespace {
@@ -54,42 +55,6 @@ dn::gpu::GridPush grid_of(uint32_t w, uint32_t h) {
   return g;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-// Records `reps` timed repetitions of `dispatch` (each between two
-// timestamps, a barrier after each) after one untimed warm-up submission,
-// then the readback of `result`; returns the median device ms.
-template <class Dispatch>
-double time_dispatches(dn::gpu::Context& ctx, const dn::gpu::Buffer& result, int reps, Dispatch dispatch,
-                       const std::function<void(VkCommandBuffer)>& before = {}) {
-  dn::gpu::CommandStream stream(ctx);
-  dn::gpu::TimestampPool timestamps(ctx, 2 * reps);
-  VkCommandBuffer cmd = stream.begin();
-  if (before) before(cmd);
-  dispatch(cmd);
-  stream.submit_and_wait();
-  cmd = stream.begin();
-  timestamps.reset(cmd);
-  for (int i = 0; i < reps; ++i) {
-    timestamps.write(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 2 * i);
-    dispatch(cmd);
-    timestamps.write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 2 * i + 1);
-    dn::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                            VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
-  }
-  result.record_readback(cmd, result.size(), VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
-  stream.submit_and_wait();
-  const auto intervals = timestamps.read_intervals_ms(2 * reps);
-  std::vector<double> ms;
-  for (int i = 0; i < reps; ++i) ms.push_back(intervals[2 * i]);
-  return median(ms);
-}
-
-// The sampled image and everything around it (own descriptor layout: the
-// Kernel class binds storage buffers only).
 class ImageFetch {
  public:
   ImageFetch(dn::gpu::Context& ctx, VkFormat format, uint32_t w, uint32_t h, const std::vector<float>& rgba)
@@ -298,7 +263,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
   dn::gpu::DescriptorPool pool(ctx, 1, 2);
   const VkBuffer storage[2] = {result.handle(), source.handle()};
   VkDescriptorSet set = pool.allocate(*kernel, uniform.handle(), storage);
-  const double buffer_ms = time_dispatches(
+  const double buffer_ms = dn::bench::time_dispatches(
       ctx, result, reps, [&](VkCommandBuffer cmd) { kernel->record_dispatch(cmd, set, grid_of(w, h)); },
       [&](VkCommandBuffer cmd) {
         source.record_upload(cmd, bytes);
@@ -315,7 +280,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
     ImageFetch image(ctx, formats[f], w, h, rgba);
     dn::gpu::Buffer image_result(ctx, bytes, dn::gpu::BufferKind::StorageDownload, "image_result");
     image.bind_result(image_result);
-    image_ms[f] = time_dispatches(
+    image_ms[f] = dn::bench::time_dispatches(
         ctx, image_result, reps, [&](VkCommandBuffer cmd) { image.record_dispatch(cmd); },
         [&](VkCommandBuffer cmd) { image.record_upload(cmd); });
     if (f == 0) {

@@ -45,6 +45,7 @@
 #include "gpu/context.hpp"
 #include "gpu/error.hpp"
 #include "gpu/timestamps.hpp"
+#include "online_stats.hpp"
 #include "half.hpp"
 #include "pipelines/pipeline.hpp"
 
@@ -61,12 +62,13 @@ struct Options {
   int frames = 12;
   int warmup = 2;
   int copy_reps = 10;
+  std::vector<dn::protocol::Parameter> parameters;  // --param NAME=VALUE, for every pipeline benched
 };
 
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: %s [--pipeline NAME]... [--size WxH]... [--fp16] [--device SELECTOR]\n"
-               "          [--frames N] [--warmup N] [--copy-reps N]\n"
+               "          [--frames N] [--warmup N] [--copy-reps N] [--param NAME=VALUE]...\n"
                "Per-pass device time of each pipeline against a plain copy of the same bytes.\n",
                argv0);
   std::exit(code);
@@ -114,6 +116,16 @@ Options parse(int argc, char** argv) {
       o.warmup = count(0);
     } else if (a == "--copy-reps") {
       o.copy_reps = count(1);
+    } else if (a == "--param") {
+      const std::string v = value();
+      const size_t eq = v.find('=');
+      char* end = nullptr;
+      const double x = eq == std::string::npos ? 0.0 : std::strtod(v.c_str() + eq + 1, &end);
+      if (eq == std::string::npos || eq == 0 || !end || *end) {
+        std::fprintf(stderr, "--param: expected NAME=VALUE, got %s\n", v.c_str());
+        usage(argv[0], 2);
+      }
+      o.parameters.push_back({v.substr(0, eq), x});
     } else if (a == "--help" || a == "-h") {
       usage(argv[0], 0);
     } else {
@@ -165,6 +177,9 @@ float depth_at(double u, double v) {
   return static_cast<float>(5.0 + 2.0 * std::sin(u * 0.013) * std::cos(v * 0.017) + 0.5 * std::sin(u * 0.041 + v * 0.029));
 }
 
+// Samples per pixel behind the sample statistics planes.
+constexpr int kStatSamples = 4;
+
 struct HostPlanes {
   std::map<ChannelId, std::vector<float>> values;
 };
@@ -214,6 +229,23 @@ HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed) {
     p.values[ChannelId::Specular] = std::move(specular);
     if (want(ChannelId::SpecularF0)) p.values[ChannelId::SpecularF0] = std::move(f0);
     if (want(ChannelId::Roughness)) p.values[ChannelId::Roughness] = std::move(roughness);
+  }
+  // Sample statistics (stat, stat-temporal): kStatSamples exponential
+  // samples per pixel around the radiance's mean, accumulated as dnrender
+  // does (paper 003 Alg. 1); the radiance is their raw mean.
+  if (want(ChannelId::StatCount)) {
+    std::vector<float> count(n, float(kStatSamples)), mean(3 * n), m2(3 * n), m3(3 * n);
+    for (size_t i = 0; i < 3 * n; ++i) {
+      uint64_t rng = splitmix64((uint64_t(uint32_t(t)) << 40) ^ (i + 0x5bd1e995u));
+      const float truth = radiance[i] > 0.0f ? radiance[i] : 0.0f;
+      dn::render::OnlineStats acc;
+      for (int k = 0; k < kStatSamples; ++k) acc.add(truth * -std::log(uniform01(rng)));
+      mean[i] = acc.mean, m2[i] = acc.m2, m3[i] = acc.m3, radiance[i] = acc.raw_mean;
+    }
+    p.values[ChannelId::StatCount] = std::move(count);
+    p.values[ChannelId::StatMean] = std::move(mean);
+    p.values[ChannelId::StatM2] = std::move(m2);
+    p.values[ChannelId::StatM3] = std::move(m3);
   }
   if (want(ChannelId::Radiance)) p.values[ChannelId::Radiance] = std::move(radiance);
   if (want(ChannelId::Albedo)) p.values[ChannelId::Albedo] = std::move(albedo);
@@ -280,8 +312,10 @@ EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t) {
 // they are left out and the svgf row stays comparable.
 std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format) {
   std::vector<dn::protocol::ChannelDecl> out;
+  // The sample statistics are fp32 only (docs/protocol.md §7.7).
   for (const auto& c : dn::protocol::kChannels)
-    if (desc.required_channels & dn::protocol::channel_bit(c.id)) out.push_back({c.id, format});
+    if (desc.required_channels & dn::protocol::channel_bit(c.id))
+      out.push_back({c.id, dn::protocol::is_sample_statistic(c.id) ? Format::F32 : format});
   // svgf takes radiance or diffuse + specular, so radiance is optional there: send it.
   const uint64_t radiance = dn::protocol::channel_bit(dn::protocol::ChannelId::Radiance);
   if (!(desc.required_channels & radiance) && (desc.optional_channels & radiance))
@@ -415,6 +449,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   config.pipeline = desc.name;
   config.output_format = o.format;
   config.channels = channels_for(desc, o.format);
+  config.parameters = o.parameters;
   if (auto err = dn::pipelines::validate(config)) {
     row.error = err->field + ": " + err->message;
     return row;

@@ -69,13 +69,16 @@ start_bench_server bench "$bin" "$dn" "$out/dnserver.log"
 # first, then every other pipeline the server offers (new ones are picked up
 # without changes), then svgf on the split lighting (diffuse + specular).
 rows=("noisy passthrough" "accumulate accumulate" "atrous svgf max_history=1")
-# stat is left out: it filters the renderer's sample statistics (dnrender
-# --stats), which a 1-spp frame does not have (n = 1: no variance); its own
-# evidence (convergence against samples) is issue 13's.
+# stat is left out: it filters the frame's own sample statistics, and a
+# 1-spp frame has n = 1 (no variance); its evidence is convergence against
+# samples (bench/stat_convergence.sh). stat-temporal accumulates them across
+# frames (the inputs carry dnrender --stats), also at the radius 6 of paper
+# 003's fast setting.
 for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" { print $2 }'); do
   case "$p" in passthrough | accumulate | stat) ;; *) rows+=("$p $p") ;; esac
 done
 rows+=("svgf-split svgf channels=diffuse,specular,albedo,normal,depth,motion,emission")
+case " ${rows[*]} " in *" stat-temporal stat-temporal "*) rows+=("stat-temporal-r6 stat-temporal radius=6 sigma_spatial=3") ;; esac
 # reflect without specular history: the thesis's NoSpecReproj baseline
 # (paper 001 §7.2) its temporal error is compared with.
 case " ${rows[*]} " in *" reflect reflect "*) rows+=("reflect-nospec reflect specular_history=0") ;; esac
@@ -106,9 +109,9 @@ for s in $scenes; do
   rm -f "$dir/refs"/frame_*.exr
   [ "$reference2" = 0 ] || ref2_args=(--reference2 "$dir/refs/ref2_%04d.exr")
   "$dnrender" --scene "$s" --frames "$frames" --width "$width" --height "$height" --out "$dir/input" --reflection \
-    --seed 3 --quiet
+    --stats --seed 3 --quiet
   "$dnrender" --scene "$s" --frames "$still" --hold-camera 0 --width "$width" --height "$height" \
-    --out "$dir/still" --reflection --seed 3 --quiet
+    --out "$dir/still" --reflection --stats --seed 3 --quiet
   panels=()
   for row in "${rows[@]}"; do
     read -r label pipeline params <<< "$row"

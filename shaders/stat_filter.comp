@@ -16,9 +16,14 @@
 //           computed as raw_p + sum weight * (raw_q - raw_p) / (1 + sum of weights)
 //           so that a constant image comes back exactly
 // raw is the sanitized radiance (the raw mean). membership 0: every tap with
-// statistics is a member (the base filter alone). A pixel without statistics
-// (theta.w = 0) is nobody's member and keeps its raw mean. One invocation per
-// pixel pair.
+// statistics is a member (the base filter alone). Only pixels with
+// statistics (n >= 2) are members. A pixel with a sample but no variance
+// (0 < n_p < 2: one sample, or a reset history at 1 spp) gathers with the
+// single-sample form of the test, its variance taken from the neighbour's
+// sample variance, var_p = var_q n_q / n_p, and nu = n_q - 1 (a prediction
+// interval: is p's sample plausible under q's distribution). A pixel without
+// data (n = 0, or a non-finite statistic) keeps its raw mean. One invocation
+// per pixel pair.
 //
 // Resources: passes/stat_filter.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -28,28 +33,23 @@
 #include "pass.glsl"
 #include "passes/stat_filter.pass"
 
-bool member(vec3 d2, float t2, vec3 var_p, vec3 var_q) {
-  if (DN_PARAM_VALUE(stat, asymmetric) != 0.0) {
-    bvec3 pass_ = lessThan(d2, var_p * (1.0 + 2.0 * t2) - var_q);
-    bvec3 tie = equal(d2 + var_p + var_q, vec3(0.0));  // equal means, no variance: w* = 0/0, accepted
-    return all(bvec3(pass_.x || tie.x, pass_.y || tie.y, pass_.z || tie.z));
-  }
-  return all(lessThanEqual(d2, t2 * (var_p + var_q)));
-}
+float dn_stat_t_squared(uint nu) { return t_squared.data[min(nu, TABLE_SIZE) - 1u]; }
+#include "stat_gather.glsl"
 
 vec3 filter_pixel(uint p) {
   vec3 raw_p = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p));
   vec4 theta_p = theta.data[p];
-  if (theta_p.w < 2.0) return raw_p;
+  if (!(theta_p.w > 0.0)) return raw_p;
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 var_p = variance.data[p].rgb;
   vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
-  float ks = -0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial));
-  float ka = -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo));
-  float kn = -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal));
+  DnStatKernel k = DnStatKernel(-0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial)),
+                                -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo)),
+                                -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal)),
+                                DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0);
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy) {
@@ -60,15 +60,10 @@ vec3 filter_pixel(uint p) {
       int d2xy = dx * dx + dy * dy;
       if (x < 0 || x >= size.x || d2xy > r * r || d2xy == 0) continue;
       uint q = uint(y) * frame.size.x + uint(x);
-      vec4 theta_q = theta.data[q];
-      if (theta_q.w < 2.0) continue;
-      vec3 d = theta_p.rgb - theta_q.rgb;
-      uint nu = uint(theta_p.w + theta_q.w + 0.5) - 2u;  // >= 2
-      float t2 = t_squared.data[min(nu, TABLE_SIZE) - 1u];
-      if (DN_PARAM_VALUE(stat, membership) != 0.0 && !member(d * d, t2, var_p, variance.data[q].rgb)) continue;
+      if (!dn_stat_is_member(theta_p, var_p, theta.data[q], variance.data[q].rgb, k)) continue;
       vec3 da = albedo_p - DN_LOAD3(albedo, ALBEDO_HALF, q);
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));
-      float w = exp(ks * float(d2xy) + ka * dot(da, da) + kn * dot(dn, dn));
+      float w = dn_stat_base_weight(d2xy, da, dn, k);
       sum += w * (dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q)) - raw_p);
       weight_sum += w;
     }

@@ -113,9 +113,7 @@ bool tap_valid(ivec2 q, float z, vec3 n, vec2 grad, out vec4 aux) {
   aux = vec4(uintBitsToFloat(bits.xyz), 0.0);
   if (!(aux.z > 0.0)) return false;
   if (!geometry_tests) return true;
-  if (abs(z - aux.z) / (grad.x + 0.01) > 10.0) return false;
-  if (distance(n, dn_svgf_unpack_normal(bits.w)) / (grad.y + 0.01) > 16.0) return false;
-  return true;
+  return dn_same_surface(z, n, grad, aux.z, dn_svgf_unpack_normal(bits.w));
 }
 
 void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout vec2 sm, inout float sl,

@@ -27,7 +27,16 @@ StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
     bool usable = finite(n) && n >= 2.0f;
     for (int c = 0; c < 3; ++c)
       usable = usable && finite(f.mean[3 * i + c]) && finite(f.m2[3 * i + c]) && finite(f.m3[3 * i + c]);
-    if (!usable) continue;  // n = 0: no statistics
+    if (!usable) {
+      // A sample but no variance: the mean, for the single-sample test.
+      bool sampled = finite(n) && n > 0.0f;
+      for (int c = 0; c < 3; ++c)
+        sampled = sampled && finite(f.mean[3 * i + c]) && finite(f.m2[3 * i + c]) && finite(f.m3[3 * i + c]);
+      if (!sampled) continue;  // n = 0: no data
+      for (int c = 0; c < 3; ++c) r.theta[4 * i + c] = f.mean[3 * i + c];
+      r.theta[4 * i + 3] = n;
+      continue;
+    }
     for (int c = 0; c < 3; ++c) {
       const float s2 = std::max(f.m2[3 * i + c], 0.0f) / (n - 1.0f);
       r.variance[3 * i + c] = std::max(s2 / n, static_cast<float>(p.variance_floor));
@@ -59,19 +68,25 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       double raw_p[3];
       for (int c = 0; c < 3; ++c) raw_p[c] = sanitize(f.radiance[3 * i + c]);
       double sum[3] = {0, 0, 0}, weight_sum = 1.0;
-      if (prep.theta[4 * i + 3] >= 2.0f) {
+      const float n_p = prep.theta[4 * i + 3];
+      const bool single = n_p < 2.0f;  // gathers with the single-sample test
+      if (n_p > 0.0f) {
         for (int dy = -r; dy <= r; ++dy)
           for (int dx = -r; dx <= r; ++dx) {
             const int qx = x + dx, qy = y + dy, d2xy = dx * dx + dy * dy;
             if (qx < 0 || qy < 0 || qx >= w || qy >= h || d2xy > r * r || d2xy == 0) continue;
             const int q = qy * w + qx;
             if (prep.theta[4 * q + 3] < 2.0f) continue;
-            const int nu = static_cast<int>(prep.theta[4 * i + 3] + prep.theta[4 * q + 3] + 0.5f) - 2;
+            const float n_q = prep.theta[4 * q + 3];
+            const int nu = single ? std::max(static_cast<int>(n_q + 0.5f), 2) - 1 : static_cast<int>(n_p + n_q + 0.5f) - 2;
             const float t2 = t_squared[std::min<size_t>(nu, t_squared.size()) - 1];
             bool member = true;
-            for (int c = 0; c < 3; ++c)
-              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, prep.variance[3 * i + c],
+            for (int c = 0; c < 3; ++c) {
+              // p without variance: its sample's variance is q's sample variance.
+              const float var_p = single ? prep.variance[3 * q + c] * (n_q / n_p) : prep.variance[3 * i + c];
+              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, var_p,
                                              prep.variance[3 * q + c], p.asymmetric);
+            }
             if (!member && !p.base_only) {
               ++res.rejected[i];
               continue;

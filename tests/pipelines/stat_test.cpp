@@ -237,6 +237,52 @@ TEST_F(StatTest, ScalingTheSamplesKeepsMembership) {
   }
 }
 
+// Feature preservation (IMPLEMENTATION-NOTES A.4 9): a hard shadow edge on a
+// plane of one albedo and one normal, which no guide shows, at 64 spp. The
+// 10-90 % width of the column-averaged profile stays within a few pixels for
+// stat and blurs to about the spatial sigma (10 px) for the base filter.
+// Width: the pixels of the profile strictly between its 90 % and 10 %
+// levels (a step: 0).
+double edge_width(const std::vector<float>& out, int w, int h) {
+  std::vector<double> profile(w, 0.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) profile[x] += out[3 * (y * w + x) + 1] / h;
+  const double hi = profile[2], lo = profile[w - 3], d = hi - lo;
+  int between = 0;
+  for (int x = 2; x < w - 2; ++x) between += profile[x] < hi - 0.1 * d && profile[x] > lo + 0.1 * d;
+  return between;
+}
+
+TEST_F(StatTest, KeepsAShadowEdgeNoGuideShowsSharp) {
+  const int w = 96, h = 24;
+  test::StatFrame f = shadow_frame(w, h, 64, 31);
+  // One albedo everywhere: only the samples tell the two sides apart.
+  for (int i = 0; i < w * h; ++i) {
+    const float lit = i % w < w / 2 ? 1.0f : 0.2f;
+    std::mt19937 rng(static_cast<uint32_t>(i));
+    for (int c = 0; c < 3; ++c) {
+      f.albedo[3 * i + c] = 0.5f;
+      render::OnlineStats s;
+      for (int k = 0; k < 64; ++k) {
+        const double u = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+        s.add(static_cast<float>(-std::log(u)) * lit * 0.5f);
+      }
+      f.radiance[3 * i + c] = s.raw_mean;
+      f.mean[3 * i + c] = s.mean;
+      f.m2[3 * i + c] = s.m2;
+      f.m3[3 * i + c] = s.m3;
+    }
+  }
+  auto stat_pipe = make(ctx(), w, h, {});
+  auto base_pipe = make(ctx(), w, h, {{"membership", 0}});
+  const double stat = edge_width(svgf_inputs::run(*stat_pipe, host_frame(f)), w, h);
+  const double base = edge_width(svgf_inputs::run(*base_pipe, host_frame(f)), w, h);
+  const double input = edge_width(f.radiance, w, h);
+  std::printf("[ info     ] edge width (pixels between the 10 %% and 90 %% levels): input %.0f px, stat %.0f px, base filter %.0f px\n", input, stat, base);
+  EXPECT_LE(stat, 3.0);
+  EXPECT_GE(base, 10.0);
+}
+
 // With equal n the symmetric test is symmetric bit for bit (property (c));
 // p is always its own member.
 TEST(StatReference, MembershipIsSymmetric) {
@@ -259,9 +305,10 @@ TEST(StatReference, MembershipIsSymmetric) {
   EXPECT_FALSE(test::stat_member(1.5f, std::nextafter(1.5f, 2.0f), t2, 0.0f, 0.0f, false));
 }
 
-// n < 2 and non-finite statistics: the pixel keeps its own (sanitized) raw
-// mean and is nobody's member, so changing its radiance changes no other
-// pixel's output.
+// n = 0 and non-finite statistics: the pixel keeps its own (sanitized) raw
+// mean. n = 1: it gathers with the single-sample test (as the reference
+// does). Neither is anybody's member, so changing its radiance changes no
+// other pixel's output.
 TEST_F(StatTest, PixelsWithoutStatisticsKeepTheirOwnValue) {
   const int w = 40, h = 24;
   test::StatFrame f = shadow_frame(w, h, 8, 13);
@@ -273,8 +320,15 @@ TEST_F(StatTest, PixelsWithoutStatisticsKeepTheirOwnValue) {
   f.radiance[3 * inf_radiance] = std::numeric_limits<float>::infinity();
   auto pipe = make(ctx(), w, h, {{"radius", 6}, {"sigma_spatial", 3}});
   const auto got = svgf_inputs::run(*pipe, host_frame(f));
-  for (int i : {one, none, bad})
+  for (int i : {none, bad})
     for (int c = 0; c < 3; ++c) EXPECT_EQ(got[3 * i + c], f.radiance[3 * i + c]) << "pixel " << i;
+  test::StatParams p;
+  p.radius = 6;
+  p.sigma_spatial = 3.0;
+  const test::StatResult want = test::stat_filter(f, test::stat_prepare(f, p), p, t_squared(p.alpha));
+  EXPECT_GT(want.members[one], 0) << "the single-sample test must accept some neighbours here";
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(got[3 * one + c], want.output[3 * one + c], 1e-5 * std::fabs(want.output[3 * one + c]));
   for (float v : got) ASSERT_TRUE(std::isfinite(v));
   test::StatFrame changed = f;
   for (int i : {one, none, bad})

@@ -29,9 +29,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectAndStat) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatAndStatTemporal) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 6u);
+  ASSERT_EQ(all.size(), 7u);
   // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for every SVGF-chain pipeline.
   uint64_t extra_samples = 0;
   for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
@@ -109,6 +109,15 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectAndStat) {
   for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
   EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
                                                   "variance_floor", "membership", "asymmetric"}));
+  // stat-temporal: stat's channels plus depth and motion (reprojection); stat's parameters and its own.
+  EXPECT_EQ(all[6].name, "stat-temporal");
+  EXPECT_EQ(all[6].required_channels,
+            all[5].required_channels | protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
+  EXPECT_EQ(all[6].optional_channels, 0u);
+  std::vector<std::string> temporal_names;
+  for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
+  stat_names.insert(stat_names.end(), {"history_alpha", "fading"});
+  EXPECT_EQ(temporal_names, stat_names);
 }
 
 TEST(Pipelines, ParameterDefaultsAreTheSpecifiedOnes) {

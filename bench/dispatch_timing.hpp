@@ -1,0 +1,53 @@
+// Timing of compute dispatches for the kernel benchmarks (bilinear_bench,
+// stat_gather_bench): the median device time of repeated dispatches from
+// Vulkan timestamps, after one untimed run (first dispatch, caches).
+#pragma once
+
+#include <algorithm>
+#include <functional>
+#include <vector>
+
+#include "gpu/buffer.hpp"
+#include "gpu/commands.hpp"
+#include "gpu/context.hpp"
+#include "gpu/timestamps.hpp"
+
+namespace dn::bench {
+
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// Records `reps` timed repetitions of `dispatch` (each between two
+// timestamps, a barrier after each) after one untimed warm-up submission,
+// then the readback of `result`; returns the median device ms.
+template <class Dispatch>
+double time_dispatches(dn::gpu::Context& ctx, const dn::gpu::Buffer& result, int reps, Dispatch dispatch,
+                       const std::function<void(VkCommandBuffer)>& before = {}) {
+  dn::gpu::CommandStream stream(ctx);
+  dn::gpu::TimestampPool timestamps(ctx, 2 * reps);
+  VkCommandBuffer cmd = stream.begin();
+  if (before) before(cmd);
+  dispatch(cmd);
+  stream.submit_and_wait();
+  cmd = stream.begin();
+  timestamps.reset(cmd);
+  for (int i = 0; i < reps; ++i) {
+    timestamps.write(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 2 * i);
+    dispatch(cmd);
+    timestamps.write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 2 * i + 1);
+    dn::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                            VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+  }
+  result.record_readback(cmd, result.size(), VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
+  stream.submit_and_wait();
+  const auto intervals = timestamps.read_intervals_ms(2 * reps);
+  std::vector<double> ms;
+  for (int i = 0; i < reps; ++i) ms.push_back(intervals[2 * i]);
+  return median(ms);
+}
+
+// The sampled image and everything around it (own descriptor layout: the
+// Kernel class binds storage buffers only).
+}  // namespace dn::bench

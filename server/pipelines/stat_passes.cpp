@@ -1,0 +1,88 @@
+#include "pipelines/stat_passes.hpp"
+
+#include <cstring>
+#include <vector>
+
+#include "pipelines/student_t.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+using protocol::ChannelId;
+
+// Per pixel, fp32: vec4(theta rgb, n) and vec4(variance of the mean rgb, 0).
+constexpr uint64_t kThetaBytes = 16;
+constexpr uint64_t kVarianceBytes = 16;
+
+constexpr ChannelId kStatistics[] = {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3};
+
+}  // namespace
+
+// t^2 of the two-sided quantile t_{1 - alpha/2, nu}, entry k for nu = k + 1
+// (beyond nu = 1024 within 0.2 % of the normal quantile; IMPLEMENTATION-NOTES
+// A.3 4), as fp32 bytes for the Constant buffer.
+std::vector<uint8_t> t_squared_table(double alpha) {
+  const std::vector<float> t = student_t_table(alpha, kStatTableSize);
+  std::vector<uint8_t> bytes(t.size() * sizeof(float));
+  for (size_t k = 0; k < t.size(); ++k) {
+    const float t2 = t[k] * t[k];
+    std::memcpy(bytes.data() + k * sizeof(float), &t2, sizeof t2);
+  }
+  return bytes;
+}
+
+uint64_t stat_channels() {
+  uint64_t mask = protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
+                  protocol::channel_bit(ChannelId::Normal);
+  for (ChannelId id : kStatistics) mask |= protocol::channel_bit(id);
+  return mask;
+}
+
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config) {
+  g.add_input(config, ChannelId::Radiance, "radiance");
+  g.add_input(config, ChannelId::Albedo, "albedo");
+  g.add_input(config, ChannelId::Normal, "normal");
+  for (ChannelId id : kStatistics) g.add_input(config, id, std::string(protocol::find_channel(id)->name));
+  g.add_constant("stat_t_squared", t_squared_table(g.parameters.stat_alpha));
+}
+
+void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& s) {
+  g.add_scratch("stat_theta", kThetaBytes);
+  g.add_scratch("stat_variance", kVarianceBytes);
+  g.add_pass("stat_prepare", "stat_prepare")
+      .bind("count", s.count)
+      .bind("mean", s.mean)
+      .bind("m2", s.m2)
+      .bind("m3", s.m3)
+      .bind("theta", "stat_theta")
+      .bind("variance", "stat_variance")
+      .pixels_per_invocation = 1;
+  g.add_pass("stat_filter", "stat_filter")
+      .bind("theta", "stat_theta")
+      .bind("variance", "stat_variance")
+      .bind("radiance", s.raw)
+      .bind("albedo", "albedo")
+      .bind("normal", "normal")
+      .bind("t_squared", "stat_t_squared")
+      .bind("result", "output")
+      .set("RADIANCE_HALF", s.raw_half)
+      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
+      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
+      .set("OUTPUT_HALF", is_half(config.output_format))
+      .set("TABLE_SIZE", kStatTableSize);
+}
+
+// The statistics are sums that outgrow fp16 within a few hundred samples
+// (docs/protocol.md §7.7): fp32 only.
+std::optional<ConfigError> check_statistics(const SessionConfig& config) {
+  for (size_t i = 0; i < config.channels.size(); ++i) {
+    const protocol::ChannelDecl& c = config.channels[i];
+    if (protocol::is_sample_statistic(c.id) && c.format != protocol::Format::F32)
+      return ConfigError{protocol::ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "].format",
+                         config.pipeline + " takes " + std::string(protocol::find_channel(c.id)->name) +
+                             " in fp32 only (the sums of squared and cubed deviations overflow fp16)"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,39 @@
+// The passes and checks stat and stat-temporal share (docs/pipelines.md,
+// "stat"): the frame's statistics planes, the critical-value table, the
+// per-pixel prepare pass and the disc gather.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipelines/definitions.hpp"
+
+namespace dn::pipelines {
+
+// Entries of the critical-value tables (the TABLE_SIZE of the passes that read them).
+inline constexpr uint32_t kStatTableSize = 1024;
+
+// Where stat_prepare and stat_filter read a pixel's statistics: the frame's
+// planes (stat) or the accumulators (stat-temporal), in the planes' layouts.
+struct StatSources {
+  std::string count, mean, m2, m3;
+  std::string raw;        // the raw means that are averaged
+  bool raw_half = false;  // raw is an fp16 plane
+};
+
+// The channels both take besides their own: radiance, albedo, normal and the
+// four statistics.
+uint64_t stat_channels();
+// Declares the frame's planes of stat_channels(), named by their channels'
+// names (radiance, albedo, normal, stat_count, ...), and the table "stat_t_squared".
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config);
+// t^2 of the two-sided Student-t quantile at significance alpha for nu = 1 ..
+// kStatTableSize (entry k: nu = k + 1), as the fp32 bytes of a Constant buffer.
+std::vector<uint8_t> t_squared_table(double alpha);
+// stat_prepare and stat_filter over `sources`, writing the output plane.
+void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& sources);
+// The statistics are fp32 only (docs/protocol.md §7.7).
+std::optional<ConfigError> check_statistics(const SessionConfig& config);
+
+}  // namespace dn::pipelines

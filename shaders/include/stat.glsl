@@ -1,0 +1,56 @@
+// Sample statistics of paper 003 (docs/pipelines.md, "stat"): a pixel's
+// accumulator of Box-Cox samples y = 2 sqrt(x) - 2 per RGB channel, its
+// skew-corrected mean and the variance of that mean, and the exact merge of
+// two accumulators (IMPLEMENTATION-NOTES A.2 P0b; Chan et al., Pebay), which
+// stat-temporal uses to carry statistics across frames.
+#ifndef DN_STAT_GLSL
+#define DN_STAT_GLSL
+
+const float DN_FLT_EPSILON = 1.1920929e-7;
+
+struct DnStat {
+  float n;    // samples (fractional after scaling)
+  vec3 mean;  // mean of y
+  vec3 m2;    // sum of squared deviations of y
+  vec3 m3;    // sum of cubed deviations of y
+  vec3 raw;   // mean of the untransformed samples
+};
+
+DnStat dn_stat_empty() { return DnStat(0.0, vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0)); }
+
+// Weighs an accumulator by f (fading, bilinear weights): n, M2 and M3 scale,
+// so the means and the central moments M2 / n, M3 / n are kept.
+DnStat dn_stat_scale(DnStat a, float f) { return DnStat(a.n * f, a.mean, a.m2 * f, a.m3 * f, a.raw); }
+
+// The accumulator of the union of the samples of a and b.
+DnStat dn_stat_merge(DnStat a, DnStat b) {
+  float n = a.n + b.n;
+  if (!(b.n > 0.0)) return a;
+  if (!(a.n > 0.0)) return b;
+  vec3 d = b.mean - a.mean;
+  float fb = b.n / n;
+  DnStat r;
+  r.n = n;
+  r.mean = a.mean + d * fb;
+  r.m2 = a.m2 + b.m2 + d * d * (a.n * fb);
+  r.m3 = a.m3 + b.m3 + d * d * d * (a.n * fb * (a.n - b.n) / n) + 3.0 * d * (a.n * b.m2 - b.n * a.m2) / n;
+  r.raw = a.raw + (b.raw - a.raw) * fb;
+  return r;
+}
+
+// Bessel-corrected sample variance of y (needs n > 1).
+vec3 dn_stat_sample_variance(DnStat s) { return max(s.m2, 0.0) / (s.n - 1.0); }
+
+// The skew-corrected mean theta = mean + (M3 / n) / (6 s2 n) where
+// s2 > FLT_EPSILON, else the mean (paper 003 Alg. 2; Johnson 1978).
+vec3 dn_stat_theta(DnStat s) {
+  vec3 s2 = dn_stat_sample_variance(s);
+  vec3 skew = (s.m3 / s.n) / (6.0 * s2 * s.n);
+  return mix(s.mean, s.mean + skew, greaterThan(s2, vec3(DN_FLT_EPSILON)));
+}
+
+bool dn_stat_is_finite(DnStat s) {
+  return dn_is_finite(s.n) && dn_is_finite(s.mean) && dn_is_finite(s.m2) && dn_is_finite(s.m3) && dn_is_finite(s.raw);
+}
+
+#endif

@@ -1,0 +1,49 @@
+// The per-tap decisions of stat's disc gather (docs/pipelines.md, "stat"),
+// shared by stat_filter and the tiling benchmark (bench_stat_gather): the
+// Welch membership of tap q in p's disc and q's base weight. The includer
+// defines `float dn_stat_t_squared(uint nu)`, the table entry for nu >= 1.
+#ifndef DN_STAT_GATHER_GLSL
+#define DN_STAT_GATHER_GLSL
+
+float dn_stat_t_squared(uint nu);
+
+struct DnStatKernel {
+  float ks, ka, kn;  // -1 / (2 sigma^2) of the spatial, albedo and normal terms
+  bool membership;   // false: every tap with statistics is a member (the base filter)
+  bool asymmetric;   // Eq. 14 instead of the symmetric test
+};
+
+// symmetric:  (theta_p - theta_q)^2 <= t^2 (var_p + var_q)
+// asymmetric: (theta_p - theta_q)^2 <  var_p (1 + 2 t^2) - var_q, by the
+//             inequality (never through a NaN); equal means with zero
+//             variances are members
+bool dn_stat_member(vec3 d2, float t2, vec3 var_p, vec3 var_q, bool asymmetric) {
+  if (asymmetric) {
+    bvec3 pass_ = lessThan(d2, var_p * (1.0 + 2.0 * t2) - var_q);
+    bvec3 tie = equal(d2 + var_p + var_q, vec3(0.0));  // equal means, no variance: w* = 0/0, accepted
+    return all(bvec3(pass_.x || tie.x, pass_.y || tie.y, pass_.z || tie.z));
+  }
+  return all(lessThanEqual(d2, t2 * (var_p + var_q)));
+}
+
+// Whether q (theta_q = vec4(theta, n), var_q) is a member of p's disc: q
+// must have statistics (n >= 2); a p without variance (n_p < 2) takes q's
+// sample variance as its own, var_q n_q / n_p, with nu = n_q - 1.
+bool dn_stat_is_member(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnStatKernel k) {
+  if (theta_q.w < 2.0) return false;
+  if (!k.membership) return true;
+  bool single = theta_p.w < 2.0;
+  vec3 d = theta_p.rgb - theta_q.rgb;
+  // nu >= 1; pairs of pixels with statistics: n_p + n_q - 2 >= 2
+  uint nu = single ? max(uint(theta_q.w + 0.5), 2u) - 1u : uint(theta_p.w + theta_q.w + 0.5) - 2u;
+  vec3 var_pq = single ? var_q * (theta_q.w / theta_p.w) : var_p;
+  return dn_stat_member(d * d, dn_stat_t_squared(nu), var_pq, var_q, k.asymmetric);
+}
+
+// The base weight of a member at squared pixel distance d2xy with albedo and
+// normal differences da, dn (Eq. 16, the authors' standard deviations).
+float dn_stat_base_weight(int d2xy, vec3 da, vec3 dn, DnStatKernel k) {
+  return exp(k.ks * float(d2xy) + k.ka * dot(da, da) + k.kn * dot(dn, dn));
+}
+
+#endif

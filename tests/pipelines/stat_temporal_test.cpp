@@ -1,0 +1,398 @@
+// stat-temporal against its CPU reference (stat_temporal_reference.cpp) over
+// moving sequences with a disocclusion and a shadow that moves over the
+// surface, and the oracles of its statistics: a still camera accumulates
+// every sample exactly (the P0b merge), a changed history is rejected by the
+// Welch test and an unchanged one is kept, scaling the samples keeps every
+// decision, and frames without statistics or with bad ones keep the history.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+#include "gpu_test_env.hpp"
+#include "online_stats.hpp"
+#include "pipelines/graph.hpp"
+#include "pipelines/pipeline.hpp"
+#include "pipelines/student_t.hpp"
+#include "stat_temporal_reference.hpp"
+#include "svgf_inputs.hpp"
+
+namespace dn {
+namespace {
+
+using test::ChannelId;
+using test::Format;
+
+class StatTemporalTest : public test::GpuTest {};
+
+// A sloped plane the camera pans over at `pan` px per frame (p_prev = p +
+// (pan, 0)), albedo in blocks fixed to the plane, and in front of it a box
+// (depth 3) fixed on screen whose edge uncovers the plane. A shadow no
+// G-buffer shows lies on the plane right of world u = shadow_u + shadow_speed
+// * frame: it moves over the surface, so a history the shadow crossed is stale.
+// Each pixel's `spp` samples are exponential around light * albedo * scale.
+struct SceneSpec {
+  int w = 48, h = 32;
+  float pan = 1.0f;
+  float shadow_u = 30.0f, shadow_speed = 2.0f, shadow_light = 0.1f;
+  bool box = true;
+  int spp = 1;
+  float scale = 1.0f;
+};
+
+test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
+  test::StatTemporalFrame f;
+  test::StatFrame& st = f.stats;
+  st.width = s.w;
+  st.height = s.h;
+  const int n = s.w * s.h;
+  for (auto* v : {&st.radiance, &st.albedo, &st.normal, &st.mean, &st.m2, &st.m3}) v->assign(3 * n, 0.0f);
+  st.count.assign(n, static_cast<float>(s.spp));
+  f.depth.assign(n, 0.0f);
+  f.motion.assign(2 * n, 0.0f);
+  std::mt19937 rng(seed * 7919u + static_cast<uint32_t>(k));
+  for (int y = 0; y < s.h; ++y)
+    for (int x = 0; x < s.w; ++x) {
+      const int i = y * s.w + x;
+      const bool in_box = s.box && x >= 8 && x < 18 && y >= 8 && y < 22;
+      const float u = static_cast<float>(x) + s.pan * static_cast<float>(k);  // world position on the plane
+      float light = 1.0f;
+      if (in_box) {
+        f.depth[i] = 3.0f;
+        st.normal[3 * i] = 0.6f;
+        st.normal[3 * i + 2] = 0.8f;
+      } else {
+        f.depth[i] = 6.0f + 0.01f * u;
+        st.normal[3 * i + 2] = 1.0f;
+        f.motion[2 * i] = s.pan;
+        if (u > s.shadow_u + s.shadow_speed * static_cast<float>(k)) light = s.shadow_light;
+      }
+      const int block = in_box ? 5 : static_cast<int>(std::floor(u / 6.0f));
+      for (int c = 0; c < 3; ++c) {
+        const float albedo = 0.3f + 0.15f * static_cast<float>((block * 3 + c + 8) % 4);
+        st.albedo[3 * i + c] = albedo;
+        render::OnlineStats acc;
+        for (int j = 0; j < s.spp; ++j) {
+          const double r = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+          acc.add(s.scale * static_cast<float>(-std::log(r)) * light * albedo);
+        }
+        st.radiance[3 * i + c] = acc.raw_mean;
+        st.mean[3 * i + c] = acc.mean;
+        st.m2[3 * i + c] = acc.m2;
+        st.m3[3 * i + c] = acc.m3;
+      }
+    }
+  return f;
+}
+
+std::vector<protocol::ChannelDecl> channels() {
+  return {{ChannelId::Radiance, Format::F32},  {ChannelId::Albedo, Format::F32},   {ChannelId::Normal, Format::F32},
+          {ChannelId::Depth, Format::F32},     {ChannelId::Motion, Format::F32},   {ChannelId::StatCount, Format::F32},
+          {ChannelId::StatMean, Format::F32},  {ChannelId::StatM2, Format::F32},   {ChannelId::StatM3, Format::F32}};
+}
+
+test::HostFrame host_frame(const test::StatTemporalFrame& f) {
+  test::HostFrame h;
+  h.info.flags = f.reset ? protocol::kFrameReset : 0u;
+  h.add(ChannelId::Radiance, Format::F32, f.stats.radiance);
+  h.add(ChannelId::Albedo, Format::F32, f.stats.albedo);
+  h.add(ChannelId::Normal, Format::F32, f.stats.normal);
+  h.add(ChannelId::Depth, Format::F32, f.depth);
+  h.add(ChannelId::Motion, Format::F32, f.motion);
+  h.add(ChannelId::StatCount, Format::F32, f.stats.count);
+  h.add(ChannelId::StatMean, Format::F32, f.stats.mean);
+  h.add(ChannelId::StatM2, Format::F32, f.stats.m2);
+  h.add(ChannelId::StatM3, Format::F32, f.stats.m3);
+  return h;
+}
+
+std::vector<float> t_squared(double alpha = 0.001) {  // history_alpha's default
+  std::vector<float> t = pipelines::student_t_table(alpha, 1024);
+  for (float& v : t) v = v * v;
+  return t;
+}
+
+struct Session {
+  std::unique_ptr<pipelines::Pipeline> pipe;
+  pipelines::GraphPipeline* graph = nullptr;
+};
+
+Session make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params = {{"radius", 4}}) {
+  auto config = test::make_config("stat-temporal", w, h, channels(), Format::F32, std::move(params));
+  EXPECT_FALSE(pipelines::validate(config).has_value());
+  Session s;
+  s.pipe = pipelines::create(ctx, config);
+  s.graph = dynamic_cast<pipelines::GraphPipeline*>(s.pipe.get());
+  EXPECT_NE(s.graph, nullptr);
+  s.graph->set_capture(true);
+  return s;
+}
+
+// The accumulators the frame left on the device (read where stat_prepare and
+// stat_filter read them).
+struct DeviceState {
+  std::vector<float> count, mean, m2, m3, raw;
+};
+DeviceState device_state(const Session& s) {
+  auto read = [&](const char* pass, const char* buffer) {
+    return test::decode_output(s.graph->captured(pass, buffer), Format::F32);
+  };
+  return {read("stat_prepare", "stat_acc_count"), read("stat_prepare", "stat_acc_mean"),
+          read("stat_prepare", "stat_acc_m2"), read("stat_prepare", "stat_acc_m3"), read("stat_filter", "stat_acc_raw")};
+}
+
+// Pixels whose accumulator differs from the reference's: `decisions` where
+// the count differs (another merge or rejection), `values` where the count
+// agrees but a statistic is off by more than fp32 merging explains.
+struct Mismatch {
+  size_t decisions = 0, values = 0;
+};
+Mismatch compare(const DeviceState& d, const test::StatTemporalState& ref) {
+  Mismatch m;
+  for (size_t i = 0; i < ref.acc.size(); ++i) {
+    const test::StatAccumulator& a = ref.acc[i];
+    if (std::fabs(d.count[i] - a.n) > 1e-4 * (1.0 + a.n)) {
+      ++m.decisions;
+      continue;
+    }
+    bool ok = true;
+    for (int c = 0; c < 3; ++c) {
+      const double scale3 = std::pow(std::max(a.m2[c], 0.0) / std::max(a.n, 1.0), 1.5) * a.n;
+      ok = ok && std::fabs(d.mean[3 * i + c] - a.mean[c]) <= 1e-4 * (1.0 + std::fabs(a.mean[c]));
+      ok = ok && std::fabs(d.raw[3 * i + c] - a.raw[c]) <= 1e-4 * (1e-3 + std::fabs(a.raw[c]));
+      ok = ok && std::fabs(d.m2[3 * i + c] - a.m2[c]) <= 1e-3 * (1e-3 + std::fabs(a.m2[c]));
+      ok = ok && std::fabs(d.m3[3 * i + c] - a.m3[c]) <= 1e-3 * (1e-3 + std::fabs(a.m3[c]) + scale3);
+    }
+    if (!ok) ++m.values;
+  }
+  return m;
+}
+
+TEST_F(StatTemporalTest, MatchesCpuReference) {
+  struct Variant {
+    const char* name;
+    SceneSpec scene;
+    double fading;
+  };
+  // At 1 spp a 3x3 window holds 9 samples: a dark shadow (2 %) moving fast
+  // exercises the rejection.
+  SceneSpec one_spp;
+  one_spp.shadow_light = 0.02f;
+  one_spp.shadow_speed = 4.0f;
+  SceneSpec fractional = one_spp;
+  fractional.pan = 0.6f;
+  SceneSpec four_spp;
+  four_spp.spp = 4;
+  four_spp.pan = 1.3f;
+  SceneSpec still = one_spp;
+  still.pan = 0.0f;
+  const Variant variants[] = {{"pan1_1spp", one_spp, 0.9}, {"pan0.6_1spp", fractional, 0.9},
+                              {"pan1.3_4spp_fading0.7", four_spp, 0.7}, {"still_shadow_moves", still, 0.9}};
+  const auto table = t_squared();
+  for (const auto& v : variants) {
+    SCOPED_TRACE(v.name);
+    Session s = make(ctx(), v.scene.w, v.scene.h, {{"radius", 4}, {"fading", v.fading}});
+    test::StatTemporalState state;
+    size_t rejected = 0, merged = 0;
+    for (int k = 0; k < 8; ++k) {
+      test::StatTemporalFrame f = scene_frame(v.scene, k, 3);
+      f.reset = k == 5;  // a reset mid-sequence: every pixel starts afresh
+      svgf_inputs::run(*s.pipe, host_frame(f));
+      const test::StatTemporalResult want = test::stat_temporal(f, state, v.fading, table);
+      const Mismatch m = compare(device_state(s), want.state);
+      EXPECT_EQ(m.decisions, 0u) << "frame " << k << ": pixels merged or rejected unlike the reference";
+      EXPECT_EQ(m.values, 0u) << "frame " << k << ": accumulators off the reference";
+      for (size_t i = 0; i < want.rejected.size(); ++i) {
+        rejected += want.rejected[i];
+        merged += want.state.acc[i].n > f.stats.count[i] + 1e-3;
+      }
+      if (k == 5)
+        for (size_t i = 0; i < want.state.acc.size(); ++i) ASSERT_EQ(want.state.acc[i].n, f.stats.count[i]);
+      state = want.state;
+    }
+    std::printf("[ info     ] %s: %zu merges, %zu rejections by the test over 8 frames\n", v.name, merged, rejected);
+    EXPECT_GT(rejected, 0u) << "the sequence never exercises the test's rejection";
+    EXPECT_GT(merged, 0u);
+  }
+}
+
+// A still camera over an unchanging scene: still pixels do not fade, so a
+// pixel whose history the test never rejected holds every sample, and its
+// accumulators equal two-pass statistics of them all (the exact merge over
+// 24 frames). The test may reject by chance (history_alpha per channel and
+// frame): nearly every pixel must keep all its samples.
+TEST_F(StatTemporalTest, StillCameraAccumulatesEverySampleExactly) {
+  const int w = 40, h = 24, frames = 24, spp = 2;
+  Session s = make(ctx(), w, h);
+  std::vector<std::vector<double>> samples(3 * w * h);
+  std::mt19937 rng(17);
+  for (int k = 0; k < frames; ++k) {
+    test::StatTemporalFrame f = scene_frame(SceneSpec{w, h, 0.0f, 0.0f, 0.0f, 1.0f, false, spp}, k, 1);
+    for (int i = 0; i < w * h; ++i)
+      for (int c = 0; c < 3; ++c) {
+        render::OnlineStats acc;
+        const double truth = 0.2 + 0.6 * ((i + c) % 5) / 4.0;
+        for (int j = 0; j < spp; ++j) {
+          const double r = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
+          const float x = static_cast<float>(-std::log(r) * truth);
+          acc.add(x);
+          samples[3 * i + c].push_back(x);
+        }
+        f.stats.radiance[3 * i + c] = acc.raw_mean;
+        f.stats.mean[3 * i + c] = acc.mean;
+        f.stats.m2[3 * i + c] = acc.m2;
+        f.stats.m3[3 * i + c] = acc.m3;
+      }
+    svgf_inputs::run(*s.pipe, host_frame(f));
+  }
+  const DeviceState d = device_state(s);
+  size_t complete = 0, off = 0;
+  for (int i = 0; i < w * h; ++i) {
+    if (d.count[i] != static_cast<float>(frames * spp)) continue;
+    ++complete;
+    for (int c = 0; c < 3; ++c) {
+      const std::vector<double>& x = samples[3 * i + c];
+      double mean = 0.0, raw = 0.0;
+      for (double v : x) mean += 2.0 * std::sqrt(v) - 2.0, raw += v;
+      mean /= x.size();
+      raw /= x.size();
+      double m2 = 0.0, m3 = 0.0;
+      for (double v : x) {
+        const double dy = 2.0 * std::sqrt(v) - 2.0 - mean;
+        m2 += dy * dy;
+        m3 += dy * dy * dy;
+      }
+      const bool ok = std::fabs(d.mean[3 * i + c] - mean) <= 1e-5 * (1.0 + std::fabs(mean)) &&
+                      std::fabs(d.raw[3 * i + c] - raw) <= 1e-5 * raw &&
+                      std::fabs(d.m2[3 * i + c] - m2) <= 1e-4 * m2 &&
+                      std::fabs(d.m3[3 * i + c] - m3) <= 1e-4 * (std::fabs(m3) + std::pow(m2, 1.5) / std::sqrt(x.size()));
+      off += !ok;
+    }
+  }
+  std::printf("[ info     ] %zu of %d pixels kept all %d samples\n", complete, w * h, frames * spp);
+  EXPECT_GE(complete, static_cast<size_t>(0.98 * w * h)) << "still pixels lost samples (rejections or fading)";
+  EXPECT_EQ(off, 0u) << "accumulated statistics differ from two-pass ones";
+}
+
+// A still camera; on frame 12 the light on the left half drops to 5 % (a
+// change no G-buffer shows). The Welch test rejects the stale history there
+// (it fails far beyond the critical t: at once) and keeps it elsewhere; the
+// output follows the new light.
+TEST_F(StatTemporalTest, RejectsAChangedHistoryAndKeepsAnUnchangedOne) {
+  SceneSpec spec;
+  spec.pan = 0.0f;
+  spec.box = false;
+  spec.shadow_speed = 0.0f;
+  spec.shadow_u = 1e9f;  // no shadow
+  const int frames = 14, change = 12;
+  Session s = make(ctx(), spec.w, spec.h);
+  std::vector<float> out;
+  test::StatTemporalFrame f;
+  for (int k = 0; k < frames; ++k) {
+    f = scene_frame(spec, k, 9);
+    if (k >= change)
+      for (int y = 0; y < spec.h; ++y)
+        for (int x = 0; x < spec.w / 2; ++x) {
+          const int i = y * spec.w + x;
+          for (int c = 0; c < 3; ++c) {
+            f.stats.radiance[3 * i + c] *= 0.05f;  // samples x 0.05: Box-Cox y = 2 sqrt(x) - 2 moves accordingly
+            const float y0 = f.stats.mean[3 * i + c];  // one sample: mean = 2 sqrt(x) - 2
+            const float x0 = (y0 + 2.0f) * (y0 + 2.0f) / 4.0f;
+            f.stats.mean[3 * i + c] = 2.0f * std::sqrt(0.05f * x0) - 2.0f;
+          }
+        }
+    out = svgf_inputs::run(*s.pipe, host_frame(f));
+  }
+  const DeviceState d = device_state(s);
+  size_t changed_kept = 0, changed = 0, unchanged_lost = 0, unchanged = 0;
+  double out_changed = 0.0, truth_changed = 0.0;
+  for (int y = 1; y < spec.h - 1; ++y)
+    for (int x = 1; x < spec.w - 1; ++x) {
+      const int i = y * spec.w + x;
+      if (x < spec.w / 2 - 1) {  // windows wholly in the changed half
+        ++changed;
+        changed_kept += d.count[i] > static_cast<float>(frames - change) + 0.5f;
+        for (int c = 0; c < 3; ++c) {
+          out_changed += out[3 * i + c];
+          truth_changed += 0.05 * f.stats.albedo[3 * i + c];
+        }
+      } else if (x > spec.w / 2) {
+        ++unchanged;
+        unchanged_lost += d.count[i] != static_cast<float>(frames);
+      }
+    }
+  std::printf("[ info     ] changed: %zu of %zu kept a stale history; unchanged: %zu of %zu lost samples\n", changed_kept,
+              changed, unchanged_lost, unchanged);
+  EXPECT_LE(changed_kept, changed / 50) << "stale histories kept";
+  EXPECT_LE(unchanged_lost, unchanged / 50) << "unchanged histories lost";
+  EXPECT_NEAR(out_changed / truth_changed, 1.0, 0.25) << "the output did not follow the new light";
+}
+
+// Samples x 4: Box-Cox differences and deviations scale by 2, so every merge
+// and rejection stays and the raw means scale by 4.
+TEST_F(StatTemporalTest, ScalingTheSamplesKeepsEveryDecision) {
+  SceneSpec spec;
+  spec.shadow_light = 0.02f;
+  spec.shadow_speed = 4.0f;
+  SceneSpec scaled = spec;
+  scaled.scale = 4.0f;
+  Session a = make(ctx(), spec.w, spec.h), b = make(ctx(), spec.w, spec.h);
+  for (int k = 0; k < 6; ++k) {
+    svgf_inputs::run(*a.pipe, host_frame(scene_frame(spec, k, 2)));
+    svgf_inputs::run(*b.pipe, host_frame(scene_frame(scaled, k, 2)));
+    const DeviceState da = device_state(a), db = device_state(b);
+    ASSERT_EQ(da.count, db.count) << "frame " << k << ": a merge or rejection changed with the scale";
+    for (size_t i = 0; i < da.raw.size(); ++i)
+      ASSERT_NEAR(db.raw[i], 4.0f * da.raw[i], 1e-5f * (1e-3f + 4.0f * da.raw[i])) << "frame " << k;
+  }
+}
+
+// Frames that bring no data for a pixel (n = 0) or bad statistics (NaN,
+// infinite) keep its history unchanged; the output stays finite.
+TEST_F(StatTemporalTest, FramesWithoutDataKeepTheHistory) {
+  SceneSpec spec;
+  spec.pan = 0.0f;
+  spec.shadow_speed = 0.0f;
+  Session s = make(ctx(), spec.w, spec.h);
+  for (int k = 0; k < 4; ++k) svgf_inputs::run(*s.pipe, host_frame(scene_frame(spec, k, 4)));
+  const DeviceState before = device_state(s);
+  test::StatTemporalFrame f = scene_frame(spec, 4, 4);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const int none = 3 * spec.w + 30, bad_m2 = 20 * spec.w + 25, bad_count = 25 * spec.w + 40;
+  f.stats.count[none] = 0.0f;
+  f.stats.m2[3 * bad_m2 + 1] = nan;
+  f.stats.count[bad_count] = inf;
+  const auto out = svgf_inputs::run(*s.pipe, host_frame(f));
+  const DeviceState after = device_state(s);
+  for (int i : {none, bad_m2, bad_count}) {
+    EXPECT_EQ(after.count[i], before.count[i]) << "pixel " << i;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(after.raw[3 * i + c], before.raw[3 * i + c]) << "pixel " << i;
+  }
+  for (float v : out) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(StatTemporalValidate, NeedsDepthMotionAndFp32Statistics) {
+  auto without = [](ChannelId id) {
+    std::vector<protocol::ChannelDecl> c;
+    for (const auto& d : channels())
+      if (d.id != id) c.push_back(d);
+    return c;
+  };
+  for (ChannelId id : {ChannelId::Depth, ChannelId::Motion, ChannelId::StatM3}) {
+    const auto err = pipelines::validate(test::make_config("stat-temporal", 16, 16, without(id)));
+    ASSERT_TRUE(err.has_value());
+    EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+  }
+  auto half = channels();
+  for (auto& c : half)
+    if (c.id == ChannelId::StatMean) c.format = Format::F16;
+  const auto err = pipelines::validate(test::make_config("stat-temporal", 16, 16, half));
+  ASSERT_TRUE(err.has_value());
+  EXPECT_EQ(err->code, protocol::ErrorCode::InvalidChannel);
+  EXPECT_NE(err->message.find("stat-temporal takes stat_mean in fp32 only"), std::string::npos) << err->message;
+}
+
+}  // namespace
+}  // namespace dn
