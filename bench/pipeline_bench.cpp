@@ -4,7 +4,9 @@
 // default 640x360 and 1280x720) it opens a session on the device the server
 // would choose (--device to pick another), feeds it --frames frames (default
 // 12, the first --warmup 2 not counted) of deterministic noisy radiance and
-// smooth G-buffers seen by a panning camera, and prints one markdown row:
+// smooth G-buffers seen by a panning camera (and, for the stat pipelines,
+// the sample statistics of 4 samples per pixel; --param NAME=VALUE sets a
+// parameter of every benched pipeline), and prints one markdown row:
 // cold figures apart from steady ones (create() wall time with the number of
 // kernels it compiled, the first frame's device time), then
 // the median device time of every pass (from the timings process() returns),

@@ -13,6 +13,9 @@ namespace dn::pipelines {
 
 // Entries of the critical-value tables (the TABLE_SIZE of the passes that read them).
 inline constexpr uint32_t kStatTableSize = 1024;
+// The largest radius stat_filter_tiled's shared-memory tile serves
+// (shaders/stat_filter_tiled.comp: DN_STAT_TILE_APRON).
+inline constexpr float kStatTileApron = 6.0f;
 
 // Where stat_prepare and stat_filter read a pixel's statistics: the frame's
 // planes (stat) or the accumulators (stat-temporal), in the planes' layouts.
@@ -31,7 +34,8 @@ void add_stat_inputs(GraphSpec& g, const SessionConfig& config);
 // t^2 of the two-sided Student-t quantile at significance alpha for nu = 1 ..
 // kStatTableSize (entry k: nu = k + 1), as the fp32 bytes of a Constant buffer.
 std::vector<uint8_t> t_squared_table(double alpha);
-// stat_prepare and stat_filter over `sources`, writing the output plane.
+// stat_prepare and stat_filter (stat_filter_tiled where it serves) over
+// `sources`, writing the output plane.
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& sources);
 // The statistics are fp32 only (docs/protocol.md §7.7).
 std::optional<ConfigError> check_statistics(const SessionConfig& config);

@@ -26,7 +26,9 @@ layout(std140, set = 0, binding = 0) uniform FrameConstants {
 // The value of tunable `name` of parameter group `group` (a row of parameters.def).
 #define DN_PARAM_VALUE(group, name) (frame.params.group##_##name)
 
-// Workgroup size is specialization constant 0 in every pass.
+// Workgroup size is specialization constant 0 in every pass. A pass over a
+// 2-D grid includes grid2d.glsl first, which declares its own.
+#ifndef DN_GRID2D_GLSL
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 // Linear index of this invocation over a (x, y) grid of workgroups: the host
@@ -34,5 +36,6 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 uint dn_invocation_index() {
   return (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
 }
+#endif
 
 #endif

@@ -16,7 +16,7 @@ mkdir -p "$dir"
 DN_SKIP_SETUP=1 DN_BUILD_DIR="$build" "$src/bench/speed_error.sh" --scenes 1 --frames 3 --still 6 --size 64x36 \
   --ref-spp 32 --out "$dir/out" --cache "$dir/cache" > "$dir/log" 2>&1 || { cat "$dir/log"; exit 1; }
 results="$dir/out/results.tsv"
-for method in noisy accumulate atrous svgf svgf-fb svgf-split; do
+for method in noisy accumulate atrous svgf svgf-fb svgf-split stat-temporal stat-temporal-r6; do
   grep -q "^1	$method	" "$results" || { echo "no row for $method"; cat "$results"; exit 1; }
   for region in roughness-mapped glossy highlights disocclusion; do
     grep -q "^1	$region	$method	" "$dir/out/region.tsv" ||

@@ -127,6 +127,8 @@ TEST_F(StatTest, MatchesCpuReference) {
       {"asymmetric", 64, 40, Format::F32, {{"radius", 6}, {"sigma_spatial", 3}, {"asymmetric", 1}}, asym},
       {"floor_alpha_fp16", 61, 37, Format::F16,
        {{"radius", 6}, {"sigma_spatial", 3}, {"variance_floor", 0.01}, {"alpha", 0.05}}, floor},
+      {"floor_alpha_fp16_even", 62, 38, Format::F16,
+       {{"radius", 6}, {"sigma_spatial", 3}, {"variance_floor", 0.01}, {"alpha", 0.05}}, floor},
   };
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
@@ -134,6 +136,10 @@ TEST_F(StatTest, MatchesCpuReference) {
     auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
     ASSERT_NE(graph, nullptr);
     graph->set_capture(true);
+    // Radius <= 6 at an even width: the shared-memory tile (stat_filter_tiled).
+    const bool tiled = v.ref.radius <= 6 && v.w % 2 == 0;
+    for (const auto& pass : graph->spec().passes)
+      if (pass.name() == "stat_filter") EXPECT_EQ(pass.shader(), tiled ? "stat_filter_tiled" : "stat_filter");
     const test::StatFrame f = shadow_frame(v.w, v.h, 8, 11);
     const auto got = svgf_inputs::run(*pipe, host_frame(f, v.guides), v.guides);
     const test::StatFrame seen = rounded(f, v.guides);
