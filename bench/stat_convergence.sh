@@ -8,7 +8,8 @@
 # and the noise-corrected MSE (mean of (x - r1)(x - r2), unbiased for the
 # error against the true image, docs/results.md) of each. Writes
 # OUT/convergence.tsv and OUT/stat_convergence.png; --docs also copies the
-# plot to docs/images/stat_convergence.png.
+# plot to docs/images/stat_convergence.png. --param NAME=VALUE (repeatable)
+# sets a stat parameter for both the base filter and stat (e.g. radius=6).
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
 # skips scripts/setup.sh.
 set -euo pipefail
@@ -22,9 +23,11 @@ ref_spp=4096
 out=out/stat_convergence
 cache=out/cache
 docs=0
+stat_params=()
 usage() {
   cat <<USAGE
-usage: bench/stat_convergence.sh [--scenes "1 3"] [--size WxH] [--max-spp N] [--ref-spp S] [--out DIR] [--cache DIR] [--docs]
+usage: bench/stat_convergence.sh [--scenes "1 3"] [--size WxH] [--max-spp N] [--ref-spp S] [--param NAME=VALUE]...
+                                 [--out DIR] [--cache DIR] [--docs]
 defaults: --scenes "$scenes" --size $size --max-spp $max_spp --ref-spp $ref_spp --out $out
 USAGE
 }
@@ -36,6 +39,7 @@ while [ $# -gt 0 ]; do
     --ref-spp) ref_spp=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
+    --param) stat_params+=(--param "$2"); shift 2 ;;
     --docs) docs=1; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "stat_convergence: unknown option '$1'" >&2; usage >&2; exit 2 ;;
@@ -65,6 +69,7 @@ for s in $scenes; do
       read -r label pipeline params <<< "$row"
       param_args=()
       for p in $params; do param_args+=(--param "$p"); done
+      [ "$pipeline" != stat ] || param_args+=(${stat_params[@]+"${stat_params[@]}"})
       "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset dnrender \
         --input "$dir/spp$spp/frame_%04d.exr" --start 0 --end 0 --output "$dir/spp$spp/$label/frame_%04d.exr" \
         -r "$dir/refs/ref_%04d.exr" --reference2 "$dir/refs/ref2_%04d.exr" --summary "$dir/spp$spp/$label.tsv"
