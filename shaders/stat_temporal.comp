@@ -11,9 +11,9 @@
 //   test: the Welch test of stat_filter, between the history and the
 //        frame over p's 3x3 window (the same-surface previous pixels around
 //        p_prev, merged and faded, against the same-surface current pixels
-//        around p, merged), nu = n_H + n_C - 2; one sample's test would
-//        reject on every firefly, the window's on what changed.
-//        nu by Welch-Satterthwaite per channel, at history_alpha
+//        around p, merged), per channel with the Welch-Satterthwaite nu, at
+//        history_alpha; one sample's test would reject on every firefly, the
+//        window's rejects what changed.
 //   accumulator = C (the history is rejected: a moved shadow or highlight, a
 //        ghost) when the test fails by more than 2t standard errors, or fails
 //        for the second frame in a row (p's previous pixel is marked
