@@ -30,7 +30,7 @@
 #include "gpu/context.hpp"
 #include "gpu/error.hpp"
 #include "gpu/timestamps.hpp"
-#include "dispatch_timing.hpp"
+#include "kernel_bench.hpp"
 #include "half.hpp"
 
 namespace {
@@ -40,11 +40,6 @@ using dn::gpu::check;
 constexpr uint32_t kBlock = 8;
 constexpr float kOffset[2] = {0.3f, 0.6f};
 
-struct Options {
-  std::string device;
-  std::vector<std::pair<uint32_t, uint32_t>> sizes;
-  int reps = 30;
-};
 
 dn::gpu::GridPush grid_of(uint32_t w, uint32_t h) {
   dn::gpu::GridPush g;
@@ -308,26 +303,17 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--device") {
-      options.device = value();
-    } else if (a == "--size") {
-      unsigned w = 0, h = 0;
-      const std::string v = value();
-      if (std::sscanf(v.c_str(), "%ux%u", &w, &h) != 2 || !w || !h) throw std::runtime_error("bad --size " + v);
-      options.sizes.emplace_back(w, h);
-    } else if (a == "--reps") {
-      options.reps = std::max(1, std::atoi(value().c_str()));
-    } else {
+  dn::bench::KernelBenchOptions options;
+  options.reps = 30;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      if (dn::bench::parse_kernel_bench_option(argc, argv, i, options)) continue;
       std::fprintf(stderr, "usage: %s [--device SEL] [--size WxH]... [--reps N]\n", argv[0]);
       return 2;
     }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bilinear_bench: %s\n", e.what());
+    return 2;
   }
   if (options.sizes.empty()) options.sizes = {{640, 360}, {1280, 720}, {1920, 1080}};
   try {

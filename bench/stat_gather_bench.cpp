@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "dispatch_timing.hpp"
+#include "kernel_bench.hpp"
 #include "dn/shaders/shaders.hpp"
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
@@ -32,12 +32,6 @@ constexpr uint32_t kApron = 6;  // the tile's apron (the largest radius it serve
 constexpr int kSamples = 16;    // the statistics' n
 constexpr int kBuffers = 7;     // result, theta, variance, raw, albedo, normal, t_squared
 
-struct Options {
-  std::string device;
-  std::vector<std::pair<uint32_t, uint32_t>> sizes;
-  std::vector<int> radii;
-  int reps = 10;
-};
 
 // Per-pixel vec4 planes as stat_prepare leaves them: theta (Box-Cox mean of a
 // pixel whose true value is a smooth field, halved right of a vertical edge,
@@ -141,31 +135,25 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int radius, int reps) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--device") {
-      options.device = value();
-    } else if (a == "--size") {
-      unsigned w = 0, h = 0;
-      const std::string v = value();
-      if (std::sscanf(v.c_str(), "%ux%u", &w, &h) != 2 || !w || !h) throw std::runtime_error("bad --size " + v);
-      options.sizes.emplace_back(w, h);
-    } else if (a == "--radius") {
-      options.radii.push_back(std::max(1, std::atoi(value().c_str())));
-    } else if (a == "--reps") {
-      options.reps = std::max(1, std::atoi(value().c_str()));
-    } else {
+  dn::bench::KernelBenchOptions options;
+  options.reps = 10;
+  std::vector<int> radii;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      if (dn::bench::parse_kernel_bench_option(argc, argv, i, options)) continue;
+      if (std::string(argv[i]) == "--radius" && i + 1 < argc) {
+        radii.push_back(std::max(1, std::atoi(argv[++i])));
+        continue;
+      }
       std::fprintf(stderr, "usage: %s [--device SEL] [--size WxH]... [--radius R]... [--reps N]\n", argv[0]);
       return 2;
     }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stat_gather_bench: %s\n", e.what());
+    return 2;
   }
   if (options.sizes.empty()) options.sizes = {{640, 360}, {1280, 720}};
-  if (options.radii.empty()) options.radii = {6, 20};
+  if (radii.empty()) radii = {6, 20};
   try {
     dn::gpu::ContextOptions co;
     co.device = options.device;
@@ -175,7 +163,7 @@ int main(int argc, char** argv) {
     std::printf("| size | radius | plain loads ms | shared tile ms | max diff | mean weight sum |\n");
     std::printf("| --- | --- | --- | --- | --- | --- |\n");
     for (auto [w, h] : options.sizes)
-      for (int r : options.radii) run(ctx, w, h, r, options.reps);
+      for (int r : radii) run(ctx, w, h, r, options.reps);
     if (ctx.validation_enabled() && ctx.validation_message_count() > 0) {
       std::fprintf(stderr, "%llu validation messages\n",
                    static_cast<unsigned long long>(ctx.validation_message_count()));

@@ -46,10 +46,7 @@ vec3 filter_pixel(uint p) {
   vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
-  DnStatKernel k = DnStatKernel(-0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial)),
-                                -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo)),
-                                -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal)),
-                                DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0);
+  DnStatKernel k = dn_stat_kernel_from_parameters();
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy) {

@@ -1,7 +1,7 @@
 #version 450
 // stat_filter_tiled: stat_filter (see there and docs/pipelines.md, "stat")
 // with the disc read from a shared-memory tile: each 8x8 workgroup loads the
-// (8 + 2 DN_STAT_TILE_APRON)^2 pixels around its block once (theta,
+// (8 + 2 APRON)^2 pixels around its block once (theta,
 // variance, sanitized raw mean, albedo, sanitized normal: 80 B each, 32000 B
 // in all, within lavapipe's 32 KiB) instead of every invocation loading its
 // own taps. It measured 1.5x faster on lavapipe at radius 6
@@ -23,13 +23,10 @@
 float dn_stat_t_squared(uint nu) { return t_squared.data[min(nu, TABLE_SIZE) - 1u]; }
 #include "stat_gather.glsl"
 
-// The largest radius the tile serves (server/pipelines/stat_passes.hpp: kStatTileApron).
-const uint DN_STAT_TILE_APRON = 6u;
-
 struct Tap {
   vec4 theta, variance, raw, albedo, normal;
 };
-#define DN_TILE_APRON DN_STAT_TILE_APRON
+#define DN_TILE_APRON APRON
 #define DN_TILE_T Tap
 #include "tile.glsl"
 
@@ -44,10 +41,7 @@ vec3 filter_pixel() {
   vec3 raw_p = c.raw.rgb;
   if (!(c.theta.w > 0.0)) return raw_p;
   int r = int(DN_PARAM_VALUE(stat, radius));
-  DnStatKernel k = DnStatKernel(-0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial)),
-                                -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo)),
-                                -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal)),
-                                DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0);
+  DnStatKernel k = dn_stat_kernel_from_parameters();
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy)

@@ -60,9 +60,9 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
   // The shared-memory tile measured faster on lavapipe (docs/results.md);
   // it serves radii up to its apron and writes pixel pairs within a
   // workgroup row, so the width must be even.
-  const bool tiled = g.parameters.stat_radius <= kStatTileApron && config.width % 2 == 0;
+  const bool tiled = g.parameters.stat_radius <= static_cast<float>(kStatTileApron) && config.width % 2 == 0;
   PassSpec& filter = g.add_pass("stat_filter", tiled ? "stat_filter_tiled" : "stat_filter");
-  if (tiled) filter.over_grid({config.width, config.height}, {config.width, config.height});
+  if (tiled) filter.over_grid({config.width, config.height}, {config.width, config.height}).set("APRON", kStatTileApron);
   filter.bind("theta", "stat_theta")
       .bind("variance", "stat_variance")
       .bind("radiance", s.raw)

@@ -13,9 +13,9 @@ namespace dn::pipelines {
 
 // Entries of the critical-value tables (the TABLE_SIZE of the passes that read them).
 inline constexpr uint32_t kStatTableSize = 1024;
-// The largest radius stat_filter_tiled's shared-memory tile serves
-// (shaders/stat_filter_tiled.comp: DN_STAT_TILE_APRON).
-inline constexpr float kStatTileApron = 6.0f;
+// The largest radius stat_filter_tiled's shared-memory tile serves (its
+// APRON): (8 + 2 * 6)^2 texels of 80 B fill lavapipe's 32 KiB.
+inline constexpr uint32_t kStatTileApron = 6;
 
 // Where stat_prepare and stat_filter read a pixel's statistics: the frame's
 // planes (stat) or the accumulators (stat-temporal), in the planes' layouts.

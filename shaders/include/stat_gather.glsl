@@ -13,6 +13,16 @@ struct DnStatKernel {
   bool asymmetric;   // Eq. 14 instead of the symmetric test
 };
 
+#ifdef DN_FRAME_GLSL
+// The kernel of the session's stat parameters (passes with FrameConstants).
+DnStatKernel dn_stat_kernel_from_parameters() {
+  return DnStatKernel(-0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial)),
+                      -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo)),
+                      -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal)),
+                      DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0);
+}
+#endif
+
 // symmetric:  (theta_p - theta_q)^2 <= t^2 (var_p + var_q)
 // asymmetric: (theta_p - theta_q)^2 <  var_p (1 + 2 t^2) - var_q, by the
 //             inequality (never through a NaN); equal means with zero

@@ -1,10 +1,16 @@
-// Timing of compute dispatches for the kernel benchmarks (bilinear_bench,
-// stat_gather_bench): the median device time of repeated dispatches from
-// Vulkan timestamps, after one untimed run (first dispatch, caches).
+// What the kernel benchmarks (bilinear_bench, stat_gather_bench) share: their
+// common options (--device, --size WxH repeatable, --reps) and the median
+// device time of repeated dispatches from Vulkan timestamps, after one
+// untimed run (first dispatch, caches).
 #pragma once
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
+#include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "gpu/buffer.hpp"
@@ -13,6 +19,31 @@
 #include "gpu/timestamps.hpp"
 
 namespace dn::bench {
+
+struct KernelBenchOptions {
+  std::string device;
+  std::vector<std::pair<uint32_t, uint32_t>> sizes;
+  int reps = 0;  // the benchmark's default until set
+};
+
+// Consumes argv[i] (and its value, advancing i) when it is a common option;
+// false when it is not one. Throws std::runtime_error on a missing or bad value.
+inline bool parse_kernel_bench_option(int argc, char** argv, int& i, KernelBenchOptions& o) {
+  const std::string a = argv[i];
+  if (a != "--device" && a != "--size" && a != "--reps") return false;
+  if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
+  const std::string v = argv[++i];
+  if (a == "--device") {
+    o.device = v;
+  } else if (a == "--size") {
+    unsigned w = 0, h = 0;
+    if (std::sscanf(v.c_str(), "%ux%u", &w, &h) != 2 || !w || !h) throw std::runtime_error("bad --size " + v);
+    o.sizes.emplace_back(w, h);
+  } else {
+    o.reps = std::max(1, std::atoi(v.c_str()));
+  }
+  return true;
+}
 
 inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
