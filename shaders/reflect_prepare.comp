@@ -81,12 +81,6 @@ float reflection_class(uint p, float z) {
   return DN_REFLECT_NONE;
 }
 
-vec3 guarded(vec3 a) {
-  return vec3(a.x >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.x) ? a.x : 1.0,
-              a.y >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.y) ? a.y : 1.0,
-              a.z >= DN_SVGF_ALBEDO_MIN && dn_is_finite(a.z) ? a.z : 1.0);
-}
-
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -102,7 +96,7 @@ void main() {
     vec3 w = DN_LOAD3(reflection_position, REFLECTION_POSITION_HALF, p);
     if (dn_is_finite(w)) {
       a = vec4(w, cls);
-      f *= guarded(DN_LOAD3(reflection_albedo, REFLECTION_ALBEDO_HALF, p));
+      f *= dn_guarded_albedo(DN_LOAD3(reflection_albedo, REFLECTION_ALBEDO_HALF, p));
       float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
       if (VIRTUAL_START) vmv = mirror_virtual_motion(p, DN_LOAD3(position, POSITION_HALF, p), vz, primary_depth);
       if (dn_is_foreground(vz)) {

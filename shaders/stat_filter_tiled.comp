@@ -2,7 +2,7 @@
 // stat_filter_tiled: stat_filter (see there and docs/pipelines.md, "stat")
 // with the disc read from a shared-memory tile: each 8x8 workgroup loads the
 // (8 + 2 APRON)^2 pixels around its block once (theta,
-// variance, sanitized raw mean, albedo, sanitized normal: 80 B each, 32000 B
+// variance, the value (dn_stat_value), albedo, sanitized normal: 80 B each, 32000 B
 // in all, within lavapipe's 32 KiB) instead of every invocation loading its
 // own taps. It measured 1.5x faster on lavapipe at radius 6
 // (bench/stat_gather_bench, docs/results.md); the host uses it when the
@@ -20,7 +20,7 @@
 #include "pass.glsl"
 #include "passes/stat_filter_tiled.pass"
 
-float dn_stat_t_squared(uint nu) { return t_squared.data[min(nu, TABLE_SIZE) - 1u]; }
+#include "stat_filter_io.glsl"
 #include "stat_gather.glsl"
 
 struct Tap {
@@ -32,14 +32,14 @@ struct Tap {
 
 Tap dn_tile_fetch(ivec2 p) {
   uint i = dn_grid_index(uvec2(p), dn_grid.size);
-  return Tap(theta.data[i], variance.data[i], vec4(dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, i)), 0.0),
+  return Tap(theta.data[i], variance.data[i], vec4(dn_stat_value(i), 0.0),
              vec4(DN_LOAD3(albedo, ALBEDO_HALF, i), 0.0), vec4(dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, i)), 0.0));
 }
 
 vec3 filter_pixel() {
   Tap c = dn_tile_at(ivec2(0));
   vec3 raw_p = c.raw.rgb;
-  if (!(c.theta.w > 0.0)) return raw_p;
+  if (!(c.theta.w > 0.0)) return dn_stat_remodulate(raw_p, c.albedo.rgb);
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
@@ -55,7 +55,7 @@ vec3 filter_pixel() {
       sum += w * (q.raw.rgb - raw_p);
       weight_sum += w;
     }
-  return raw_p + sum / weight_sum;
+  return dn_stat_remodulate(raw_p + sum / weight_sum, c.albedo.rgb);
 }
 
 void main() {

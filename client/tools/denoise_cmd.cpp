@@ -20,6 +20,7 @@
 #include "progress.hpp"
 #include "reflection_features.hpp"
 #include "sequence_metrics.hpp"
+#include "statistics_kind.hpp"
 
 namespace dn::cli {
 
@@ -215,6 +216,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline));
   const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
   const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
+  apply_statistics_kind(first.string_attribute("dn.stat_samples"), first_path, plan, pipeline, params);
 
   client::SessionDesc desc;
   desc.width = uint32_t(width);

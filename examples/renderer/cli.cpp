@@ -42,6 +42,9 @@ const char* const kUsage =
     "                     (sample<j>_* layers, protocol channels 33-50)\n"
     "  --stats            also per-pixel online statistics (stat_* layers, paper 003 Alg. 1); with\n"
     "                     --server streamed as protocol channels 51-54 when the pipeline takes them\n"
+    "  --stats-demodulated  --stats over demodulated samples: each sample's radiance divided by the\n"
+    "                     guarded diffuse albedo of its primary hit (docs/protocol.md §7.7); streamed\n"
+    "                     with the pipeline's parameter demodulated = 1, written with dn.stat_samples\n"
     "  --reflection       also the reflection features of mirror and glossy pixels (reflection_* layers,\n"
     "                     protocol channels 15-21)\n"
     "  --out DIR          write DIR/frame_%04d.exr (dnrender layout, docs/client.md)\n"
@@ -109,6 +112,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--gbuffer-grid") o.render.gbuffer_grid = parse_int(a, value(), 0, 16);
     else if (a == "--extra-samples") o.render.extra_samples = parse_int(a, value(), 0, 3);
     else if (a == "--stats") o.render.channels.statistics = true;
+    else if (a == "--stats-demodulated") o.render.channels.statistics = o.render.channels.statistics_demodulated = true;
     else if (a == "--reflection") o.render.channels.reflection = true;
     else if (a == "--out") o.out = value();
     else if (a == "--reference") o.reference_spp = parse_int(a, value(), 1, 1 << 20);
@@ -184,7 +188,8 @@ int run_cli(const CliOptions& o) {
   std::unique_ptr<FrameStreamer> streamer;
   RenderSettings settings = o.render;
   if (!o.server.empty()) {
-    StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet};
+    StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet,
+                     o.render.channels.statistics_demodulated};
     streamer = std::make_unique<FrameStreamer>(so);
     // Without --out nothing but the session sees the frame: render only what the pipeline takes.
     // With it, the files get the asked-for channels, plus the reflection features and the sample
@@ -195,6 +200,7 @@ int run_cli(const CliOptions& o) {
       settings.channels.reflection |= needed.reflection;
       settings.channels.statistics |= needed.statistics;
     }
+    settings.channels.statistics_demodulated = o.render.channels.statistics_demodulated;
     // The server refuses a channel its pipeline does not take (INVALID_CHANNEL), so --stats
     // streams the statistics (ids 51-54) only to a pipeline whose masks list them.
     if (o.render.channels.statistics && !needed.statistics)

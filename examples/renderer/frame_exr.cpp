@@ -71,6 +71,9 @@ void write_frame_exr(const std::string& path, const FrameBuffers& fb, const Came
   options.camera.prev_jitter = std::array<float, 2>{previous.jitter.x, previous.jitter.y};
   options.strings = attributes;
   options.strings["dn.generator"] = "dnrender";
+  // What the stat_* layers are over (docs/client.md): dn sets the pipeline's
+  // parameter demodulated from it.
+  if (!fb.stat_count.empty()) options.strings["dn.stat_samples"] = fb.statistics_demodulated ? "demodulated" : "radiance";
   image::write_exr(path, fb.width, fb.height, channels, options);
 }
 

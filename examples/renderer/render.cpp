@@ -11,6 +11,7 @@
 #include <xmmintrin.h>
 
 #include "bsdf.hpp"
+#include "dn/protocol/channels.hpp"
 #include "integrator.hpp"
 #include "online_stats.hpp"
 #include "scenes.hpp"
@@ -64,6 +65,7 @@ struct Planes {
     alloc(fb.stat_m2, want.statistics, 3);
     alloc(fb.stat_m3, want.statistics, 3);
     alloc(fb.stat_raw_mean, want.statistics, 3);
+    fb.statistics_demodulated = want.statistics && want.statistics_demodulated;
     alloc(fb.reflection_position, want.reflection, 3);
     alloc(fb.reflection_albedo, want.reflection, 3);
     alloc(fb.reflection_normal, want.reflection, 3);
@@ -82,6 +84,7 @@ struct Planes {
     }
     fb.samples_stride = want.record_samples ? samples_stride : 0;
     alloc(fb.samples, want.record_samples, samples_stride * 3);
+    alloc(fb.sample_albedo, want.record_samples, samples_stride * 3);
   }
 };
 
@@ -592,23 +595,34 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
   const PathSettings path_settings{st.max_depth, st.next_event};
   PathResult sum;
   OnlineStats stats[3];
+  const bool want_albedo = want.record_samples || (want.statistics && want.statistics_demodulated);
   for (int s = 0; s < count; ++s) {
-    PathResult p;
-    if (s == 0) {
-      p = trace_path(scene, dir0, hit0, rng, path_settings, ctx);
-    } else {
+    glm::vec3 dir = dir0;
+    Hit hit = hit0;
+    if (s > 0) {
       // Further samples spread uniformly over the pixel (box filter), for references.
       const glm::vec2 u = rng.next2();
-      const glm::vec3 dir = pc.rays.direction(x + u.x, y + u.y);
-      p = trace_path(scene, dir, scene.intersect(eye, dir, ctx), rng, path_settings, ctx);
+      dir = pc.rays.direction(x + u.x, y + u.y);
+      hit = scene.intersect(eye, dir, ctx);
     }
+    const PathResult p = trace_path(scene, dir, hit, rng, path_settings, ctx);
     sum.diffuse += p.diffuse;
     sum.specular += p.specular;
     sum.emission += p.emission;
     const glm::vec3 total = p.total();
+    // The diffuse albedo of this sample's own primary hit (a miss: the background's, 0).
+    glm::vec3 albedo(0.0f);
+    if (want_albedo && hit.found)
+      albedo = s == 0 ? surface0.diffuse_albedo : evaluate_material(scene.material_of(hit), hit.position).diffuse_albedo;
     if (want.statistics)
-      for (int c = 0; c < 3; ++c) stats[c].add(sanitize_sample(total[c]));
-    if (want.record_samples && s < fb.samples_stride) put3(fb.samples, i * fb.samples_stride + s, total);
+      for (int c = 0; c < 3; ++c) {
+        const float v = sanitize_sample(total[c]);
+        stats[c].add(want.statistics_demodulated ? v / protocol::demodulation_albedo(albedo[c]) : v);
+      }
+    if (want.record_samples && s < fb.samples_stride) {
+      put3(fb.samples, i * fb.samples_stride + s, total);
+      put3(fb.sample_albedo, i * fb.samples_stride + s, albedo);
+    }
   }
   if (count > 0) {
     const float inv = 1.0f / static_cast<float>(count);

@@ -18,8 +18,11 @@ struct ChannelSet {
   bool motion = true;
   bool sample_count = true;
   bool statistics = false;    // paper 003 Alg. 1 per pixel (stat_* planes)
+  // With statistics: over each sample's radiance divided by the guarded
+  // diffuse albedo of its own primary hit (docs/protocol.md §7.7).
+  bool statistics_demodulated = false;
   bool reflection = false;    // reflection features, docs/protocol.md §7.5 (reflection_* planes)
-  bool record_samples = false;  // every sample's radiance, for tests
+  bool record_samples = false;  // every sample's radiance and primary-hit albedo, for tests
 };
 
 struct RenderSettings {
@@ -57,6 +60,7 @@ struct FrameBuffers {
   // are M/n), and the mean of the raw x.
   std::vector<float> stat_count;                              // 1
   std::vector<float> stat_mean, stat_m2, stat_m3, stat_raw_mean;  // 3
+  bool statistics_demodulated = false;  // of radiance / guarded primary-hit albedo (ChannelSet)
   // The reflection features (protocol channels 15-21, docs/protocol.md §7.5),
   // point-sampled along the sample 0 ray like depth and position. Mirror-class
   // pixels get all seven, glossy-class pixels direction, distance and
@@ -74,6 +78,7 @@ struct FrameBuffers {
   };
   std::vector<ExtraSample> extra;
   std::vector<float> samples;  // record_samples: samples_stride RGB samples per pixel, unused slots 0
+  std::vector<float> sample_albedo;  // record_samples: each sample's primary-hit diffuse albedo (0: a miss)
   int samples_stride = 0;
   uint64_t rays = 0;  // Embree rays traced (rtcIntersect1 + rtcOccluded1)
   double seconds = 0.0;

@@ -1,5 +1,6 @@
 #include "stream.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -151,6 +152,17 @@ void FrameStreamer::open(const FrameBuffers& sample) {
     if ((info->required_channels & protocol::channel_bit(c.id)) && !has(c.id))
       throw std::runtime_error("pipeline " + options.pipeline + " requires channel " + std::string(c.name) +
                                ", which this render does not produce");
+  if (options.statistics_demodulated && has(ChannelId::StatCount) && (takes & protocol::channel_bit(ChannelId::StatCount))) {
+    // A pipeline that filters with the statistics must be told they are
+    // demodulated; one that only carries them (passthrough) has no such parameter.
+    const bool knows = std::any_of(info->parameters.begin(), info->parameters.end(),
+                                   [](const protocol::ParameterInfo& p) { return p.name == "demodulated"; });
+    if (knows) desc.parameters.push_back({"demodulated", 1.0});
+    else if (info->required_channels & protocol::channel_bit(ChannelId::StatCount))
+      throw std::runtime_error("pipeline " + options.pipeline +
+                               " has no parameter 'demodulated': it cannot take demodulated statistics "
+                               "(render them with --stats instead of --stats-demodulated)");
+  }
   state_->session.emplace(state_->connection.open_session(desc));
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
 }

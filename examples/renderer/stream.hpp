@@ -21,6 +21,9 @@ struct StreamOptions {
   int in_flight = 2;      // frames kept in flight
   bool send_split = false;  // send diffuse + specular instead of radiance when the pipeline takes both
   std::string out_dir;    // empty: results are received but not written
+  // The frames' sample statistics are demodulated (dnrender --stats-demodulated):
+  // the session is opened with the pipeline's parameter demodulated = 1.
+  bool statistics_demodulated = false;
   bool quiet = false;
 };
 

@@ -74,7 +74,8 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
       .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("OUTPUT_HALF", is_half(config.output_format))
-      .set("TABLE_SIZE", kStatTableSize);
+      .set("TABLE_SIZE", kStatTableSize)
+      .set("RAW_DEMODULATED", s.raw_demodulated);
 }
 
 // The statistics are sums that outgrow fp16 within a few hundred samples

@@ -23,6 +23,9 @@ struct StatSources {
   std::string count, mean, m2, m3;
   std::string raw;        // the raw means that are averaged
   bool raw_half = false;  // raw is an fp16 plane
+  // raw holds demodulated means when the statistics are (parameter
+  // demodulated): stat-temporal's accumulators; the frame's radiance does not.
+  bool raw_demodulated = false;
 };
 
 // The channels both take besides their own: radiance, albedo, normal and the

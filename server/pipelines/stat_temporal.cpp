@@ -51,14 +51,16 @@ GraphSpec build(const SessionConfig& config) {
       .bind("acc_m3", "stat_acc_m3")
       .bind("acc_raw", "stat_acc_raw")
       .bind("acc_geometry", "stat_acc_geometry")
+      .bind("albedo", "albedo")
       .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("TABLE_SIZE", kStatTableSize)
+      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
       .pixels_per_invocation = 1;
   add_stat_filter(g, config,
-                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false});
+                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, true});
   return g;
 }
 

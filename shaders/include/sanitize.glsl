@@ -4,6 +4,8 @@
 //   normal:   any non-finite component -> the zero vector (rejects every tap)
 //   depth:    a pixel is foreground iff depth is finite and > 0
 //   motion:   any non-finite component -> no reprojection for that pixel
+//   albedo, where a pass demodulates by it: a component below 1e-3 or not
+//             finite divides and multiplies by 1 (docs/protocol.md §7.7)
 // Tests are done on the bits so that no compiler fast-math can fold them away.
 #ifndef DN_SANITIZE_GLSL
 #define DN_SANITIZE_GLSL
@@ -18,6 +20,10 @@ vec3 dn_sanitize_radiance(vec3 c) {
 }
 
 vec3 dn_sanitize_normal(vec3 n) { return dn_is_finite(n) ? n : vec3(0.0); }
+
+const float DN_ALBEDO_MIN = 1e-3;
+float dn_guarded_albedo(float a) { return (dn_is_finite(a) && a >= DN_ALBEDO_MIN) ? a : 1.0; }
+vec3 dn_guarded_albedo(vec3 a) { return vec3(dn_guarded_albedo(a.x), dn_guarded_albedo(a.y), dn_guarded_albedo(a.z)); }
 
 bool dn_is_foreground(float depth) { return dn_is_finite(depth) && depth > 0.0; }
 

@@ -1,11 +1,8 @@
 // svgf guards and constants (docs/pipelines.md, "svgf in detail"): radiance
-// and albedo guards, epsilons, the history normal packing. Needs sanitize.glsl.
+// guards, epsilons, the history normal packing. Needs sanitize.glsl.
 #ifndef DN_SVGF_GUARDS_GLSL
 #define DN_SVGF_GUARDS_GLSL
 
-// Albedo components below this (or not finite) are not demodulated: the
-// pass divides and multiplies by 1 instead.
-const float DN_SVGF_ALBEDO_MIN = 1e-3;
 // Finite radiance components above this count as bad samples (-> 0, like
 // +Inf): it keeps l^2 of the demodulated colour (<= 1e15 after the albedo
 // guard) far from fp32 overflow in the moments.
@@ -32,9 +29,6 @@ vec3 dn_svgf_sanitize(vec3 c) {
   return vec3(c.x > DN_SVGF_MAX_RADIANCE ? 0.0 : c.x, c.y > DN_SVGF_MAX_RADIANCE ? 0.0 : c.y,
               c.z > DN_SVGF_MAX_RADIANCE ? 0.0 : c.z);
 }
-
-float dn_svgf_albedo(float a) { return (dn_is_finite(a) && a >= DN_SVGF_ALBEDO_MIN) ? a : 1.0; }
-vec3 dn_svgf_albedo(vec3 a) { return vec3(dn_svgf_albedo(a.x), dn_svgf_albedo(a.y), dn_svgf_albedo(a.z)); }
 
 // Octahedral unit-normal packing into two snorm16 (history only).
 uint dn_svgf_pack_normal(vec3 n) {

@@ -16,6 +16,8 @@ double normal_component(const std::vector<float>& n, int i, int c) {
 
 }  // namespace
 
+double guarded_albedo(float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0; }
+
 StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
   const int n_px = f.width * f.height;
   StatPrepared r;
@@ -62,11 +64,16 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
   res.members.assign(w * h, 0);
   res.rejected.assign(w * h, 0);
   auto rgb = [](const std::vector<float>& v, int i, int c) { return static_cast<double>(v[3 * i + c]); };
+  // What pixel q contributes to an average (demodulated or not).
+  auto value = [&](int q, int c) {
+    const double raw = sanitize(f.radiance[3 * q + c]);
+    return p.demodulated && !p.raw_demodulated ? raw / guarded_albedo(f.albedo[3 * q + c]) : raw;
+  };
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const int i = y * w + x;
       double raw_p[3];
-      for (int c = 0; c < 3; ++c) raw_p[c] = sanitize(f.radiance[3 * i + c]);
+      for (int c = 0; c < 3; ++c) raw_p[c] = value(i, c);
       double sum[3] = {0, 0, 0}, weight_sum = 1.0;
       const float n_p = prep.theta[4 * i + 3];
       const bool single = n_p < 2.0f;  // gathers with the single-sample test
@@ -102,11 +109,14 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             const double wgt = std::exp(-d2xy / (2.0 * p.sigma_spatial * p.sigma_spatial) -
                                         da2 / (2.0 * p.sigma_albedo * p.sigma_albedo) -
                                         dn2 / (2.0 * p.sigma_normal * p.sigma_normal));
-            for (int c = 0; c < 3; ++c) sum[c] += wgt * (sanitize(f.radiance[3 * q + c]) - raw_p[c]);
+            for (int c = 0; c < 3; ++c) sum[c] += wgt * (value(q, c) - raw_p[c]);
             weight_sum += wgt;
           }
       }
-      for (int c = 0; c < 3; ++c) res.output[3 * i + c] = raw_p[c] + sum[c] / weight_sum;
+      for (int c = 0; c < 3; ++c) {
+        const double average = raw_p[c] + sum[c] / weight_sum;
+        res.output[3 * i + c] = p.demodulated ? average * guarded_albedo(f.albedo[3 * i + c]) : average;
+      }
     }
   return res;
 }

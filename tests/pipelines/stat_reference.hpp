@@ -16,6 +16,11 @@ struct StatParams {
   double variance_floor = 0.0;
   bool asymmetric = false;
   bool base_only = false;  // every tap with statistics is a member (the t -> infinity limit)
+  // The statistics are demodulated: the filter averages radiance / guarded
+  // albedo and multiplies by p's guarded albedo; raw_demodulated: the
+  // frame's radiance holds demodulated means already (stat-temporal).
+  bool demodulated = false;
+  bool raw_demodulated = false;
 };
 
 // One frame's planes as floats: radiance, albedo, normal, mean, m2, m3 3 per
@@ -40,6 +45,9 @@ StatPrepared stat_prepare(const StatFrame& f, const StatParams& p);
 // t_squared: entry k holds t^2 for nu = k + 1 (the pipeline's table).
 StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatParams& p,
                        const std::vector<float>& t_squared);
+// An albedo component as demodulation uses it: below 1e-3 (fp32) or not
+// finite, 1 (docs/protocol.md §7.7).
+double guarded_albedo(float a);
 // The membership decision for one channel pair (exposed for the symmetry test).
 bool stat_member(float theta_p, float theta_q, float t2, float var_p, float var_q, bool asymmetric);
 

@@ -39,7 +39,9 @@ struct StatTemporalResult {
 };
 
 // previous: empty vectors for the first frame. t_squared as in stat_filter.
+// demodulated: the statistics are, so the accumulated raw mean is the
+// radiance over the guarded albedo.
 StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalState& previous, double fading,
-                                 const std::vector<float>& t_squared);
+                                 const std::vector<float>& t_squared, bool demodulated = false);
 
 }  // namespace dn::test

@@ -40,6 +40,7 @@ struct SceneSpec {
   bool box = true;
   int spp = 1;
   float scale = 1.0f;
+  bool demodulated = false;  // statistics over sample / albedo (dnrender --stats-demodulated)
 };
 
 test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
@@ -73,12 +74,14 @@ test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
       for (int c = 0; c < 3; ++c) {
         const float albedo = 0.3f + 0.15f * static_cast<float>((block * 3 + c + 8) % 4);
         st.albedo[3 * i + c] = albedo;
-        render::OnlineStats acc;
+        render::OnlineStats acc, radiance;
         for (int j = 0; j < s.spp; ++j) {
           const double r = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
-          acc.add(s.scale * static_cast<float>(-std::log(r)) * light * albedo);
+          const float sample = s.scale * static_cast<float>(-std::log(r)) * light * albedo;
+          acc.add(s.demodulated ? sample / albedo : sample);
+          radiance.add(sample);
         }
-        st.radiance[3 * i + c] = acc.raw_mean;
+        st.radiance[3 * i + c] = radiance.raw_mean;
         st.mean[3 * i + c] = acc.mean;
         st.m2[3 * i + c] = acc.m2;
         st.m3[3 * i + c] = acc.m3;
@@ -188,19 +191,25 @@ TEST_F(StatTemporalTest, MatchesCpuReference) {
   four_spp.pan = 1.3f;
   SceneSpec still = one_spp;
   still.pan = 0.0f;
-  const Variant variants[] = {{"pan1_1spp", one_spp, 0.9}, {"pan0.6_1spp", fractional, 0.9},
-                              {"pan1.3_4spp_fading0.7", four_spp, 0.7}, {"still_shadow_moves", still, 0.9}};
+  SceneSpec demodulated = four_spp;
+  demodulated.demodulated = true;
+  const Variant variants[] = {{"pan1_1spp", one_spp, 0.9},
+                              {"pan0.6_1spp", fractional, 0.9},
+                              {"pan1.3_4spp_fading0.7", four_spp, 0.7},
+                              {"still_shadow_moves", still, 0.9},
+                              {"pan1.3_4spp_demodulated", demodulated, 0.9}};
   const auto table = t_squared();
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
-    Session s = make(ctx(), v.scene.w, v.scene.h, {{"radius", 4}, {"fading", v.fading}});
+    Session s = make(ctx(), v.scene.w, v.scene.h,
+                     {{"radius", 4}, {"fading", v.fading}, {"demodulated", v.scene.demodulated ? 1.0 : 0.0}});
     test::StatTemporalState state;
     size_t rejected = 0, merged = 0;
     for (int k = 0; k < 8; ++k) {
       test::StatTemporalFrame f = scene_frame(v.scene, k, 3);
       f.reset = k == 5;  // a reset mid-sequence: every pixel starts afresh
       svgf_inputs::run(*s.pipe, host_frame(f));
-      const test::StatTemporalResult want = test::stat_temporal(f, state, v.fading, table);
+      const test::StatTemporalResult want = test::stat_temporal(f, state, v.fading, table, v.scene.demodulated);
       const Mismatch m = compare(device_state(s), want.state);
       EXPECT_EQ(m.decisions, 0u) << "frame " << k << ": pixels merged or rejected unlike the reference";
       EXPECT_EQ(m.values, 0u) << "frame " << k << ": accumulators off the reference";

@@ -56,6 +56,58 @@ TEST(RendererStatistics, OnlineMomentsMatchDirectComputation) {
   EXPECT_GT(skewed, 10);  // the check saw non-trivial third moments
 }
 
+// --stats-demodulated: the statistics are over each sample divided by the
+// guarded diffuse albedo of its own primary hit (docs/protocol.md §7.7),
+// computed here in two passes from the recorded samples and albedos; the
+// radiance stays the undivided mean. Scene 1: a checkered floor, a mirror
+// sphere (diffuse albedo 0: divided by 1) and the background.
+TEST(RendererStatistics, DemodulatedStatisticsAreOverEachSampleOverItsAlbedo) {
+  const std::unique_ptr<Scene> scene = build_scene(1);
+  RenderSettings st = test::small_settings(48, 27, 8.0);
+  st.gbuffer_grid = 0;  // the albedo channel is sample 0's own point albedo
+  st.channels.statistics = true;
+  st.channels.statistics_demodulated = true;
+  st.channels.record_samples = true;
+  const Camera cam = frame_camera(1, 0, st);
+  const FrameBuffers fb = render_frame(*scene, cam, cam, 0, st);
+  ASSERT_TRUE(fb.statistics_demodulated);
+  ASSERT_EQ(fb.samples_stride, 8);
+  const auto guard = [](double a) { return std::isfinite(a) && a >= double(1e-3f) ? a : 1.0; };
+  int divided = 0, undivided = 0;
+  for (int i = 0; i < st.width * st.height; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const size_t k = 3 * size_t(i) + c;
+      ASSERT_EQ(fb.sample_albedo[size_t(i) * 8 * 3 + c], fb.albedo[k]) << "sample 0's albedo, pixel " << i;
+      std::vector<double> t;
+      double raw = 0, radiance = 0;
+      for (int s = 0; s < 8; ++s) {
+        const size_t j = (size_t(i) * 8 + s) * 3 + c;
+        const double a = fb.sample_albedo[j];
+        const double x = std::max(0.0, double(fb.samples[j])) / guard(a);
+        (guard(a) == 1.0 ? undivided : divided) += 1;
+        t.push_back(2.0 * std::sqrt(x) - 2.0);
+        raw += x / 8;
+        radiance += fb.samples[j] / 8.0;
+      }
+      double mean = 0;
+      for (double v : t) mean += v / 8;
+      double m2 = 0, m3 = 0, abs3 = 0;
+      for (double v : t) {
+        m2 += (v - mean) * (v - mean);
+        m3 += (v - mean) * (v - mean) * (v - mean);
+        abs3 += std::fabs(v - mean) * (v - mean) * (v - mean);
+      }
+      ASSERT_NEAR(fb.stat_mean[k], mean, 1e-4 * (1 + std::fabs(mean))) << "pixel " << i << " channel " << c;
+      ASSERT_NEAR(fb.stat_raw_mean[k], raw, 1e-4 * (1 + raw)) << "pixel " << i;
+      ASSERT_NEAR(fb.stat_m2[k], m2, 1e-4 * (1 + m2)) << "pixel " << i;
+      ASSERT_NEAR(fb.stat_m3[k], m3, 1e-4 * (1 + abs3)) << "pixel " << i;
+      ASSERT_NEAR(fb.radiance[k], radiance, 1e-4 * (1 + radiance)) << "radiance is not demodulated, pixel " << i;
+    }
+  // Both kinds of sample occur: diffuse hits, and the mirror and the background.
+  EXPECT_GT(divided, 1000);
+  EXPECT_GT(undivided, 100);
+}
+
 TEST(RendererStatistics, TwoSamplesHaveNoThirdMoment) {
   OnlineStats s;
   s.add(0.0f);

@@ -91,6 +91,15 @@ inline constexpr bool is_sample_statistic(ChannelId id) {
   return id == ChannelId::StatCount || id == ChannelId::StatMean || id == ChannelId::StatM2 || id == ChannelId::StatM3;
 }
 
+// Demodulated sample statistics (docs/protocol.md §7.7) divide each sample
+// by the diffuse albedo of its primary hit, guarded: a component below this
+// or not finite divides by 1. The server multiplies back with the same rule
+// (shaders/include/sanitize.glsl, DN_ALBEDO_MIN).
+inline constexpr float kDemodulationAlbedoMin = 1e-3f;
+inline constexpr float demodulation_albedo(float a) {
+  return (a >= kDemodulationAlbedoMin && a <= 3.4028234663852886e38f) ? a : 1.0f;  // NaN and +inf fail both
+}
+
 inline constexpr uint32_t kChannelIdLimit = 64;  // ids are < 64 so sets fit in a uint64 mask
 
 struct ChannelInfo {
