@@ -9,7 +9,9 @@
 # error against the true image, docs/results.md) of each. Writes
 # OUT/convergence.tsv and OUT/stat_convergence.png; --docs also copies the
 # plot to docs/images/stat_convergence.png. --param NAME=VALUE (repeatable)
-# sets a stat parameter for both the base filter and stat (e.g. radius=6).
+# sets a stat parameter for both the base filter and stat (e.g. radius=6);
+# --demodulated renders the statistics over demodulated samples (dnrender
+# --stats-demodulated: dn denoise then sets demodulated = 1 for both).
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
 # skips scripts/setup.sh.
 set -euo pipefail
@@ -24,10 +26,11 @@ out=out/stat_convergence
 cache=out/cache
 docs=0
 stat_params=()
+stats_flag=--stats
 usage() {
   cat <<USAGE
 usage: bench/stat_convergence.sh [--scenes "1 3"] [--size WxH] [--max-spp N] [--ref-spp S] [--param NAME=VALUE]...
-                                 [--out DIR] [--cache DIR] [--docs]
+                                 [--demodulated] [--out DIR] [--cache DIR] [--docs]
 defaults: --scenes "$scenes" --size $size --max-spp $max_spp --ref-spp $ref_spp --out $out
 USAGE
 }
@@ -40,6 +43,7 @@ while [ $# -gt 0 ]; do
     --out) out=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
     --param) stat_params+=(--param "$2"); shift 2 ;;
+    --demodulated) stats_flag=--stats-demodulated; shift ;;
     --docs) docs=1; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "stat_convergence: unknown option '$1'" >&2; usage >&2; exit 2 ;;
@@ -63,7 +67,7 @@ for s in $scenes; do
     --reference "$ref_spp" --reference2 --cache "$cache" --quiet
   spp=4
   while [ "$spp" -le "$max_spp" ]; do
-    "$dnrender" --scene "$s" --frames 1 --width "$width" --height "$height" --spp "$spp" --stats --seed 3 \
+    "$dnrender" --scene "$s" --frames 1 --width "$width" --height "$height" --spp "$spp" "$stats_flag" --seed 3 \
       --out "$dir/spp$spp" --quiet
     for row in "noisy passthrough" "base stat membership=0" "stat stat"; do
       read -r label pipeline params <<< "$row"

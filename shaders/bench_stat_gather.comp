@@ -36,7 +36,7 @@ void main() {
   const uint pi = dn_grid_index(p, dn_grid.size);
   const int r = TILED ? min(int(dn_grid.args.x), int(APRON)) : int(dn_grid.args.x);
   DnStatKernel k = DnStatKernel(uintBitsToFloat(dn_grid.args.y), uintBitsToFloat(dn_grid.args.z),
-                                uintBitsToFloat(dn_grid.args.w), true, false);
+                                uintBitsToFloat(dn_grid.args.w), true, false, 0.0);
   vec4 theta_p = theta.data[pi];
   vec3 var_p = variance.data[pi].rgb, raw_p = raw.data[pi].rgb;
   vec3 albedo_p = albedo.data[pi].rgb, normal_p = normal.data[pi].rgb;
@@ -50,13 +50,13 @@ void main() {
         continue;
       if (TILED) {
         Tap t = dn_tile_at(ivec2(dx, dy));
-        if (!dn_stat_is_member(theta_p, var_p, t.theta, t.variance.rgb, k)) continue;
+        if (dn_stat_membership(theta_p, var_p, t.theta, t.variance.rgb, k) == 0.0) continue;
         float w = dn_stat_base_weight(d2xy, albedo_p - t.albedo.rgb, normal_p - t.normal.rgb, k);
         sum += w * (t.raw.rgb - raw_p);
         weight_sum += w;
       } else {
         uint qi = dn_grid_index(uvec2(q), dn_grid.size);
-        if (!dn_stat_is_member(theta_p, var_p, theta.data[qi], variance.data[qi].rgb, k)) continue;
+        if (dn_stat_membership(theta_p, var_p, theta.data[qi], variance.data[qi].rgb, k) == 0.0) continue;
         float w = dn_stat_base_weight(d2xy, albedo_p - albedo.data[qi].rgb, normal_p - normal.data[qi].rgb, k);
         sum += w * (raw.data[qi].rgb - raw_p);
         weight_sum += w;

@@ -16,8 +16,8 @@
 //           computed as raw_p + sum weight * (raw_q - raw_p) / (1 + sum of weights)
 //           so that a constant image comes back exactly
 // raw is the sanitized radiance (the raw mean); with demodulated statistics
-// (parameter demodulated) raw / guarded albedo, and out_p is remodulated by
-// p's guarded albedo. membership 0: every tap with
+// (DEMODULATED) stat_prepare's demodulated mean, and out_p is multiplied by
+// p's modulation. membership 0: every tap with
 // statistics is a member (the base filter alone). Only pixels with
 // statistics (n >= 2) are members. A pixel with a sample but no variance
 // (0 < n_p < 2: one sample, or a reset history at 1 spp) gathers with the
@@ -40,12 +40,12 @@
 
 vec3 filter_pixel(uint p) {
   vec3 raw_p = dn_stat_value(p);
-  vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec4 theta_p = theta.data[p];
-  if (!(theta_p.w > 0.0)) return dn_stat_remodulate(raw_p, albedo_p);
+  if (!(theta_p.w > 0.0)) return dn_stat_remodulate(raw_p, p);
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 var_p = variance.data[p].rgb;
+  vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
@@ -59,15 +59,16 @@ vec3 filter_pixel(uint p) {
       int d2xy = dx * dx + dy * dy;
       if (x < 0 || x >= size.x || d2xy > r * r || d2xy == 0) continue;
       uint q = uint(y) * frame.size.x + uint(x);
-      if (!dn_stat_is_member(theta_p, var_p, theta.data[q], variance.data[q].rgb, k)) continue;
+      float m = dn_stat_membership(theta_p, var_p, theta.data[q], variance.data[q].rgb, k);
+      if (m == 0.0) continue;
       vec3 da = albedo_p - DN_LOAD3(albedo, ALBEDO_HALF, q);
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));
-      float w = dn_stat_base_weight(d2xy, da, dn, k);
+      float w = m * dn_stat_base_weight(d2xy, da, dn, k);
       sum += w * (dn_stat_value(q) - raw_p);
       weight_sum += w;
     }
   }
-  return dn_stat_remodulate(raw_p + sum / weight_sum, albedo_p);
+  return dn_stat_remodulate(raw_p + sum / weight_sum, p);
 }
 
 void main() {

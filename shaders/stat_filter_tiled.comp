@@ -39,7 +39,7 @@ Tap dn_tile_fetch(ivec2 p) {
 vec3 filter_pixel() {
   Tap c = dn_tile_at(ivec2(0));
   vec3 raw_p = c.raw.rgb;
-  if (!(c.theta.w > 0.0)) return dn_stat_remodulate(raw_p, c.albedo.rgb);
+  if (!(c.theta.w > 0.0)) return dn_stat_remodulate(raw_p, dn_grid_index(dn_pixel(), dn_grid.size));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
@@ -50,12 +50,13 @@ vec3 filter_pixel() {
       ivec2 offset = ivec2(dx, dy);
       if (d2xy > r * r || d2xy == 0 || !dn_tile_inside(offset, dn_grid.size)) continue;
       Tap q = dn_tile_at(offset);
-      if (!dn_stat_is_member(c.theta, c.variance.rgb, q.theta, q.variance.rgb, k)) continue;
-      float w = dn_stat_base_weight(d2xy, c.albedo.rgb - q.albedo.rgb, c.normal.rgb - q.normal.rgb, k);
+      float m = dn_stat_membership(c.theta, c.variance.rgb, q.theta, q.variance.rgb, k);
+      if (m == 0.0) continue;
+      float w = m * dn_stat_base_weight(d2xy, c.albedo.rgb - q.albedo.rgb, c.normal.rgb - q.normal.rgb, k);
       sum += w * (q.raw.rgb - raw_p);
       weight_sum += w;
     }
-  return dn_stat_remodulate(raw_p + sum / weight_sum, c.albedo.rgb);
+  return dn_stat_remodulate(raw_p + sum / weight_sum, dn_grid_index(dn_pixel(), dn_grid.size));
 }
 
 void main() {

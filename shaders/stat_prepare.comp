@@ -10,13 +10,36 @@
 // variances); n = 0 or any non-finite statistic gets n = 0 in theta.w: no
 // data. One invocation per pixel.
 //
+// DEMODULATED (the statistics are over demodulated samples): also the
+// value stat_filter averages, the demodulated mean from the moments
+// (dn_stat_raw_from_moments; no data: the sanitized radiance, returned as
+// it is), and with MODULATION (stat: the sources are the frame's planes)
+// what remodulates p's result, dn_stat_modulation (no data: 1).
+//
 // Resources: passes/stat_prepare.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
+#include "plane.glsl"
 #include "sanitize.glsl"
 #include "stat.glsl"
 #include "pass.glsl"
 #include "passes/stat_prepare.pass"
+
+void store3(uint p, vec3 v, bool to_modulation) {
+  for (uint c = 0u; c < 3u; ++c) {
+    if (to_modulation) modulation.data[3u * p + c] = v[c];
+    else value.data[3u * p + c] = v[c];
+  }
+}
+
+// The demodulated value and modulation of pixel p with statistics s (n = 0: none).
+void demodulate(uint p, DnStat s) {
+  vec3 radiance_p = MODULATION || !(s.n > 0.0) ? dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p)) : vec3(0.0);
+  vec3 v = s.n > 0.0 ? dn_stat_raw_from_moments(s) : radiance_p;
+  store3(p, v, false);
+  if (MODULATION)
+    store3(p, s.n > 0.0 ? dn_stat_modulation(radiance_p, v, DN_LOAD3(albedo, ALBEDO_HALF, p)) : vec3(1.0), true);
+}
 
 void main() {
   uint p = dn_invocation_index();
@@ -30,8 +53,10 @@ void main() {
   if (!(dn_stat_is_finite(s) && s.n > 0.0)) {
     theta.data[p] = vec4(0.0);
     variance.data[p] = vec4(0.0);
+    if (DEMODULATED) demodulate(p, dn_stat_empty());
     return;
   }
+  if (DEMODULATED) demodulate(p, s);
   if (s.n < 2.0) {  // samples but no variance: the mean, for the single-sample test
     theta.data[p] = vec4(s.mean, s.n);
     variance.data[p] = vec4(0.0);

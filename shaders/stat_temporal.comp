@@ -2,8 +2,7 @@
 // stat_temporal: temporal sample statistics for stat-temporal (paper 003 §8's
 // future work; docs/pipelines.md, "stat-temporal"). Per pixel p:
 //   C  = the frame's statistics (count, Box-Cox mean, M2, M3, raw mean =
-//        the sanitized radiance, over the guarded albedo when the statistics
-//        are demodulated); non-finite statistics or n <= 0: no data
+//        the sanitized radiance); non-finite statistics or n <= 0: no data
 //   H  = the previous accumulators under p's bilinear footprint at
 //        p_prev = p + mv, the taps on the same surface (Falcor's SVGF test),
 //        each weighed by its renormalised bilinear weight and merged
@@ -22,7 +21,8 @@
 //        the frames of a still pixel) costs no history. Else merge(H, C), the
 //        exact parallel merge, marking p suspect when the test failed.
 //        Windows with fewer than 2 samples pass.
-// Background pixels, the first frame and a reset keep C alone. One
+// Background pixels, the first frame and a reset keep C alone. With
+// demodulated statistics also p's modulation (store_modulation). One
 // invocation per pixel.
 //
 // Resources: passes/stat_temporal.pass (binding 0 FrameConstants).
@@ -39,12 +39,10 @@
 
 #define DN_READ3(plane, p) vec3(plane.data[3u * (p)], plane.data[3u * (p) + 1u], plane.data[3u * (p) + 2u])
 
-// The frame's statistics at pixel q (no data: n = 0), the raw mean
-// demodulated as the statistics are.
+// The frame's statistics at pixel q (no data: n = 0).
 DnStat current_stat(uint q) {
-  vec3 raw = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q));
-  if (DN_PARAM_VALUE(stat, demodulated) != 0.0) raw /= dn_guarded_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
-  DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q), raw);
+  DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q),
+                    dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q)));
   return (dn_stat_is_finite(s) && s.n > 0.0) ? s : dn_stat_empty();
 }
 
@@ -137,6 +135,19 @@ void store(uint p, DnStat s, float z, vec3 n, bool suspect) {
   acc_geometry.data[p] = z > 0.0 ? uvec4(floatBitsToUint(z), dn_svgf_pack_normal(n), suspect ? 1u : 0u, 0u) : uvec4(0u);
 }
 
+// DEMODULATED: what stat_filter multiplies p's result by, from this
+// frame's own samples (dn_stat_modulation), the guarded albedo where the
+// frame brought none, 1 where nothing is accumulated (stat_prepare then
+// passes the frame's radiance through).
+void store_modulation(uint p, DnStat c, DnStat acc) {
+  if (!DEMODULATED) return;
+  vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
+  vec3 m = !(acc.n > 0.0) ? vec3(1.0)
+           : c.n > 0.0    ? dn_stat_modulation(c.raw, dn_stat_raw_from_moments(c), albedo_p)
+                          : dn_guarded_albedo(albedo_p);
+  for (uint k = 0u; k < 3u; ++k) modulation.data[3u * p + k] = m[k];
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -147,6 +158,7 @@ void main() {
   vec3 n = dn_svgf_normal(p);
   if (!dn_is_foreground(z) || !(dot(n, n) > 0.0)) {
     store(p, c, 0.0, vec3(0.0), false);
+    store_modulation(p, c, c);
     return;
   }
   vec2 grad = dn_svgf_gradients(pos, z, n);
@@ -172,4 +184,5 @@ void main() {
     }
   }
   store(p, acc, z, n, suspect);
+  store_modulation(p, c, acc);
 }

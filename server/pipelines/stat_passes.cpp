@@ -47,16 +47,32 @@ void add_stat_inputs(GraphSpec& g, const SessionConfig& config) {
 }
 
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& s) {
+  const bool demodulated = g.parameters.stat_demodulated != 0.0f;
   g.add_scratch("stat_theta", kThetaBytes);
   g.add_scratch("stat_variance", kVarianceBytes);
-  g.add_pass("stat_prepare", "stat_prepare")
-      .bind("count", s.count)
-      .bind("mean", s.mean)
-      .bind("m2", s.m2)
-      .bind("m3", s.m3)
-      .bind("theta", "stat_theta")
-      .bind("variance", "stat_variance")
-      .pixels_per_invocation = 1;
+  PassSpec& prepare = g.add_pass("stat_prepare", "stat_prepare")
+                          .bind("count", s.count)
+                          .bind("mean", s.mean)
+                          .bind("m2", s.m2)
+                          .bind("m3", s.m3)
+                          .bind("theta", "stat_theta")
+                          .bind("variance", "stat_variance");
+  prepare.pixels_per_invocation = 1;
+  if (demodulated) {
+    // The values averaged and, for the frame's own statistics, what remodulates them.
+    g.add_scratch("stat_value", kStatRgbBytes);
+    prepare.bind("value", "stat_value")
+        .bind("radiance", "radiance")
+        .set("DEMODULATED", true)
+        .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)));
+    if (s.prepare_modulates) {
+      g.add_scratch("stat_modulation", kStatRgbBytes);
+      prepare.bind("albedo", "albedo")
+          .bind("modulation", "stat_modulation")
+          .set("MODULATION", true)
+          .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+    }
+  }
   // The shared-memory tile measured faster on lavapipe (docs/results.md);
   // it serves radii up to its apron and writes pixel pairs within a
   // workgroup row, so the width must be even.
@@ -65,17 +81,18 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
   if (tiled) filter.over_grid({config.width, config.height}, {config.width, config.height}).set("APRON", kStatTileApron);
   filter.bind("theta", "stat_theta")
       .bind("variance", "stat_variance")
-      .bind("radiance", s.raw)
+      .bind("radiance", demodulated ? std::string("stat_value") : s.raw)
       .bind("albedo", "albedo")
       .bind("normal", "normal")
       .bind("t_squared", "stat_t_squared")
       .bind("result", "output")
-      .set("RADIANCE_HALF", s.raw_half)
+      .set("RADIANCE_HALF", !demodulated && s.raw_half)
       .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("OUTPUT_HALF", is_half(config.output_format))
       .set("TABLE_SIZE", kStatTableSize)
-      .set("RAW_DEMODULATED", s.raw_demodulated);
+      .set("DEMODULATED", demodulated);
+  if (demodulated) filter.bind("modulation", "stat_modulation");
 }
 
 // The statistics are sums that outgrow fp16 within a few hundred samples

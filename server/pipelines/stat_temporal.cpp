@@ -29,7 +29,7 @@ GraphSpec build(const SessionConfig& config) {
   g.add_history("stat_acc_geometry", kGeometryBytes);
   g.add_output(config);
 
-  g.add_pass("stat_temporal", "stat_temporal")
+  PassSpec& temporal = g.add_pass("stat_temporal", "stat_temporal")
       .bind("count", "stat_count")
       .bind("mean", "stat_mean")
       .bind("m2", "stat_m2")
@@ -51,16 +51,22 @@ GraphSpec build(const SessionConfig& config) {
       .bind("acc_m3", "stat_acc_m3")
       .bind("acc_raw", "stat_acc_raw")
       .bind("acc_geometry", "stat_acc_geometry")
-      .bind("albedo", "albedo")
       .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
-      .set("TABLE_SIZE", kStatTableSize)
-      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
-      .pixels_per_invocation = 1;
+      .set("TABLE_SIZE", kStatTableSize);
+  temporal.pixels_per_invocation = 1;
+  if (g.parameters.stat_demodulated != 0.0f) {
+    // The frame's own samples give the modulation; the accumulators cannot.
+    g.add_scratch("stat_modulation", kStatRgbBytes);
+    temporal.bind("albedo", "albedo")
+        .bind("modulation", "stat_modulation")
+        .set("DEMODULATED", true)
+        .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+  }
   add_stat_filter(g, config,
-                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, true});
+                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
   return g;
 }
 

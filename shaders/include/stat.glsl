@@ -49,6 +49,26 @@ vec3 dn_stat_theta(DnStat s) {
   return mix(s.mean, s.mean + skew, greaterThan(s2, vec3(DN_FLT_EPSILON)));
 }
 
+// The mean of the samples themselves from the Box-Cox moments (n > 0):
+// x = (y / 2 + 1)^2 exactly, so mean(x) = (mean / 2 + 1)^2 + M2 / (4 n).
+// Demodulated statistics (docs/protocol.md §7.7) carry no raw mean of their
+// own on the wire; this is it, exact for any merge and fading.
+vec3 dn_stat_raw_from_moments(DnStat s) {
+  vec3 root = s.mean * 0.5 + 1.0;
+  return root * root + max(s.m2, 0.0) / (4.0 * s.n);
+}
+
+// What turns a pixel's demodulated mean back into radiance: radiance /
+// demodulated mean of the same samples (per channel; the samples' own
+// albedos, exact for the pixel itself also where it straddles two
+// surfaces), or the guarded albedo where either is 0 (no light to divide).
+vec3 dn_stat_modulation(vec3 radiance, vec3 demodulated, vec3 albedo) {
+  vec3 guarded = dn_guarded_albedo(albedo);
+  return vec3(radiance.x > 0.0 && demodulated.x > 0.0 ? radiance.x / demodulated.x : guarded.x,
+              radiance.y > 0.0 && demodulated.y > 0.0 ? radiance.y / demodulated.y : guarded.y,
+              radiance.z > 0.0 && demodulated.z > 0.0 ? radiance.z / demodulated.z : guarded.z);
+}
+
 bool dn_stat_is_finite(DnStat s) {
   return dn_is_finite(s.n) && dn_is_finite(s.mean) && dn_is_finite(s.m2) && dn_is_finite(s.m3) && dn_is_finite(s.raw);
 }

@@ -1,6 +1,6 @@
 // The per-tap decisions of stat's disc gather (docs/pipelines.md, "stat"),
 // shared by stat_filter and the tiling benchmark (bench_stat_gather): the
-// Welch membership of tap q in p's disc and q's base weight. The includer
+// Welch membership (weight) of tap q in p's disc and q's base weight. The includer
 // defines `float dn_stat_t_squared(uint nu)`, the table entry for nu >= 1.
 #ifndef DN_STAT_GATHER_GLSL
 #define DN_STAT_GATHER_GLSL
@@ -11,6 +11,7 @@ struct DnStatKernel {
   float ks, ka, kn;  // -1 / (2 sigma^2) of the spatial, albedo and normal terms
   bool membership;   // false: every tap with statistics is a member (the base filter)
   bool asymmetric;   // Eq. 14 instead of the symmetric test
+  float falloff;     // exponent of the membership weight (0: all or nothing, the paper's)
 };
 
 #ifdef DN_FRAME_GLSL
@@ -19,7 +20,8 @@ DnStatKernel dn_stat_kernel_from_parameters() {
   return DnStatKernel(-0.5 / (DN_PARAM_VALUE(stat, sigma_spatial) * DN_PARAM_VALUE(stat, sigma_spatial)),
                       -0.5 / (DN_PARAM_VALUE(stat, sigma_albedo) * DN_PARAM_VALUE(stat, sigma_albedo)),
                       -0.5 / (DN_PARAM_VALUE(stat, sigma_normal) * DN_PARAM_VALUE(stat, sigma_normal)),
-                      DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0);
+                      DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0,
+                      DN_PARAM_VALUE(stat, membership_falloff));
 }
 #endif
 
@@ -36,18 +38,29 @@ bool dn_stat_member(vec3 d2, float t2, vec3 var_p, vec3 var_q, bool asymmetric) 
   return all(lessThanEqual(d2, t2 * (var_p + var_q)));
 }
 
-// Whether q (theta_q = vec4(theta, n), var_q) is a member of p's disc: q
-// must have statistics (n >= 2); a p without variance (n_p < 2) takes q's
-// sample variance as its own, var_q n_q / n_p, with nu = n_q - 1.
-bool dn_stat_is_member(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnStatKernel k) {
-  if (theta_q.w < 2.0) return false;
-  if (!k.membership) return true;
+// The membership weight of q (theta_q = vec4(theta, n), var_q) in p's
+// disc: 0 unless q is a member, else (1 - r)^falloff, r the largest
+// channel's share of the test's bound, d^2 / (t^2 (var_p + var_q)) or
+// d^2 / (var_p (1 + 2 t^2) - var_q) (1 with falloff 0: the paper's
+// all-or-nothing membership). q must have statistics (n >= 2); a p without
+// variance (n_p < 2) takes q's sample variance as its own, var_q n_q / n_p,
+// with nu = n_q - 1.
+float dn_stat_membership(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnStatKernel k) {
+  if (theta_q.w < 2.0) return 0.0;
+  if (!k.membership) return 1.0;
   bool single = theta_p.w < 2.0;
   vec3 d = theta_p.rgb - theta_q.rgb;
+  vec3 d2 = d * d;
   // nu >= 1; pairs of pixels with statistics: n_p + n_q - 2 >= 2
   uint nu = single ? max(uint(theta_q.w + 0.5), 2u) - 1u : uint(theta_p.w + theta_q.w + 0.5) - 2u;
   vec3 var_pq = single ? var_q * (theta_q.w / theta_p.w) : var_p;
-  return dn_stat_member(d * d, dn_stat_t_squared(nu), var_pq, var_q, k.asymmetric);
+  float t2 = dn_stat_t_squared(nu);
+  if (!dn_stat_member(d2, t2, var_pq, var_q, k.asymmetric)) return 0.0;
+  if (k.falloff == 0.0) return 1.0;
+  // A member's bound exceeds its d^2 > 0; d^2 = 0 (equal means) has r = 0.
+  vec3 bound = k.asymmetric ? var_pq * (1.0 + 2.0 * t2) - var_q : t2 * (var_pq + var_q);
+  vec3 r = vec3(d2.x > 0.0 ? d2.x / bound.x : 0.0, d2.y > 0.0 ? d2.y / bound.y : 0.0, d2.z > 0.0 ? d2.z / bound.z : 0.0);
+  return pow(1.0 - min(max(r.x, max(r.y, r.z)), 1.0), k.falloff);
 }
 
 // The base weight of a member at squared pixel distance d2xy with albedo and

@@ -18,6 +18,14 @@ double normal_component(const std::vector<float>& n, int i, int c) {
 
 double guarded_albedo(float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0; }
 
+double raw_from_moments(double n, double mean, double m2) {
+  return (mean / 2.0 + 1.0) * (mean / 2.0 + 1.0) + std::max(m2, 0.0) / (4.0 * n);
+}
+
+double modulation(double radiance, double demodulated, float albedo) {
+  return radiance > 0.0 && demodulated > 0.0 ? radiance / demodulated : guarded_albedo(albedo);
+}
+
 StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
   const int n_px = f.width * f.height;
   StatPrepared r;
@@ -64,10 +72,13 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
   res.members.assign(w * h, 0);
   res.rejected.assign(w * h, 0);
   auto rgb = [](const std::vector<float>& v, int i, int c) { return static_cast<double>(v[3 * i + c]); };
-  // What pixel q contributes to an average (demodulated or not).
+  // What pixel q contributes to an average: its raw mean, or the
+  // demodulated mean from its moments (no statistics: the radiance).
+  auto has_data = [&](int q) { return prep.theta[4 * q + 3] > 0.0f; };
   auto value = [&](int q, int c) {
     const double raw = sanitize(f.radiance[3 * q + c]);
-    return p.demodulated && !p.raw_demodulated ? raw / guarded_albedo(f.albedo[3 * q + c]) : raw;
+    if (!p.demodulated || !has_data(q)) return raw;
+    return raw_from_moments(f.count[q], f.mean[3 * q + c], f.m2[3 * q + c]);
   };
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -88,16 +99,22 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             const int nu = single ? std::max(static_cast<int>(n_q + 0.5f), 2) - 1 : static_cast<int>(n_p + n_q + 0.5f) - 2;
             const float t2 = t_squared[std::min<size_t>(nu, t_squared.size()) - 1];
             bool member = true;
+            float share = 0.0f;  // the largest channel's d^2 over the test's bound
             for (int c = 0; c < 3; ++c) {
               // p without variance: its sample's variance is q's sample variance.
               const float var_p = single ? prep.variance[3 * q + c] * (n_q / n_p) : prep.variance[3 * i + c];
-              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, var_p,
-                                             prep.variance[3 * q + c], p.asymmetric);
+              const float var_q = prep.variance[3 * q + c];
+              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, var_p, var_q, p.asymmetric);
+              const float d = prep.theta[4 * i + c] - prep.theta[4 * q + c];
+              const float bound = p.asymmetric ? var_p * (1.0f + 2.0f * t2) - var_q : t2 * (var_p + var_q);
+              if (d * d > 0.0f) share = std::max(share, d * d / bound);
             }
             if (!member && !p.base_only) {
               ++res.rejected[i];
               continue;
             }
+            const double membership =
+                p.base_only || p.falloff == 0.0 ? 1.0 : std::pow(1.0 - std::min(share, 1.0f), p.falloff);
             ++res.members[i];
             double da2 = 0.0, dn2 = 0.0;
             for (int c = 0; c < 3; ++c) {
@@ -106,7 +123,7 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
               da2 += da * da;
               dn2 += (nn_p - nn_q) * (nn_p - nn_q);
             }
-            const double wgt = std::exp(-d2xy / (2.0 * p.sigma_spatial * p.sigma_spatial) -
+            const double wgt = membership * std::exp(-d2xy / (2.0 * p.sigma_spatial * p.sigma_spatial) -
                                         da2 / (2.0 * p.sigma_albedo * p.sigma_albedo) -
                                         dn2 / (2.0 * p.sigma_normal * p.sigma_normal));
             for (int c = 0; c < 3; ++c) sum[c] += wgt * (value(q, c) - raw_p[c]);
@@ -115,7 +132,8 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       }
       for (int c = 0; c < 3; ++c) {
         const double average = raw_p[c] + sum[c] / weight_sum;
-        res.output[3 * i + c] = p.demodulated ? average * guarded_albedo(f.albedo[3 * i + c]) : average;
+        const double m = has_data(i) ? modulation(sanitize(f.radiance[3 * i + c]), value(i, c), f.albedo[3 * i + c]) : 1.0;
+        res.output[3 * i + c] = p.demodulated ? average * m : average;
       }
     }
   return res;

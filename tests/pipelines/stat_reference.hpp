@@ -16,11 +16,12 @@ struct StatParams {
   double variance_floor = 0.0;
   bool asymmetric = false;
   bool base_only = false;  // every tap with statistics is a member (the t -> infinity limit)
-  // The statistics are demodulated: the filter averages radiance / guarded
-  // albedo and multiplies by p's guarded albedo; raw_demodulated: the
-  // frame's radiance holds demodulated means already (stat-temporal).
+  // A member's weight times (1 - r)^falloff, r the largest channel's share of
+  // the test's bound (0: all or nothing).
+  double falloff = 0.0;
+  // The statistics are demodulated: the filter averages the demodulated
+  // means from the moments and multiplies by p's modulation.
   bool demodulated = false;
-  bool raw_demodulated = false;
 };
 
 // One frame's planes as floats: radiance, albedo, normal, mean, m2, m3 3 per
@@ -48,6 +49,10 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
 // An albedo component as demodulation uses it: below 1e-3 (fp32) or not
 // finite, 1 (docs/protocol.md §7.7).
 double guarded_albedo(float a);
+// The mean of the samples from their Box-Cox moments, (mean / 2 + 1)^2 + M2 / (4 n).
+double raw_from_moments(double n, double mean, double m2);
+// radiance / demodulated mean, or the guarded albedo where either is 0.
+double modulation(double radiance, double demodulated, float albedo);
 // The membership decision for one channel pair (exposed for the symmetry test).
 bool stat_member(float theta_p, float theta_q, float t2, float var_p, float var_q, bool asymmetric);
 

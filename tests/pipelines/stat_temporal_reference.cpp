@@ -25,7 +25,7 @@ bool same_surface(double z, const Vec3& n, double grad_z, double grad_n, double 
   return std::abs(z - z_prev) / (grad_z + 0.01) <= 10.0 && distance(n, n_prev) / (grad_n + 0.01) <= 16.0;
 }
 
-StatAccumulator frame_statistics(const StatFrame& f, int q, bool demodulated) {
+StatAccumulator frame_statistics(const StatFrame& f, int q) {
   StatAccumulator s;
   s.n = f.count[q];
   bool ok = finite(s.n) && s.n > 0.0;
@@ -35,7 +35,6 @@ StatAccumulator frame_statistics(const StatFrame& f, int q, bool demodulated) {
     s.m3[c] = f.m3[3 * q + c];
     const float r = f.radiance[3 * q + c];
     s.raw[c] = std::isfinite(r) ? std::max(r, 0.0f) : 0.0f;
-    if (demodulated) s.raw[c] /= guarded_albedo(f.albedo[3 * q + c]);
     ok = ok && finite(s.mean[c]) && finite(s.m2[c]) && finite(s.m3[c]);
   }
   return ok ? s : StatAccumulator{};
@@ -77,7 +76,7 @@ StatAccumulator stat_merge(const StatAccumulator& a, const StatAccumulator& b) {
 }
 
 StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalState& prev, double fading,
-                                 const std::vector<float>& t_squared, bool demodulated) {
+                                 const std::vector<float>& t_squared) {
   const StatFrame& s = f.stats;
   const int w = s.width, h = s.height, n_px = w * h;
   const bool has_history = !f.reset && static_cast<int>(prev.acc.size()) == n_px;
@@ -91,7 +90,7 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const int i = y * w + x;
-      const StatAccumulator current = frame_statistics(s, i, demodulated);
+      const StatAccumulator current = frame_statistics(s, i);
       res.state.acc[i] = current;
       const float z = f.depth[i];
       const Vec3 n = normal_at(s.normal, i);
@@ -157,7 +156,7 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
           if (!inside(qx, qy)) continue;
           const int q = qy * w + qx;
           if (foreground(f.depth[q]) && same_surface(z, n, grad_z, grad_n, f.depth[q], normal_at(s.normal, q)))
-            cw = stat_merge(cw, frame_statistics(s, q, demodulated));
+            cw = stat_merge(cw, frame_statistics(s, q));
         }
       hw = stat_scale(hw, beta);
       // Passes, fails (by more than t standard errors), or fails far (2t).

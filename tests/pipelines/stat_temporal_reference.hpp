@@ -39,9 +39,7 @@ struct StatTemporalResult {
 };
 
 // previous: empty vectors for the first frame. t_squared as in stat_filter.
-// demodulated: the statistics are, so the accumulated raw mean is the
-// radiance over the guarded albedo.
 StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalState& previous, double fading,
-                                 const std::vector<float>& t_squared, bool demodulated = false);
+                                 const std::vector<float>& t_squared);
 
 }  // namespace dn::test

@@ -16,6 +16,7 @@
 #include "pipelines/pipeline.hpp"
 #include "pipelines/student_t.hpp"
 #include "stat_reference.hpp"
+#include "stat_samples.hpp"
 #include "svgf_inputs.hpp"
 
 namespace dn {
@@ -56,17 +57,7 @@ test::StatFrame shadow_frame(int w, int h, int spp, uint32_t seed, float scale =
         albedo = 0.3f + 0.1f * static_cast<float>(block);
         if (demodulated && (x / 8 + c) % 3 == 0) albedo = block % 2 ? 5e-4f : 2e-3f;  // either side of the guard
         const float divisor = demodulated ? static_cast<float>(test::guarded_albedo(albedo)) : 1.0f;
-        render::OnlineStats s, radiance;
-        for (int k = 0; k < spp; ++k) {
-          const double u = (static_cast<double>(rng()) + 0.5) / 4294967296.0;
-          const float sample = scale * static_cast<float>(-std::log(u)) * lit * albedo;
-          s.add(sample / divisor);
-          radiance.add(sample);
-        }
-        f.radiance[3 * i + c] = radiance.raw_mean;
-        f.mean[3 * i + c] = s.mean;
-        f.m2[3 * i + c] = s.m2;
-        f.m3[3 * i + c] = s.m3;
+        test::put_exponential_samples(f, i, c, spp, scale * lit * albedo, divisor, rng);
       }
     }
   return f;
@@ -132,6 +123,10 @@ TEST_F(StatTest, MatchesCpuReference) {
   demodulated.demodulated = true;
   test::StatParams demodulated_r6 = r6;
   demodulated_r6.demodulated = true;
+  test::StatParams falloff;
+  falloff.falloff = 2.0;
+  test::StatParams falloff_asym = asym;
+  falloff_asym.falloff = 0.5;
   const std::vector<protocol::Parameter> p6 = {{"radius", 6}, {"sigma_spatial", 3}};
   const Variant variants[] = {
       {"defaults", 48, 32, Format::F32, {}, test::StatParams{}},
@@ -144,6 +139,9 @@ TEST_F(StatTest, MatchesCpuReference) {
       {"demodulated", 48, 32, Format::F32, {{"demodulated", 1}}, demodulated},
       {"demodulated_tiled", 64, 40, Format::F32, {{"radius", 6}, {"sigma_spatial", 3}, {"demodulated", 1}},
        demodulated_r6},
+      {"falloff", 47, 32, Format::F32, {{"membership_falloff", 2}}, falloff},
+      {"falloff_asymmetric_tiled", 64, 40, Format::F32,
+       {{"radius", 6}, {"sigma_spatial", 3}, {"asymmetric", 1}, {"membership_falloff", 0.5}}, falloff_asym},
   };
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
@@ -210,16 +208,7 @@ TEST_F(StatTest, DemodulatedStatisticsAverageAcrossTexture) {
       for (int c = 0; c < 3; ++c) {
         const float albedo = 0.45f + 0.1f * static_cast<float>((rng() + 0.5) / 4294967296.0);
         f.albedo[3 * i + c] = albedo;
-        render::OnlineStats s, radiance;
-        for (int k = 0; k < spp; ++k) {
-          const float sample = static_cast<float>(-std::log((rng() + 0.5) / 4294967296.0)) * albedo;
-          s.add(demodulated ? sample / albedo : sample);
-          radiance.add(sample);
-        }
-        f.radiance[3 * i + c] = radiance.raw_mean;
-        f.mean[3 * i + c] = s.mean;
-        f.m2[3 * i + c] = s.m2;
-        f.m3[3 * i + c] = s.m3;
+        test::put_exponential_samples(f, i, c, spp, albedo, demodulated ? albedo : 1.0f, rng);
       }
     }
     return f;

@@ -108,7 +108,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatAndStatT
   std::vector<std::string> stat_names;
   for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
   EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
-                                                  "variance_floor", "membership", "asymmetric", "demodulated"}));
+                                                  "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated"}));
   // stat-temporal: stat's channels plus depth and motion (reprojection); stat's parameters and its own.
   EXPECT_EQ(all[6].name, "stat-temporal");
   EXPECT_EQ(all[6].required_channels,
