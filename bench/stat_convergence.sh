@@ -85,6 +85,11 @@ for s in $scenes; do
   done
 done
 
+# The title names what differs from stat's defaults.
+title_extra=""
+for a in ${stat_params[@]+"${stat_params[@]}"}; do [ "$a" = --param ] || title_extra+=", $a"; done
+[ "$stats_flag" = --stats ] || title_extra+=", demodulated"
+
 # RMSE from the noise-corrected MSE (clamped at 1e-12: it can come out
 # slightly negative within the references' noise), against spp, log-log.
 plots=""
@@ -99,7 +104,7 @@ done
 gnuplot <<GP
 set terminal png size 800,500 font ",11" noenhanced
 set output '$out/stat_convergence.png'
-set title 'stat against spp ($size, dnrender)'
+set title 'stat against spp ($size, dnrender$title_extra)'
 set logscale xy
 set grid
 set key outside right
