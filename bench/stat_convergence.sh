@@ -11,7 +11,9 @@
 # plot to docs/images/stat_convergence.png. --param NAME=VALUE (repeatable)
 # sets a stat parameter for both the base filter and stat (e.g. radius=6);
 # --demodulated renders the statistics over demodulated samples (dnrender
-# --stats-demodulated: dn denoise then sets demodulated = 1 for both).
+# --stats-demodulated: dn denoise then sets demodulated = 1 for both);
+# --seed S renders the noisy frames with another seed (default 3; not 1,
+# reference 1's, whose samples the frames would share).
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
 # skips scripts/setup.sh.
 set -euo pipefail
@@ -27,10 +29,11 @@ cache=out/cache
 docs=0
 stat_params=()
 stats_flag=--stats
+seed=3
 usage() {
   cat <<USAGE
 usage: bench/stat_convergence.sh [--scenes "1 3"] [--size WxH] [--max-spp N] [--ref-spp S] [--param NAME=VALUE]...
-                                 [--demodulated] [--out DIR] [--cache DIR] [--docs]
+                                 [--demodulated] [--seed S] [--out DIR] [--cache DIR] [--docs]
 defaults: --scenes "$scenes" --size $size --max-spp $max_spp --ref-spp $ref_spp --out $out
 USAGE
 }
@@ -44,11 +47,13 @@ while [ $# -gt 0 ]; do
     --cache) cache=$2; shift 2 ;;
     --param) stat_params+=(--param "$2"); shift 2 ;;
     --demodulated) stats_flag=--stats-demodulated; shift ;;
+    --seed) seed=$2; shift 2 ;;
     --docs) docs=1; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "stat_convergence: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
+[ "$seed" != 1 ] || { echo "stat_convergence: --seed 1 is reference 1's seed" >&2; exit 2; }
 width=${size%x*}
 height=${size#*x}
 [ "${DN_SKIP_SETUP:-0}" = 1 ] || ./scripts/setup.sh
@@ -67,7 +72,7 @@ for s in $scenes; do
     --reference "$ref_spp" --reference2 --cache "$cache" --quiet
   spp=4
   while [ "$spp" -le "$max_spp" ]; do
-    "$dnrender" --scene "$s" --frames 1 --width "$width" --height "$height" --spp "$spp" "$stats_flag" --seed 3 \
+    "$dnrender" --scene "$s" --frames 1 --width "$width" --height "$height" --spp "$spp" "$stats_flag" --seed "$seed" \
       --out "$dir/spp$spp" --quiet
     for row in "noisy passthrough" "base stat membership=0" "stat stat"; do
       read -r label pipeline params <<< "$row"
