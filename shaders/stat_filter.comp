@@ -45,7 +45,7 @@ vec3 filter_pixel(uint p) {
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 var_p = variance.data[p].rgb;
-  vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
+  vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
@@ -61,7 +61,7 @@ vec3 filter_pixel(uint p) {
       uint q = uint(y) * frame.size.x + uint(x);
       float m = dn_stat_membership(theta_p, var_p, theta.data[q], variance.data[q].rgb, k);
       if (m == 0.0) continue;
-      vec3 da = albedo_p - DN_LOAD3(albedo, ALBEDO_HALF, q);
+      vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));
       float w = m * dn_stat_base_weight(d2xy, da, dn, k);
       sum += w * (dn_stat_value(q) - raw_p);

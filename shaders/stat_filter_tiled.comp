@@ -2,7 +2,7 @@
 // stat_filter_tiled: stat_filter (see there and docs/pipelines.md, "stat")
 // with the disc read from a shared-memory tile: each 8x8 workgroup loads the
 // (8 + 2 APRON)^2 pixels around its block once (theta,
-// variance, the value (dn_stat_value), albedo, sanitized normal: 80 B each, 32000 B
+// variance, the value (dn_stat_value), sanitized albedo and normal: 80 B each, 32000 B
 // in all, within lavapipe's 32 KiB) instead of every invocation loading its
 // own taps. It measured 1.5x faster on lavapipe at radius 6
 // (bench/stat_gather_bench, docs/results.md); the host uses it when the
@@ -33,7 +33,8 @@ struct Tap {
 Tap dn_tile_fetch(ivec2 p) {
   uint i = dn_grid_index(uvec2(p), dn_grid.size);
   return Tap(theta.data[i], variance.data[i], vec4(dn_stat_value(i), 0.0),
-             vec4(DN_LOAD3(albedo, ALBEDO_HALF, i), 0.0), vec4(dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, i)), 0.0));
+             vec4(dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, i)), 0.0),
+             vec4(dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, i)), 0.0));
 }
 
 vec3 filter_pixel() {

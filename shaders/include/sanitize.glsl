@@ -5,7 +5,9 @@
 //   depth:    a pixel is foreground iff depth is finite and > 0
 //   motion:   any non-finite component -> no reprojection for that pixel
 //   albedo, where a pass demodulates by it: a component below 1e-3 or not
-//             finite divides and multiplies by 1 (docs/protocol.md §7.7)
+//             finite divides and multiplies by 1 (docs/protocol.md §7.7);
+//             where it guides a filter (stat's base weight): a non-finite
+//             component -> 0
 // Tests are done on the bits so that no compiler fast-math can fold them away.
 #ifndef DN_SANITIZE_GLSL
 #define DN_SANITIZE_GLSL
@@ -20,6 +22,10 @@ vec3 dn_sanitize_radiance(vec3 c) {
 }
 
 vec3 dn_sanitize_normal(vec3 n) { return dn_is_finite(n) ? n : vec3(0.0); }
+
+vec3 dn_sanitize_albedo(vec3 a) {
+  return vec3(dn_is_finite(a.x) ? a.x : 0.0, dn_is_finite(a.y) ? a.y : 0.0, dn_is_finite(a.z) ? a.z : 0.0);
+}
 
 const float DN_ALBEDO_MIN = 1e-3;
 float dn_guarded_albedo(float a) { return (dn_is_finite(a) && a >= DN_ALBEDO_MIN) ? a : 1.0; }

@@ -14,6 +14,8 @@ double normal_component(const std::vector<float>& n, int i, int c) {
   return ok ? static_cast<double>(n[3 * i + c]) : 0.0;
 }
 
+double finite_or_zero(float x) { return finite(x) ? static_cast<double>(x) : 0.0; }
+
 }  // namespace
 
 double guarded_albedo(float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0; }
@@ -71,7 +73,6 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
   res.output.assign(3 * w * h, 0.0);
   res.members.assign(w * h, 0);
   res.rejected.assign(w * h, 0);
-  auto rgb = [](const std::vector<float>& v, int i, int c) { return static_cast<double>(v[3 * i + c]); };
   // What pixel q contributes to an average: its raw mean, or the
   // demodulated mean from its moments (no statistics: the radiance).
   auto has_data = [&](int q) { return prep.theta[4 * q + 3] > 0.0f; };
@@ -118,7 +119,8 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             ++res.members[i];
             double da2 = 0.0, dn2 = 0.0;
             for (int c = 0; c < 3; ++c) {
-              const double da = rgb(f.albedo, i, c) - rgb(f.albedo, q, c);
+              // A non-finite albedo component guides as 0 (sanitize.glsl).
+              const double da = finite_or_zero(f.albedo[3 * i + c]) - finite_or_zero(f.albedo[3 * q + c]);
               const double nn_p = normal_component(f.normal, i, c), nn_q = normal_component(f.normal, q, c);
               da2 += da * da;
               dn2 += (nn_p - nn_q) * (nn_p - nn_q);

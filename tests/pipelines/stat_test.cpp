@@ -416,6 +416,30 @@ TEST_F(StatTest, PixelsWithoutStatisticsKeepTheirOwnValue) {
   }
 }
 
+// Non-finite guides (a renderer's NaN albedo on the background, an
+// infinite one, a NaN normal) never reach the output, with statistics over
+// radiance or demodulated.
+TEST_F(StatTest, NonFiniteGuidesNeverReachTheOutput) {
+  const int w = 40, h = 24;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (bool demodulated : {false, true}) {
+    SCOPED_TRACE(demodulated ? "demodulated" : "over radiance");
+    test::StatFrame f = shadow_frame(w, h, 8, 19, 1.0f, demodulated);
+    f.albedo[3 * (4 * w + 9)] = nan;
+    f.albedo[3 * (12 * w + 20) + 1] = inf;
+    f.albedo[3 * (20 * w + 30) + 2] = -inf;
+    f.normal[3 * (8 * w + 14) + 2] = nan;
+    for (const auto& params : {std::vector<protocol::Parameter>{{"demodulated", demodulated ? 1.0 : 0.0}},
+                               std::vector<protocol::Parameter>{{"radius", 6}, {"sigma_spatial", 3},
+                                                                {"demodulated", demodulated ? 1.0 : 0.0}}}) {
+      const auto got = svgf_inputs::run(*make(ctx(), w, h, params), host_frame(f));
+      size_t bad = 0;
+      for (float v : got) bad += !std::isfinite(v);
+      EXPECT_EQ(bad, 0u) << "non-finite output components";
+    }
+  }
+}
+
 TEST(StatValidate, StatisticsOnlyInFp32) {
   for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3}) {
     auto channels = stat_channels();
