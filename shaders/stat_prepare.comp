@@ -34,11 +34,10 @@ void store3(uint p, vec3 v, bool to_modulation) {
 
 // The demodulated value and modulation of pixel p with statistics s (n = 0: none).
 void demodulate(uint p, DnStat s) {
-  vec3 radiance_p = MODULATION || !(s.n > 0.0) ? dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p)) : vec3(0.0);
-  vec3 v = s.n > 0.0 ? dn_stat_raw_from_moments(s) : radiance_p;
-  store3(p, v, false);
-  if (MODULATION)
-    store3(p, s.n > 0.0 ? dn_stat_modulation(radiance_p, v, DN_LOAD3(albedo, ALBEDO_HALF, p)) : vec3(1.0), true);
+  bool has_data = s.n > 0.0;
+  s.raw = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p));
+  store3(p, has_data ? dn_stat_raw_from_moments(s) : s.raw, false);
+  if (MODULATION) store3(p, dn_stat_pixel_modulation(s, has_data, DN_LOAD3(albedo, ALBEDO_HALF, p)), true);
 }
 
 void main() {

@@ -136,15 +136,11 @@ void store(uint p, DnStat s, float z, vec3 n, bool suspect) {
 }
 
 // DEMODULATED: what stat_filter multiplies p's result by, from this
-// frame's own samples (dn_stat_modulation), the guarded albedo where the
-// frame brought none, 1 where nothing is accumulated (stat_prepare then
-// passes the frame's radiance through).
+// frame's own samples (dn_stat_pixel_modulation): the accumulators cannot
+// give it.
 void store_modulation(uint p, DnStat c, DnStat acc) {
   if (!DEMODULATED) return;
-  vec3 albedo_p = DN_LOAD3(albedo, ALBEDO_HALF, p);
-  vec3 m = !(acc.n > 0.0) ? vec3(1.0)
-           : c.n > 0.0    ? dn_stat_modulation(c.raw, dn_stat_raw_from_moments(c), albedo_p)
-                          : dn_guarded_albedo(albedo_p);
+  vec3 m = dn_stat_pixel_modulation(c, acc.n > 0.0, DN_LOAD3(albedo, ALBEDO_HALF, p));
   for (uint k = 0u; k < 3u; ++k) modulation.data[3u * p + k] = m[k];
 }
 

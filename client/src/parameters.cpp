@@ -37,6 +37,13 @@ const std::vector<protocol::ParameterInfo>* find_parameters(const protocol::Welc
   return nullptr;
 }
 
+DemodulatedStatistics demodulated_statistics(const protocol::PipelineInfo& pipeline) {
+  for (const auto& p : pipeline.parameters)
+    if (p.name == kDemodulatedParameter) return DemodulatedStatistics::ByParameter;
+  const bool requires_statistics = pipeline.required_channels & protocol::channel_bit(protocol::ChannelId::StatCount);
+  return requires_statistics ? DemodulatedStatistics::Unsupported : DemodulatedStatistics::NotRead;
+}
+
 void check_parameters(const protocol::Welcome& welcome, const SessionDesc& desc) {
   const auto* table = find_parameters(welcome, desc.pipeline);
   if (!table) return;

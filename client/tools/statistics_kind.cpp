@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "args.hpp"
+#include "dn/client/parameters.hpp"
 
 namespace dn::cli {
 
@@ -18,7 +19,7 @@ void apply_statistics_kind(const std::optional<std::string>& stat_samples, const
                              "', expected 'radiance' or 'demodulated'");
   const bool demodulated = *stat_samples == "demodulated";
   const auto given = std::find_if(params.begin(), params.end(),
-                                  [](const protocol::Parameter& p) { return p.name == "demodulated"; });
+                                  [](const protocol::Parameter& p) { return p.name == client::kDemodulatedParameter; });
   if (given != params.end()) {
     if ((given->value != 0.0) != demodulated)
       throw UsageError("--param demodulated=" + std::to_string(static_cast<int>(given->value)) + " contradicts " +
@@ -27,12 +28,12 @@ void apply_statistics_kind(const std::optional<std::string>& stat_samples, const
     return;
   }
   if (!demodulated || !pipeline) return;
-  const bool knows = std::any_of(pipeline->parameters.begin(), pipeline->parameters.end(),
-                                 [](const protocol::ParameterInfo& p) { return p.name == "demodulated"; });
-  if (knows) params.push_back({"demodulated", 1.0});
-  else if (pipeline->required_channels & protocol::channel_bit(protocol::ChannelId::StatCount))
+  const client::DemodulatedStatistics how = client::demodulated_statistics(*pipeline);
+  if (how == client::DemodulatedStatistics::Unsupported)
     throw std::runtime_error(path + " holds demodulated statistics (dn.stat_samples), but pipeline " +
                              pipeline->name + " has no parameter 'demodulated' to be told so");
+  if (how == client::DemodulatedStatistics::ByParameter)
+    params.push_back({std::string(client::kDemodulatedParameter), 1.0});
 }
 
 }  // namespace dn::cli

@@ -1,12 +1,12 @@
 #include "stream.hpp"
 
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
 
 #include "dn/client/client.hpp"
+#include "dn/client/parameters.hpp"
 #include "dn/image/exr_io.hpp"
 #include "frame_exr.hpp"
 
@@ -153,15 +153,13 @@ void FrameStreamer::open(const FrameBuffers& sample) {
       throw std::runtime_error("pipeline " + options.pipeline + " requires channel " + std::string(c.name) +
                                ", which this render does not produce");
   if (options.statistics_demodulated && has(ChannelId::StatCount) && (takes & protocol::channel_bit(ChannelId::StatCount))) {
-    // A pipeline that filters with the statistics must be told they are
-    // demodulated; one that only carries them (passthrough) has no such parameter.
-    const bool knows = std::any_of(info->parameters.begin(), info->parameters.end(),
-                                   [](const protocol::ParameterInfo& p) { return p.name == "demodulated"; });
-    if (knows) desc.parameters.push_back({"demodulated", 1.0});
-    else if (info->required_channels & protocol::channel_bit(ChannelId::StatCount))
+    const client::DemodulatedStatistics how = client::demodulated_statistics(*info);
+    if (how == client::DemodulatedStatistics::Unsupported)
       throw std::runtime_error("pipeline " + options.pipeline +
                                " has no parameter 'demodulated': it cannot take demodulated statistics "
                                "(render them with --stats instead of --stats-demodulated)");
+    if (how == client::DemodulatedStatistics::ByParameter)
+      desc.parameters.push_back({std::string(client::kDemodulatedParameter), 1.0});
   }
   state_->session.emplace(state_->connection.open_session(desc));
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);

@@ -66,9 +66,9 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
         .set("DEMODULATED", true)
         .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)));
     if (s.prepare_modulates) {
-      g.add_scratch("stat_modulation", kStatRgbBytes);
+      g.add_scratch(kStatModulation, kStatRgbBytes);
       prepare.bind("albedo", "albedo")
-          .bind("modulation", "stat_modulation")
+          .bind("modulation", kStatModulation)
           .set("MODULATION", true)
           .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
     }
@@ -92,7 +92,7 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
       .set("OUTPUT_HALF", is_half(config.output_format))
       .set("TABLE_SIZE", kStatTableSize)
       .set("DEMODULATED", demodulated);
-  if (demodulated) filter.bind("modulation", "stat_modulation");
+  if (demodulated) filter.bind("modulation", kStatModulation);
 }
 
 // The statistics are sums that outgrow fp16 within a few hundred samples

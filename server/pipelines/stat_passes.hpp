@@ -24,7 +24,7 @@ struct StatSources {
   std::string raw;        // the raw means that are averaged
   bool raw_half = false;  // raw is an fp16 plane
   // With demodulated statistics (parameter demodulated), who writes the
-  // plane "stat_modulation" that remodulates the result: stat_prepare from
+  // plane kStatModulation that remodulates the result: stat_prepare from
   // the frame's planes (the sources are the frame's: stat), or a pass before
   // it (stat_temporal, which sees the frame; the accumulators do not).
   bool prepare_modulates = true;
@@ -33,8 +33,10 @@ struct StatSources {
 // The channels both take besides their own: radiance, albedo, normal and the
 // four statistics.
 uint64_t stat_channels();
-// The per-pixel demodulation planes' bytes: rgb fp32 ("stat_value", "stat_modulation").
+// Bytes of an rgb fp32 plane (stat-temporal's accumulators, the demodulation planes).
 inline constexpr uint64_t kStatRgbBytes = 12;
+// The plane that remodulates stat_filter's result with demodulated statistics.
+inline constexpr const char* kStatModulation = "stat_modulation";
 // Declares the frame's planes of stat_channels(), named by their channels'
 // names (radiance, albedo, normal, stat_count, ...), and the table "stat_t_squared".
 void add_stat_inputs(GraphSpec& g, const SessionConfig& config);
@@ -44,7 +46,7 @@ std::vector<uint8_t> t_squared_table(double alpha);
 // stat_prepare and stat_filter (stat_filter_tiled where it serves) over
 // `sources`, writing the output plane. With demodulated statistics the
 // filter averages stat_prepare's demodulated means ("stat_value") and
-// multiplies by "stat_modulation" (declared here when prepare_modulates).
+// multiplies by kStatModulation (declared here when prepare_modulates).
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& sources);
 // The statistics are fp32 only (docs/protocol.md §7.7).
 std::optional<ConfigError> check_statistics(const SessionConfig& config);

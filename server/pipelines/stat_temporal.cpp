@@ -14,7 +14,6 @@ using protocol::ChannelId;
 // Accumulators, fp32, in the layouts of the statistics planes, and their
 // geometry: uvec4(depth bits, octahedral normal, suspect, 0).
 constexpr uint64_t kCountBytes = 4;
-constexpr uint64_t kRgbBytes = 12;
 constexpr uint64_t kGeometryBytes = 16;
 
 GraphSpec build(const SessionConfig& config) {
@@ -25,7 +24,7 @@ GraphSpec build(const SessionConfig& config) {
   g.add_constant("stat_history_t_squared", t_squared_table(g.parameters.stat_temporal_history_alpha));
   g.add_history("stat_acc_count", kCountBytes);
   for (const char* name : {"stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw"})
-    g.add_history(name, kRgbBytes);
+    g.add_history(name, kStatRgbBytes);
   g.add_history("stat_acc_geometry", kGeometryBytes);
   g.add_output(config);
 
@@ -59,9 +58,9 @@ GraphSpec build(const SessionConfig& config) {
   temporal.pixels_per_invocation = 1;
   if (g.parameters.stat_demodulated != 0.0f) {
     // The frame's own samples give the modulation; the accumulators cannot.
-    g.add_scratch("stat_modulation", kStatRgbBytes);
+    g.add_scratch(kStatModulation, kStatRgbBytes);
     temporal.bind("albedo", "albedo")
-        .bind("modulation", "stat_modulation")
+        .bind("modulation", kStatModulation)
         .set("DEMODULATED", true)
         .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   }

@@ -69,6 +69,15 @@ vec3 dn_stat_modulation(vec3 radiance, vec3 demodulated, vec3 albedo) {
               radiance.z > 0.0 && demodulated.z > 0.0 ? radiance.z / demodulated.z : guarded.z);
 }
 
+// A pixel's modulation given the frame's own statistics c (c.raw: its
+// radiance): dn_stat_modulation where the frame brought samples, the
+// guarded albedo where only history holds some, 1 where nothing is
+// accumulated (the value is then the radiance itself).
+vec3 dn_stat_pixel_modulation(DnStat c, bool accumulated, vec3 albedo) {
+  if (!accumulated) return vec3(1.0);
+  return c.n > 0.0 ? dn_stat_modulation(c.raw, dn_stat_raw_from_moments(c), albedo) : dn_guarded_albedo(albedo);
+}
+
 bool dn_stat_is_finite(DnStat s) {
   return dn_is_finite(s.n) && dn_is_finite(s.mean) && dn_is_finite(s.m2) && dn_is_finite(s.m3) && dn_is_finite(s.raw);
 }

@@ -21,6 +21,15 @@ const std::vector<protocol::ParameterInfo>* find_parameters(const protocol::Welc
 std::string format_value(double value);
 std::string format_range(const protocol::ParameterInfo& parameter);
 
+// How a pipeline takes sample statistics over demodulated samples
+// (docs/protocol.md §7.7): told by its parameter "demodulated"; not at all,
+// because it only carries them (the statistics are optional to it and it has
+// no such parameter: passthrough); or not safely, because it requires them
+// but cannot be told (a server older than the parameter).
+enum class DemodulatedStatistics { ByParameter, NotRead, Unsupported };
+inline constexpr std::string_view kDemodulatedParameter = "demodulated";
+DemodulatedStatistics demodulated_statistics(const protocol::PipelineInfo& pipeline);
+
 // Checks desc.parameters against the table of desc.pipeline: every name known
 // (else the error lists the valid names), given once, every value finite,
 // within [min, max] and integral where required. Throws Error (Usage,
