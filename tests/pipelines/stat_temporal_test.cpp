@@ -239,8 +239,9 @@ TEST_F(StatTemporalTest, MatchesCpuReference) {
       const test::StatTemporalResult want = test::stat_temporal(f, state, v.fading, table);
       const DeviceState device = device_state(s, v.scene.demodulated);
       const Mismatch m = compare(device, want.state);
-      if (v.scene.demodulated)
+      if (v.scene.demodulated) {
         EXPECT_EQ(demodulation_mismatches(device, want.state, f), 0u) << "frame " << k << ": demodulated means or modulation";
+      }
       EXPECT_EQ(m.decisions, 0u) << "frame " << k << ": pixels merged or rejected unlike the reference";
       EXPECT_EQ(m.values, 0u) << "frame " << k << ": accumulators off the reference";
       for (size_t i = 0; i < want.rejected.size(); ++i) {

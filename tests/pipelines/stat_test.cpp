@@ -151,8 +151,11 @@ TEST_F(StatTest, MatchesCpuReference) {
     graph->set_capture(true);
     // Radius <= 6 at an even width: the shared-memory tile (stat_filter_tiled).
     const bool tiled = v.ref.radius <= 6 && v.w % 2 == 0;
-    for (const auto& pass : graph->spec().passes)
-      if (pass.name() == "stat_filter") EXPECT_EQ(pass.shader(), tiled ? "stat_filter_tiled" : "stat_filter");
+    for (const auto& pass : graph->spec().passes) {
+      if (pass.name() == "stat_filter") {
+        EXPECT_EQ(pass.shader(), tiled ? "stat_filter_tiled" : "stat_filter");
+      }
+    }
     const test::StatFrame f = shadow_frame(v.w, v.h, 8, 11, 1.0f, v.ref.demodulated);
     const auto got = svgf_inputs::run(*pipe, host_frame(f, v.guides), v.guides);
     const test::StatFrame seen = rounded(f, v.guides);

@@ -93,8 +93,8 @@ inline constexpr bool is_sample_statistic(ChannelId id) {
 
 // Demodulated sample statistics (docs/protocol.md §7.7) divide each sample
 // by the diffuse albedo of its primary hit, guarded: a component below this
-// or not finite divides by 1. The server multiplies back with the same rule
-// (shaders/include/sanitize.glsl, DN_ALBEDO_MIN).
+// or not finite divides by 1 (the server's guard of the same name:
+// shaders/include/sanitize.glsl, DN_ALBEDO_MIN).
 inline constexpr float kDemodulationAlbedoMin = 1e-3f;
 inline constexpr float demodulation_albedo(float a) {
   return (a >= kDemodulationAlbedoMin && a <= 3.4028234663852886e38f) ? a : 1.0f;  // NaN and +inf fail both
