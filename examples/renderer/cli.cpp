@@ -29,8 +29,13 @@ const char* const kUsage =
     "                     each frame: for temporal stability)\n"
     "  --width W          image width (default 640)\n"
     "  --height H         image height (default 360)\n"
-    "  --spp X            samples per pixel; fractions allowed: 0.25 samples each pixel with probability 0.25\n"
-    "                     (default 1)\n"
+    "  --spp X            samples per pixel; fractions allowed: 0.25 gives a quarter of the pixels a sample\n"
+    "                     each frame, 2.25 gives every pixel 2 and a quarter of them a third (default 1)\n"
+    "  --spp-schedule S   which pixels take the extra sample of a fractional spp:\n"
+    "                     stratified (default): for a fraction 1/k, k = 2..1024 (0.5, 0.25, 2.125), each\n"
+    "                     pixel exactly once in every k frames, in a seed-dependent ordered-dither pattern;\n"
+    "                     any other fraction (0.3, 2.7) falls back to random\n"
+    "                     random: each pixel independently, with the fraction as probability, every frame\n"
     "  --seed S           random seed (default 1)\n"
     "  --max-depth D      bounces after the primary hit (default 8)\n"
     "  --threads T        render threads (default: all cores)\n"
@@ -85,6 +90,12 @@ int parse_int(const std::string& flag, const std::string& text, long long lo, lo
   return static_cast<int>(v);
 }
 
+SppSchedule parse_spp_schedule(const std::string& flag, const std::string& text) {
+  if (text == "stratified") return SppSchedule::Stratified;
+  if (text == "random") return SppSchedule::Random;
+  throw UsageError(flag + ": expected stratified or random, got '" + text + "'");
+}
+
 }  // namespace
 
 CliOptions parse_cli(const std::vector<std::string>& args) {
@@ -105,7 +116,8 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--spp") {
       o.render.spp = parse_number(a, value(), 0.0, 1 << 20);
       if (o.render.spp <= 0.0) throw UsageError("--spp must be > 0");
-    } else if (a == "--seed") o.render.seed = static_cast<uint32_t>(parse_int(a, value(), 0, 0x7FFFFFFF));
+    } else if (a == "--spp-schedule") o.render.spp_schedule = parse_spp_schedule(a, value());
+    else if (a == "--seed") o.render.seed = static_cast<uint32_t>(parse_int(a, value(), 0, 0x7FFFFFFF));
     else if (a == "--max-depth") o.render.max_depth = parse_int(a, value(), 1, 64);
     else if (a == "--threads") o.render.threads = parse_int(a, value(), 1, 1024);
     else if (a == "--jitter") o.render.jitter = true;

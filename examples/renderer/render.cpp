@@ -1,10 +1,13 @@
 #include "render.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <thread>
 
 #include <pmmintrin.h>
@@ -547,7 +550,7 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
   const Scene& scene = pc.scene;
   const size_t i = size_t(y) * st.width + x;
   const uint32_t pixel = static_cast<uint32_t>(i);
-  const int count = samples_for_pixel(st.spp, st.seed, pc.frame, pixel);
+  const int count = samples_for_pixel(st.spp, st.seed, pc.frame, pixel, st.width, st.spp_schedule);
   Rng rng(st.seed, static_cast<uint32_t>(pc.frame), pixel);
 
   // The G-buffer ray: pixel centre plus the frame's jitter. It is also sample 0.
@@ -664,17 +667,103 @@ void render_pixel(const PixelContext& pc, int x, int y, const TileCorners& corne
   }
 }
 
+constexpr int kMaxStratifiedPeriod = 1024;
+
+// Index of (x, y) in the 2^m x 2^m Bayer ordered-dither matrix (only the low m bits of
+// x and y count). The tile's coarse bits become the index's low bits, so every aligned
+// run of 2^j consecutive indices is a lattice spread evenly over the tile.
+uint32_t bayer_index(uint32_t x, uint32_t y, int m) {
+  uint32_t index = 0;
+  for (int level = 0; level < m; ++level) {
+    const uint32_t pair = (((x ^ y) >> level) & 1u) << 1 | ((y >> level) & 1u);
+    index |= pair << (2 * (m - 1 - level));
+  }
+  return index;
+}
+
+// Squared length of the shortest vector in coset j of the lattice {(x, y): x + c y = 0 mod k};
+// for j = 0 its shortest nonzero vector.
+long coset_distance2(int j, int c, int k) {
+  auto fold = [k](long r) {
+    r %= k;
+    if (r < 0) r += k;
+    return std::min(r, k - r);
+  };
+  long best = j == 0 ? long(k) * k : fold(j) * fold(j);
+  for (long y = 1; y * y < best; ++y)
+    for (const long dy : {y, -y}) {
+      const long x = fold(j - c * dy);
+      best = std::min(best, y * y + x * x);
+    }
+  return best;
+}
+
+// For k not a power of two, frame t samples the pixels with x + c y + shift = g t (mod k):
+// c makes each frame's pixels the lattice with the longest shortest vector (no clumps,
+// neighbours differ), g (coprime with k) puts consecutive frames' pixels far apart.
+struct LatticeSchedule {
+  uint32_t c, g;
+};
+
+LatticeSchedule lattice_schedule(int k) {
+  // c | g << 16, found once per k; 0: not yet. Racing threads store the same value.
+  static std::array<std::atomic<uint32_t>, kMaxStratifiedPeriod + 1> cache{};
+  uint32_t packed = cache[k].load(std::memory_order_relaxed);
+  if (packed == 0) {
+    int best_c = 1, best_g = 1;
+    long best = 0;
+    for (int c = 1; c < k; ++c)
+      if (const long d = coset_distance2(0, c, k); d > best) best = d, best_c = c;
+    best = 0;
+    for (int g = 1; g < k; ++g)
+      if (std::gcd(g, k) == 1)
+        if (const long d = coset_distance2(g, best_c, k); d > best) best = d, best_g = g;
+    packed = uint32_t(best_c) | uint32_t(best_g) << 16;
+    cache[k].store(packed, std::memory_order_relaxed);
+  }
+  return {packed & 0xFFFFu, packed >> 16};
+}
+
+// Whether pixel (x, y) takes the extra sample at `frame` under the stratified schedule of period k.
+bool stratified_extra_sample(int k, uint32_t seed, int frame, uint32_t x, uint32_t y) {
+  const uint32_t h = hash_combine(seed ^ 0x5B1D0F3Cu, static_cast<uint32_t>(k));
+  const uint32_t phase = static_cast<uint32_t>((frame % k + k) % k);
+  if (std::has_single_bit(static_cast<uint32_t>(k))) {
+    // For odd log2 k the tile is 2^m x 2^m with each index twice, half a tile diagonal apart:
+    // a quincunx, spread better than a 2^m x 2^(m-1) rectangle (k = 2: a checkerboard).
+    const int n = std::countr_zero(static_cast<uint32_t>(k)), m = (n + 1) / 2;
+    const uint32_t tile_mask = (1u << m) - 1u;
+    // The seed shifts the tile and XORs the index: both permute the indices, so each pixel
+    // keeps one frame per period and aligned runs of frames stay lattices.
+    const uint32_t index = bayer_index(x + (h & tile_mask), y + ((h >> 8) & tile_mask), m) >> (2 * m - n);
+    return (index ^ ((h >> 16) & uint32_t(k - 1))) == phase;
+  }
+  const LatticeSchedule s = lattice_schedule(k);
+  return (x + uint64_t{s.c} * y + h) % uint32_t(k) == uint64_t{s.g} * phase % uint32_t(k);
+}
+
 }  // namespace
 
-int samples_for_pixel(double spp, uint32_t seed, int frame, uint32_t pixel) {
+int stratified_period(double spp) {
+  const double fraction = spp - std::floor(spp);
+  if (!(fraction > 0.0)) return 0;
+  const double k = std::round(1.0 / fraction);
+  if (k < 2.0 || k > kMaxStratifiedPeriod || std::abs(fraction * k - 1.0) > 1e-6) return 0;
+  return static_cast<int>(k);
+}
+
+int samples_for_pixel(double spp, uint32_t seed, int frame, uint32_t pixel, int width, SppSchedule schedule) {
   const double whole = std::floor(spp);
   const double fraction = spp - whole;
   int count = static_cast<int>(whole);
-  if (fraction > 0.0) {
-    // Its own hash, not the path's random stream, so the mask does not depend on rendering.
-    const uint32_t h = hash_combine(hash_combine(seed ^ 0xA511E9B3u, static_cast<uint32_t>(frame)), pixel);
-    if (to_unit_float(h) < fraction) ++count;
+  if (!(fraction > 0.0)) return count;
+  if (const int period = schedule == SppSchedule::Stratified ? stratified_period(spp) : 0; period > 0) {
+    const uint32_t w = static_cast<uint32_t>(std::max(width, 1));
+    return count + (stratified_extra_sample(period, seed, frame, pixel % w, pixel / w) ? 1 : 0);
   }
+  // Its own hash, not the path's random stream, so the mask does not depend on rendering.
+  const uint32_t h = hash_combine(hash_combine(seed ^ 0xA511E9B3u, static_cast<uint32_t>(frame)), pixel);
+  if (to_unit_float(h) < fraction) ++count;
   return count;
 }
 

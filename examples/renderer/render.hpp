@@ -25,9 +25,20 @@ struct ChannelSet {
   bool record_samples = false;  // every sample's radiance and primary-hit albedo, for tests
 };
 
+// Which pixels take the extra sample of a fractional spp n + f.
+enum class SppSchedule {
+  // For f = 1/k (k = 2 ... 1024): each pixel exactly once in every k consecutive
+  // frames, in a seed-dependent ordered-dither pattern (samples_for_pixel);
+  // any other f falls back to Random.
+  Stratified,
+  // Each pixel independently with probability f every frame.
+  Random,
+};
+
 struct RenderSettings {
   int width = 640, height = 360;
-  double spp = 1.0;       // < 1: each pixel is sampled with this probability; fractions add a sample likewise
+  double spp = 1.0;       // < 1: pixels sampled with this rate; fractions add a sample likewise (spp_schedule)
+  SppSchedule spp_schedule = SppSchedule::Stratified;
   uint32_t seed = 1;
   bool jitter = false;    // per-frame Halton sub-pixel camera jitter
   // Albedo, specular_f0, roughness and normal are pixel-footprint averages over a
@@ -84,8 +95,18 @@ struct FrameBuffers {
   double seconds = 0.0;
 };
 
-// Number of samples pixel `pixel` takes this frame for a (possibly fractional) spp.
-int samples_for_pixel(double spp, uint32_t seed, int frame, uint32_t pixel);
+// Number of samples pixel `pixel` (= y * width + x) takes this frame for a (possibly
+// fractional) spp: floor(spp), plus one if `schedule` gives the pixel the fraction's
+// extra sample this frame. A pure function of its arguments.
+// Stratified, fraction 1/k: the extra sample at the frames t with (t + offset(x, y)) mod k == 0,
+// offset from a seed-shifted and -scrambled Bayer tile (k a power of two) or rank-1 lattice.
+// Random (or any other fraction): with probability of the fraction, from a hash of (seed, frame, pixel).
+int samples_for_pixel(double spp, uint32_t seed, int frame, uint32_t pixel, int width,
+                      SppSchedule schedule = SppSchedule::Stratified);
+
+// The stratified schedule's period: k when spp's fraction is 1/k (k = 2 ... 1024, to a
+// relative 1e-6, so 0.3333333 is 1/3 and 0.333 is not), else 0 (the random rule).
+int stratified_period(double spp);
 
 FrameBuffers render_frame(const Scene& scene, const Camera& camera, const Camera& previous, int frame,
                           const RenderSettings& settings);

@@ -80,6 +80,22 @@ TEST(RendererCli, RejectsBadArguments) {
   }
 }
 
+TEST(RendererCli, ParsesSppSchedule) {
+  EXPECT_EQ(parse_cli({}).render.spp_schedule, SppSchedule::Stratified);
+  EXPECT_EQ(parse_cli({"--spp-schedule", "random"}).render.spp_schedule, SppSchedule::Random);
+  EXPECT_EQ(parse_cli({"--spp", "0.25", "--spp-schedule", "stratified"}).render.spp_schedule,
+            SppSchedule::Stratified);
+  EXPECT_THROW(parse_cli({"--spp-schedule"}), UsageError);
+  try {
+    parse_cli({"--spp-schedule", "bayer"});
+    ADD_FAILURE() << "an unknown schedule was accepted";
+  } catch (const UsageError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--spp-schedule"), std::string::npos) << message;
+    EXPECT_NE(message.find("bayer"), std::string::npos) << message;
+  }
+}
+
 }  // namespace
 }  // namespace dn::render
 
