@@ -16,6 +16,14 @@
 //     fraction of every iteration's footprint)
 //   p itself has weight 1; c = sum w c / sum w, v = sum w^2 v / (sum w)^2
 //   (v_p unchanged without propagate_variance: paper 001 §6).
+// KERNEL_RADIUS 1 (progressive, paper 004): taps i, j in -1..1 with
+// h = {1/2, 1, 1/2} (the 3x3 {1/4, 1/2, 1/4}^2 / (1/2)^2). LUMINANCE_VARIANCE:
+// phi_l's place is taken by sigma_luminance * g + epsilon_luminance (paper
+// 004's variance form). AGE_GATED_LUMINANCE: no luminance term while p's
+// length < luminance_min_age. A pixel without data (variance
+// DN_SVGF_NO_DATA, MASKED chains) is no tap and no variance-prefilter tap; as
+// p it starts from weight 0 without a luminance term, and stays without data
+// when no tap has any.
 // Background pixels (and pixels without a normal, which take no tap) are
 // copied. With FEEDBACK the result's rgb also becomes the colour history
 // (length kept). Depth, dz and the (octahedral, unit) normal come from the
@@ -34,6 +42,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
+#include "plane.glsl"
 #include "sanitize.glsl"
 #include "luminance.glsl"
 #include "svgf_guards.glsl"
@@ -41,7 +50,15 @@
 #include "passes/svgf_atrous.pass"
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
-const int WIN = BLOCK + 4;
+#define R KERNEL_RADIUS
+const int WIN = BLOCK + 2 * KERNEL_RADIUS;
+
+// The kernel's tap weight at offset i (-R..R) relative to the centre's.
+float kernel_tap(int i) {
+  const float b3[5] = float[5](1.0 / 6.0, 2.0 / 3.0, 1.0, 2.0 / 3.0, 1.0 / 6.0);
+  const float b1[3] = float[3](0.5, 1.0, 0.5);
+  return R == 2 ? b3[i + 2] : b1[i + 1];
+}
 
 void main() {
   ivec2 size = ivec2(frame.size.xy);
@@ -58,6 +75,9 @@ void main() {
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * float(STEP);
   bool ramp = DN_PARAM_VALUE(svgf, luminance_ramp) != 0.0;
   bool propagate = DN_PARAM_VALUE(svgf, propagate_variance) != 0.0;
+  float sigma_l = DN_PARAM_VALUE(progressive, sigma_luminance);
+  float eps_l = DN_PARAM_VALUE(progressive, epsilon_luminance);
+  float min_age = DN_PARAM_VALUE(progressive, luminance_min_age);
 
   // Block pixels: centre data.
   float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];
@@ -79,10 +99,13 @@ void main() {
       act[k] = p.x < size.x && p.y < size.y && cz[k] > 0.0;
       cn[k] = dn_svgf_unpack_normal(gd.y);
       vec4 cs = src.data[pi];
+      // A pixel without data takes its neighbours' (no luminance weight: it
+      // has no luminance) and adds nothing of its own.
+      bool has_data = cs.w != DN_SVGF_NO_DATA;
       cl[k] = dn_luminance(cs.rgb);
-      sc[k] = cs.rgb;  // p itself, weight 1
-      sv[k] = cs.w;
-      sw[k] = 1.0;
+      sc[k] = has_data ? cs.rgb : vec3(0.0);  // p itself, weight 1
+      sv[k] = has_data ? cs.w : 0.0;
+      sw[k] = has_data ? 1.0 : 0.0;
       ipz[k] = 0.0;
       ipl[k] = 0.0;
       isig[k] = 0.0;
@@ -100,46 +123,50 @@ void main() {
             // HDR step rule: a neighbour's variance counts only where its
             // own noise explains the luminance step to p.
             vec4 sq = src.data[uint(q.y) * uint(size.x) + uint(q.x)];
-            bool same = (xx == 0 && yy == 0) || abs(cl[k] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w);
+            bool same = sq.w != DN_SVGF_NO_DATA &&
+                        ((xx == 0 && yy == 0) || abs(cl[k] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w));
             float kk = same ? g[xx + 1] * g[yy + 1] : 0.0;
             gv += kk * sq.w;
             gw += kk;
           }
         }
-        float widen = ramp ? 8.0 - min(7.0, max(temporal.data[pi].z - 1.0, 0.0)) : 1.0;
-        ipl[k] = 1.0 / (phi_c * widen * sqrt(gv / gw + DN_SVGF_VARIANCE_EPS));
+        float len = temporal.data[pi].z;
+        float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
+        float gvar = gw > 0.0 ? gv / gw : 0.0;
+        ipl[k] = LUMINANCE_VARIANCE ? 1.0 / (widen * (sigma_l * gvar + eps_l))
+                                    : 1.0 / (phi_c * widen * sqrt(gvar + DN_SVGF_VARIANCE_EPS));
+        if (!has_data || (AGE_GATED_LUMINANCE && len < min_age)) ipl[k] = 0.0;
         ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
       }
     }
   }
 
-  const float h[5] = float[5](1.0 / 6.0, 2.0 / 3.0, 1.0, 2.0 / 3.0, 1.0 / 6.0);
   [[unroll]] for (int r = 0; r < WIN; ++r) {
     [[unroll]] for (int c = 0; c < WIN; ++c) {
-      ivec2 q = base + STEP * ivec2(c - 2, r - 2);
+      ivec2 q = base + STEP * ivec2(c - R, r - R);
       ivec2 qc = clamp(q, ivec2(0), size - 1);
       bool inside = q == qc;
       uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
       uvec4 gq = guide.data[qi];
       vec4 s = src.data[qi];
       float zq = uintBitsToFloat(gq.x);
-      bool tap_ok = inside && zq > 0.0;
+      bool tap_ok = inside && zq > 0.0 && s.w != DN_SVGF_NO_DATA;
       uint qcls = gq.w;
       vec3 nq = dn_svgf_unpack_normal(gq.y);
       float lq = dn_luminance(s.rgb);
       [[unroll]] for (int j = 0; j < B; ++j) {
-        int dy = r - j - 2;
-        if (dy < -2 || dy > 2) continue;
+        int dy = r - j - R;
+        if (dy < -R || dy > R) continue;
         [[unroll]] for (int i = 0; i < B; ++i) {
-          int dx = c - i - 2;
-          if (dx < -2 || dx > 2) continue;
+          int dx = c - i - R;
+          if (dx < -R || dx > R) continue;
           int k = j * B + i;
           if (dx == 0 && dy == 0) continue;  // p itself: added above
           float cos_n = dot(cn[k], nq);
           float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
           float w_l = abs(cl[k] - lq) * ipl[k];
           if (SPATIAL_BANDWIDTH) w_l += float(dx * dx + dy * dy) * isig[k];
-          float w = h[dx + 2] * h[dy + 2] *
+          float w = kernel_tap(dx) * kernel_tap(dy) *
                     exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
           w = (act[k] && tap_ok && cos_n > 0.0 && (!CLASS_EDGES || qcls == ccls[k])) ? w : 0.0;
           sc[k] += w * s.rgb;
@@ -156,9 +183,12 @@ void main() {
       ivec2 p = base + STEP * ivec2(i, j);
       if (p.x >= size.x || p.y >= size.y) continue;
       uint pi = uint(p.y) * uint(size.x) + uint(p.x);
-      vec4 result = vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k]);
+      // Still no data where neither p nor any tap has any.
+      vec4 result = sw[k] > 0.0 ? vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k])
+                                : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
       dst.data[pi] = result;
-      if (FEEDBACK) colour_history.data[pi].rgb = result.rgb;
+      if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0))
+        colour_history.data[pi].rgb = result.rgb;
     }
   }
 }

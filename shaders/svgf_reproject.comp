@@ -170,9 +170,12 @@ void main() {
     add_tap(origin + ivec2(1, 0), weights.y, z, n, grad, sc, sm, sl, sw);
     add_tap(origin + ivec2(0, 1), weights.z, z, n, grad, sc, sm, sl, sw);
     add_tap(origin + ivec2(1, 1), weights.w, z, n, grad, sc, sm, sl, sw);
-    if (sw < DN_MIN_TAP_WEIGHT) {
+    if (sw < DN_MIN_TAP_WEIGHT && !MASKED) {
       // Falcor's fallback: equal weights over the valid taps of the 3x3 box
-      // around the pixel that contains p_prev.
+      // around the pixel that contains p_prev. Not with MASKED: there most
+      // pixels without history simply had no sample yet, and taking their
+      // neighbours' would fill them from neighbours (paper 004 §5: missing
+      // values are never overwritten from neighbours).
       sc = vec3(0.0);
       sm = vec2(0.0);
       sl = 0.0;
@@ -225,14 +228,21 @@ void main() {
       prev = clipped;
     }
   }
+  if (WRITE_GUIDE)
+    guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
+                          floatBitsToUint(grad.x), REFLECTION ? uint(reflection.data[p].z) : 0u);
+  // MASKED and no sample here this frame (a NaN count is none): the history
+  // as reprojected, or no data (length 0) without one.
+  if (MASKED && !(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, p) > 0.0)) {
+    illum.data[p] = vec4(prev, 0.0);
+    temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));
+    return;
+  }
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
   float alpha = valid ? max(1.0 / len, DN_SVGF_ALPHA_COLOUR) : 1.0;
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
   illum.data[p] = vec4(colour, 0.0);
-  if (WRITE_GUIDE)
-    guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
-                          floatBitsToUint(grad.x), REFLECTION ? uint(reflection.data[p].z) : 0u);
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));
 }

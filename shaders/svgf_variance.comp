@@ -4,7 +4,8 @@
 // One invocation per pixel.
 //   background: 0
 //   len >= 4:   max(0, m2 - m1^2)
-//   len < 4:    Falcor's 7x7 estimate: moments averaged over the foreground
+//   no data (MASKED chains: length 0 at a foreground pixel): DN_SVGF_NO_DATA
+//   len < 4 with SPATIAL_ESTIMATE (else as len >= 4): Falcor's 7x7 estimate: moments averaged over the foreground
 //               pixels q of the 7x7 box with weight 1 for p itself and
 //               exp(-|z_p - z_q| / (phi_depth * max(dz_p, 1e-8) * 3 * |q - p|)
 //                   - |l_p - l_q| / (phi_colour * min(l_p, l_q) + 1e-20)) * max(0, n_p.n_q)^phi_normal
@@ -80,14 +81,18 @@ void main() {
       vec4 t = temporal.data[pi];
       float gz = uintBitsToFloat(gd.x);
       len[k] = t.z;
+      // No data (a foreground pixel of length 0: only a MASKED reprojection
+      // makes one): no history depth, so the next frame reprojects nothing from it.
+      bool no_data = gz != 0.0 && t.z == 0.0;
       if (inside[k]) {
         colour_history.data[pi] = vec4(illum.data[pi].rgb, t.z);
-        aux_history.data[pi] = uvec4(floatBitsToUint(t.xy), floatBitsToUint(max(gz, 0.0)), gd.y);
+        aux_history.data[pi] = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gd.y);
       }
       // background 0; len >= 4: from the moments; else the 7x7 estimate
-      // (without a normal no neighbour is taken: act false, own moments).
-      var[k] = gz == 0.0 ? 0.0 : max(0.0, t.y - t.x * t.x);
-      act[k] = inside[k] && gz > 0.0 && t.z < 4.0;
+      // (without a normal no neighbour is taken: act false, own moments);
+      // no data: DN_SVGF_NO_DATA.
+      var[k] = gz == 0.0 ? 0.0 : no_data ? DN_SVGF_NO_DATA : max(0.0, t.y - t.x * t.x);
+      act[k] = SPATIAL_ESTIMATE && inside[k] && gz > 0.0 && t.z < 4.0 && !no_data;
       any_act = any_act || act[k];
       cz[k] = gz;
       cn[k] = dn_svgf_unpack_normal(gd.y);
@@ -146,11 +151,11 @@ void main() {
       ivec2 p = base + ivec2(i, j);
       uint pi = uint(p.y) * uint(size.x) + uint(p.x);
       float v = var[k];
-      if (cz[k] != 0.0 && len[k] < 4.0) {
+      if (SPATIAL_ESTIMATE && cz[k] != 0.0 && len[k] < 4.0 && v != DN_SVGF_NO_DATA) {
         vec2 m = sm[k] / sw[k];
         v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
       }
-      illum.data[pi].w = v / samples_averaged(len[k]);
+      illum.data[pi].w = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[k]);
     }
   }
 }

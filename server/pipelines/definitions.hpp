@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pipelines/graph.hpp"
+#include "pipelines/parameters.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace dn::pipelines {
@@ -17,6 +18,10 @@ struct PipelineDefinition {
   // The parameters.def groups it takes, in order (description.parameters
   // lists their rows): svgf-fb takes svgf's group and its own.
   std::vector<std::string_view> parameter_groups;
+  // Its own defaults for some of those rows (parameters.hpp ParameterDefaults;
+  // description.parameters shows them): a variant of another pipeline's chain
+  // keeps one definition per parameter and changes only its constants.
+  ParameterDefaults parameter_defaults;
   GraphSpec (*build)(const SessionConfig& config);
   // Optional channel rules beyond the required/optional masks (run by
   // validate() after the per-channel checks); nullptr if none.

@@ -1,5 +1,6 @@
 #include "pipelines/parameters.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -39,8 +40,30 @@ std::vector<const ParameterDef*> rows_of(ParameterGroups groups) {
   return rows;
 }
 
-double value_of(const ParameterDef& row, const std::vector<protocol::Parameter>& values) {
-  double v = row.info.default_value;
+// A row's information with the pipeline's own default, if it has one.
+ParameterInfo info_of(const ParameterDef& row, const ParameterDefaults& defaults) {
+  ParameterInfo info = row.info;
+  for (const auto& d : defaults)
+    if (d.name == info.name) info.default_value = d.value;
+  return info;
+}
+
+// Every pipeline default names one of the rows and is a value validate() would accept.
+void check_defaults(const std::vector<const ParameterDef*>& rows, const ParameterDefaults& defaults) {
+  for (const auto& d : defaults) {
+    const ParameterDef* row = nullptr;
+    for (const ParameterDef* r : rows)
+      if (r->info.name == d.name) row = r;
+    if (!row) throw std::logic_error("pipeline default for " + d.name + ": no such parameter in its groups");
+    const ParameterInfo& i = row->info;
+    if (!(d.value >= i.min_value && d.value <= i.max_value) || (i.integer && d.value != std::floor(d.value)))
+      throw std::logic_error("pipeline default for " + d.name + ": " + std::to_string(d.value) + " is not valid");
+  }
+}
+
+double value_of(const ParameterDef& row, const std::vector<protocol::Parameter>& values,
+                const ParameterDefaults& defaults) {
+  double v = info_of(row, defaults).default_value;
   for (const auto& p : values)
     if (p.name == row.info.name) v = p.value;
   return v;
@@ -48,15 +71,19 @@ double value_of(const ParameterDef& row, const std::vector<protocol::Parameter>&
 
 }  // namespace
 
-std::vector<ParameterInfo> parameters_of(ParameterGroups groups) {
+std::vector<ParameterInfo> parameters_of(ParameterGroups groups, const ParameterDefaults& defaults) {
+  const std::vector<const ParameterDef*> rows = rows_of(groups);
+  check_defaults(rows, defaults);
   std::vector<ParameterInfo> out;
-  for (const ParameterDef* row : rows_of(groups)) out.push_back(row->info);
+  for (const ParameterDef* row : rows) out.push_back(info_of(*row, defaults));
   return out;
 }
 
-Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values) {
+Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values,
+                           const ParameterDefaults& defaults) {
   Parameters out;
-  for (const ParameterDef* row : rows_of(groups)) out.*(row->member) = static_cast<float>(value_of(*row, values));
+  for (const ParameterDef* row : rows_of(groups))
+    out.*(row->member) = static_cast<float>(value_of(*row, values, defaults));
   return out;
 }
 
@@ -65,7 +92,7 @@ std::vector<float> resolve_parameters(std::string_view pipeline, const std::vect
   const PipelineDefinition* def = find_definition(pipeline);
   if (!def) return out;
   for (const ParameterDef* row : rows_of(def->parameter_groups))
-    out.push_back(static_cast<float>(value_of(*row, values)));
+    out.push_back(static_cast<float>(value_of(*row, values, def->parameter_defaults)));
   return out;
 }
 

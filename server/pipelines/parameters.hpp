@@ -35,13 +35,22 @@ const std::vector<ParameterDef>& parameter_table();
 // A pipeline's parameter groups (PipelineDefinition::parameter_groups), in order.
 using ParameterGroups = std::span<const std::string_view>;
 
-// The parameters of these groups: group by group, each in table order.
-// Throws std::logic_error for a group with no row, or a name two groups share.
-std::vector<ParameterInfo> parameters_of(ParameterGroups groups);
+// A pipeline's own defaults for rows of the groups it takes
+// (PipelineDefinition::parameter_defaults): progressive runs svgf's rows with
+// paper 004's constants. Each replaces the row's default for that pipeline only.
+using ParameterDefaults = std::vector<protocol::Parameter>;
 
-// The uniform block's parameters for a session taking `groups`: defaults,
-// overridden by `values` (which passed validate()); other groups' rows 0.
-Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values);
+// The parameters of these groups: group by group, each in table order, with
+// `defaults` applied. Throws std::logic_error for a group with no row, a name
+// two groups share, or a default that names no row of the groups or lies
+// outside its row's range (or is not integral where the row is).
+std::vector<ParameterInfo> parameters_of(ParameterGroups groups, const ParameterDefaults& defaults = {});
+
+// The uniform block's parameters for a session taking `groups`: defaults
+// (the pipeline's own where it has one), overridden by `values` (which passed
+// validate()); other groups' rows 0.
+Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values,
+                           const ParameterDefaults& defaults = {});
 
 // The values a session of `pipeline` runs with, in the order of its
 // PipelineDescription::parameters (empty for an unknown pipeline).

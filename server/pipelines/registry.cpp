@@ -55,7 +55,8 @@ GraphSpec begin_graph(const SessionConfig& config) {
   GraphSpec g;
   g.width = config.width;
   g.height = config.height;
-  g.parameters = parameter_block(find_definition(config.pipeline)->parameter_groups, config.parameters);
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  g.parameters = parameter_block(def->parameter_groups, config.parameters, def->parameter_defaults);
   return g;
 }
 

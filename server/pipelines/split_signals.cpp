@@ -104,6 +104,16 @@ std::optional<ConfigError> check_split_channels(const SessionConfig& config, con
   return check_extra_samples(config);
 }
 
+std::vector<SvgfSignal> radiance_or_split_signals(const SessionConfig& config, bool emission) {
+  if (has_split_signals(config)) return split_signals(config, Modulator{});
+  // Radiance includes what the primary hit emits (docs/protocol.md); the
+  // emitted part is added back unfiltered, so it is not filtered as well.
+  SvgfSignal radiance{ChannelId::Radiance, "radiance", "", "svgf", Modulator{"albedo", ChannelId::Albedo}};
+  radiance.subtract_emission = emission;
+  radiance.clip = true;  // it carries the highlights and reflections
+  return {radiance};
+}
+
 std::optional<ConfigError> check_split_only(const SessionConfig& config) {
   return check_split_channels(config, config.pipeline, /*radiance_allowed=*/false);
 }

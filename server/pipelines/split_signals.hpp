@@ -24,6 +24,12 @@ bool has_split_signals(const SessionConfig& config);
 // filtered as sent). Call after check_split_channels().
 std::vector<SvgfSignal> split_signals(const SessionConfig& config, const Modulator& specular_default);
 
+// svgf's signals, which its variants (progressive) share: the split pair
+// (split_signals, specular filtered as sent without specular_albedo) when the
+// session declared it, else radiance demodulated by albedo, its emission
+// subtracted when `emission` (added back after filtering), its history clipped.
+std::vector<SvgfSignal> radiance_or_split_signals(const SessionConfig& config, bool emission);
+
 // The either/or rules: one form per signal, diffuse and specular together,
 // specular_lighting with specular_albedo; `radiance_allowed`: the pipeline
 // also takes `radiance` instead of the split pair (never both). Which forms

@@ -20,16 +20,7 @@ using protocol::ChannelId;
 
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v = svgf_variant_from(config, p);
-  if (has_split_signals(config)) {
-    v.signals = split_signals(config, Modulator{});
-  } else {
-    // Radiance includes what the primary hit emits (docs/protocol.md); the
-    // emitted part is added back unfiltered, so it is not filtered as well.
-    SvgfSignal radiance{ChannelId::Radiance, "radiance", "", "svgf", Modulator{"albedo", ChannelId::Albedo}};
-    radiance.subtract_emission = v.emission;
-    radiance.clip = true;  // it carries the highlights and reflections
-    v.signals.push_back(radiance);
-  }
+  v.signals = radiance_or_split_signals(config, v.emission);
   return v;
 }
 

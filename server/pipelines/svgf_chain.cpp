@@ -86,6 +86,11 @@ void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVar
       .pixels_per_invocation = 1;
 }
 
+// The sample_count plane as a pass's validity mask (MASKED).
+void bind_validity_mask(const SessionConfig& config, ChannelId mask, PassSpec& pass) {
+  pass.bind("sample_count", "sample_count").set("MASKED", 1u).set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
+}
+
 // One reproject / variance / a-trous chain; returns the buffer holding its
 // final illumination.
 std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index,
@@ -130,6 +135,7 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .set("CLIP", 1u)
         .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)));
   if (s.motion == MotionSource::Reflection) reproject.bind("reflection", s.reflection_motion).set("REFLECTION", 1u);
+  if (v.validity_mask) bind_validity_mask(config, *v.validity_mask, reproject);
   reproject.pixels_per_invocation = 1;
 
   PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
@@ -139,13 +145,14 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .bind("colour_history", colour)
       .bind("aux_history", aux)
       .set("BLOCK", kVarianceBlock)
-      .set("SPECULAR_ALPHA", s.specular_alpha);
+      .set("SPECULAR_ALPHA", s.specular_alpha)
+      .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate);
   variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                          ((config.height + kVarianceBlock - 1) / kVarianceBlock);
 
   const uint32_t tap = std::min(v.feedback_tap, v.iterations ? v.iterations - 1 : 0u);
   for (uint32_t i = 0; i < v.iterations; ++i) {
-    const uint32_t level = v.steps == StepOrder::Increasing ? i : v.iterations - 1 - i;
+    const uint32_t level = step_level(v.steps, i, v.iterations);
     PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i) + s.suffix, "svgf_atrous");
     atrous.bind("guide", kGuide)
         .bind("src", current)
@@ -154,8 +161,12 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .set("STEP", 1u << level)
         .set("FEEDBACK", i == tap)
         .set("BLOCK", kAtrousBlock)
-        .set("CLASS_EDGES", s.motion == MotionSource::Reflection);
+        .set("CLASS_EDGES", s.motion == MotionSource::Reflection)
+        .set("KERNEL_RADIUS", v.kernel == AtrousKernel::B3_5x5 ? 2u : 1u)
+        .set("LUMINANCE_VARIANCE", v.luminance_weight == LuminanceWeight::Variance)
+        .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff);
     if (i == tap) atrous.bind("colour_history", colour);
+    if (i == tap && v.validity_mask) bind_validity_mask(config, *v.validity_mask, atrous);
     if (!s.spatial_bandwidth.empty()) atrous.bind("bandwidth", s.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
     // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
@@ -166,6 +177,15 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
 }
 
 }  // namespace
+
+uint32_t step_level(StepOrder order, uint32_t i, uint32_t n) {
+  switch (order) {
+    case StepOrder::Increasing: return i;
+    case StepOrder::Decreasing: return n - 1 - i;
+    case StepOrder::FinestFirst: return i == 0 ? 0 : n - i;
+  }
+  return i;
+}
 
 SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v;
@@ -194,10 +214,10 @@ void check_supported(const SvgfVariant& v) {
     if (s.features && (s.features->depth.empty() || s.features->normal.empty()))
       reject("signal " + s.input + ": its own features need a depth and a normal buffer");
   }
-  if (v.kernel != AtrousKernel::B3_5x5) reject("kernel: svgf_atrous.comp implements only the 5x5 B3 kernel");
-  if (v.luminance_weight != LuminanceWeight::VarianceGuided)
-    reject("luminance weight: svgf_atrous.comp implements only the variance-guided form");
-  if (v.validity_mask) reject("validity mask: no svgf pass reads one yet");
+  if (v.validity_mask && *v.validity_mask != ChannelId::SampleCount)
+    reject("validity mask: only the sample_count plane is one");
+  if (v.validity_mask && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; }))
+    reject("validity mask with a clipped signal: the clip box reads every neighbour's current sample");
   if (v.iterations > 16) reject("more than 16 a-trous iterations (step 2^16)");
 }
 
@@ -209,6 +229,7 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   if (v.emission) g.add_input(config, ChannelId::Emission, "emission");
+  if (v.validity_mask) g.add_input(config, *v.validity_mask, "sample_count");
   if (v.roughness && !g.find("roughness")) g.add_input(config, ChannelId::Roughness, "roughness");
   if (v.extra_samples) {
     std::vector<ChannelId> channels;

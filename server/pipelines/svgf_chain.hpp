@@ -22,17 +22,23 @@ namespace dn::pipelines {
 // The a-trous filter kernel.
 enum class AtrousKernel {
   B3_5x5,  // the B3 spline {1/16, 1/4, 3/8, 1/4, 1/16}^2 (Schied 2017; svgf_atrous.comp)
-  Box3x3,  // 3x3 (as A-SVGF's later iterations); not implemented by svgf_atrous.comp
+  Box3x3,  // the 3x3 {1/4, 1/2, 1/4}^2 (paper 004 §4.4)
 };
 // Order of the a-trous step sizes 2^i over the iterations.
 enum class StepOrder {
-  Increasing,  // 1, 2, 4, ... (Schied 2017)
-  Decreasing,  // ..., 4, 2, 1 (coarse to fine)
+  Increasing,   // 1, 2, 4, ... (Schied 2017)
+  Decreasing,   // ..., 4, 2, 1 (coarse to fine)
+  FinestFirst,  // 1, then coarse to fine: 1, 2^(n-1), ..., 4, 2 (paper 004 §4.4: the first feeds the history)
 };
 // The luminance edge-stopping weight of the a-trous passes.
 enum class LuminanceWeight {
   VarianceGuided,  // |l_p - l_q| / (phi_colour * sqrt(3x3 Gaussian of the variance + eps)) (Schied 2017)
-  Relative,        // |l_p - l_q| / (phi_colour * l_p) (scale-only); not implemented by svgf_atrous.comp
+  Variance,        // |l_p - l_q| / (sigma_luminance * 3x3 Gaussian of the variance + epsilon_luminance) (paper 004)
+};
+// What stands in for a young pixel's (history length < 4) temporal variance.
+enum class YoungVariance {
+  SpatialEstimate,  // Falcor's 7x7 estimate from the neighbours' moments (svgf_variance)
+  LuminanceOff,     // none: no luminance weight while length < luminance_min_age (paper 004 §4.4.3)
 };
 // Where a signal's reprojection takes its motion from.
 enum class MotionSource {
@@ -82,9 +88,13 @@ struct SvgfVariant {
   AtrousKernel kernel = AtrousKernel::B3_5x5;
   StepOrder steps = StepOrder::Increasing;
   LuminanceWeight luminance_weight = LuminanceWeight::VarianceGuided;
+  YoungVariance young_variance = YoungVariance::SpatialEstimate;
   uint32_t iterations = 4;           // a-trous iterations (0: none)
   uint32_t feedback_tap = 1;         // iteration whose output becomes the colour history (clamped)
-  std::optional<protocol::ChannelId> validity_mask;  // pixels without a sample this frame (PSVGF); not implemented
+  // Set: this plane (sample_count) says which pixels have a sample this
+  // frame; the others keep their history as it is, and a pixel with neither
+  // has no data, which no neighbour takes (paper 004 §5; svgf_reproject's MASKED).
+  std::optional<protocol::ChannelId> validity_mask;
   bool taa = false;                  // final svgf_taa pass
   bool emission = false;             // add the Emission plane back after filtering
   bool roughness = false;            // the session has a Roughness plane (an input)
@@ -99,6 +109,9 @@ struct SvgfVariant {
   // signals are mixed before their chains and the displayed frame resolved.
   uint32_t extra_samples = 0;
 };
+
+// The a-trous step exponent of iteration i of n: step 2^level.
+uint32_t step_level(StepOrder order, uint32_t i, uint32_t n);
 
 // The svgf parameter group's part of a variant (iterations, feedback tap,
 // TAA) and whether the session declared Emission; signals are the caller's.

@@ -14,6 +14,11 @@ const float DN_SVGF_VARIANCE_EPS = 1e-20;
 // Relative luminance guard of the 7x7 variance estimate (see svgf_variance.comp).
 const float DN_SVGF_LUMINANCE_EPS = 1e-20;
 
+// The illumination variance (.w) of a pixel with no data (MASKED chains:
+// never sampled, nothing reprojected): it takes no part in any neighbour's
+// filter, and a-trous keeps it unless a neighbour has data (svgf_atrous.comp).
+const float DN_SVGF_NO_DATA = -1.0;
+
 // The floor of a chain's temporal blend weight: svgf's alpha_colour, or
 // reflect's alpha_specular on its specular chain (SPECULAR_ALPHA, a
 // specialization constant of svgf_reproject and svgf_variance).

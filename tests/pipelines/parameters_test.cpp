@@ -29,13 +29,37 @@ TEST(ParameterTable, EveryRowIsOneFloatOfTheUniformBlockInRowOrder) {
 TEST(ParameterTable, GroupsAreDeclaredPerPipeline) {
   for (const auto& def : pipelines::definitions()) {
     SCOPED_TRACE(def.description.name);
-    EXPECT_EQ(pipelines::parameters_of(def.parameter_groups).size(), def.description.parameters.size());
+    EXPECT_EQ(pipelines::parameters_of(def.parameter_groups, def.parameter_defaults).size(),
+              def.description.parameters.size());
   }
   const std::string_view fb[] = {"svgf"};
   const auto block = pipelines::parameter_block(fb, {{"phi_colour", 4}});
   EXPECT_EQ(block.svgf_phi_colour, 4.0f);
   EXPECT_EQ(block.svgf_atrous_iterations, 4.0f);  // default
   EXPECT_EQ(block.accumulate_max_history, 0.0f);  // not a group svgf-fb takes
+}
+
+// A pipeline's own defaults (progressive's for svgf's rows) replace the
+// row's default for that pipeline only; a client's value still wins.
+TEST(ParameterTable, PipelineDefaultsReplaceTheRowsDefaults) {
+  const std::string_view svgf[] = {"svgf"};
+  const pipelines::ParameterDefaults own = {{"atrous_iterations", 5}, {"alpha_colour", 0.1}};
+  const auto block = pipelines::parameter_block(svgf, {{"alpha_colour", 0.3}}, own);
+  EXPECT_EQ(block.svgf_atrous_iterations, 5.0f);
+  EXPECT_EQ(block.svgf_alpha_colour, 0.3f);
+  EXPECT_EQ(block.svgf_phi_normal, 128.0f);  // no own default: the row's
+  const auto infos = pipelines::parameters_of(svgf, own);
+  for (const auto& info : infos)
+    if (info.name == "atrous_iterations") EXPECT_EQ(info.default_value, 5.0);
+  EXPECT_EQ(pipelines::parameter_block(svgf, {}).svgf_atrous_iterations, 4.0f);
+  const auto progressive = pipelines::resolve_parameters("progressive", {});
+  const auto svgf_values = pipelines::resolve_parameters("svgf", {});
+  EXPECT_EQ(progressive[3], 5.0f);  // atrous_iterations, the fourth row of svgf's group
+  EXPECT_EQ(svgf_values[3], 4.0f);
+  // A default must name a row of the groups and be a value validate() accepts.
+  EXPECT_THROW(pipelines::parameters_of(svgf, {{"radius", 6}}), std::logic_error);
+  EXPECT_THROW(pipelines::parameters_of(svgf, {{"alpha_colour", 2}}), std::logic_error);
+  EXPECT_THROW(pipelines::parameters_of(svgf, {{"atrous_iterations", 4.5}}), std::logic_error);
 }
 
 TEST(ParameterTable, UnknownGroupsAndClashingNamesAreRejected) {

@@ -38,12 +38,6 @@ std::string rejection(const SvgfVariant& v) {
 TEST(SvgfVariant, WhatTheShadersDoNotImplementIsRejectedByName) {
   EXPECT_EQ(rejection(radiance_variant()), "");
   SvgfVariant v = radiance_variant();
-  v.kernel = pipelines::AtrousKernel::Box3x3;
-  EXPECT_NE(rejection(v).find("kernel"), std::string::npos) << rejection(v);
-  v = radiance_variant();
-  v.luminance_weight = pipelines::LuminanceWeight::Relative;
-  EXPECT_NE(rejection(v).find("luminance weight"), std::string::npos) << rejection(v);
-  v = radiance_variant();
   v.signals[0].motion = pipelines::MotionSource::Reflection;  // without reflect_motion's buffer
   EXPECT_NE(rejection(v).find("reflect_motion buffer"), std::string::npos) << rejection(v);
   v = radiance_variant();
@@ -51,7 +45,13 @@ TEST(SvgfVariant, WhatTheShadersDoNotImplementIsRejectedByName) {
   EXPECT_NE(rejection(v).find("depth and a normal buffer"), std::string::npos) << rejection(v);
   v = radiance_variant();
   v.validity_mask = ChannelId::SampleCount;
-  EXPECT_NE(rejection(v).find("validity mask"), std::string::npos) << rejection(v);
+  EXPECT_EQ(rejection(v), "");
+  v.validity_mask = ChannelId::Albedo;
+  EXPECT_NE(rejection(v).find("only the sample_count plane"), std::string::npos) << rejection(v);
+  v = radiance_variant();
+  v.validity_mask = ChannelId::SampleCount;
+  v.signals[0].clip = true;
+  EXPECT_NE(rejection(v).find("clipped signal"), std::string::npos) << rejection(v);
   v = radiance_variant();
   v.signals[0].modulator = {};
   EXPECT_NE(rejection(v).find("modulator"), std::string::npos) << rejection(v);
@@ -87,6 +87,20 @@ TEST(SvgfVariant, DecreasingStepOrderSpecializesEachIteration) {
       EXPECT_EQ(constants[pass.declaration().constant("FEEDBACK")->id].value, pass.name() == "svgf_atrous_0" ? 1u : 0u);
     }
   EXPECT_EQ(steps, (std::vector<uint32_t>{4, 2, 1}));
+}
+
+// Paper 004's order: the finest step first (it feeds the history), then coarse to fine.
+TEST(SvgfVariant, StepOrders) {
+  auto steps = [](pipelines::StepOrder order, uint32_t n) {
+    std::vector<uint32_t> out;
+    for (uint32_t i = 0; i < n; ++i) out.push_back(1u << pipelines::step_level(order, i, n));
+    return out;
+  };
+  EXPECT_EQ(steps(pipelines::StepOrder::FinestFirst, 5), (std::vector<uint32_t>{1, 16, 8, 4, 2}));
+  EXPECT_EQ(steps(pipelines::StepOrder::FinestFirst, 6), (std::vector<uint32_t>{1, 32, 16, 8, 4, 2}));
+  EXPECT_EQ(steps(pipelines::StepOrder::FinestFirst, 1), (std::vector<uint32_t>{1}));
+  EXPECT_EQ(steps(pipelines::StepOrder::Increasing, 4), (std::vector<uint32_t>{1, 2, 4, 8}));
+  EXPECT_EQ(steps(pipelines::StepOrder::Decreasing, 3), (std::vector<uint32_t>{4, 2, 1}));
 }
 
 class SvgfVariantDevice : public test::GpuTest {};

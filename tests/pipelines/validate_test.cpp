@@ -29,9 +29,9 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatAndStatTemporal) {
+TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemporalAndProgressive) {
   const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 7u);
+  ASSERT_EQ(all.size(), 8u);
   // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for every SVGF-chain pipeline.
   uint64_t extra_samples = 0;
   for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
@@ -118,6 +118,30 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatAndStatT
   for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
   stat_names.insert(stat_names.end(), {"history_alpha", "fading"});
   EXPECT_EQ(temporal_names, stat_names);
+  // progressive: svgf's channels without roughness and extra samples, plus
+  // sample_count; svgf's parameters with paper 004's defaults, and its own.
+  EXPECT_EQ(all[7].name, "progressive");
+  EXPECT_EQ(all[7].required_channels, all[2].required_channels);
+  EXPECT_EQ(all[7].optional_channels,
+            (all[2].optional_channels & ~(protocol::channel_bit(ChannelId::Roughness) | extra_samples)) |
+                protocol::channel_bit(ChannelId::SampleCount));
+  std::vector<std::string> progressive_names;
+  for (const auto& p : all[7].parameters) progressive_names.push_back(p.name);
+  expected = svgf_names;
+  expected.insert(expected.end(),
+                  {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance", "luminance_min_age"});
+  EXPECT_EQ(progressive_names, expected);
+  auto default_of = [](const pipelines::PipelineDescription& d, const std::string& name) {
+    for (const auto& p : d.parameters)
+      if (p.name == name) return p.default_value;
+    return -1.0;
+  };
+  EXPECT_EQ(default_of(all[7], "alpha_colour"), 0.1);
+  EXPECT_EQ(default_of(all[7], "atrous_iterations"), 5.0);
+  EXPECT_EQ(default_of(all[7], "phi_normal"), 64.0);
+  EXPECT_EQ(default_of(all[7], "clip_roughness"), 0.0);
+  EXPECT_EQ(default_of(all[2], "alpha_colour"), 0.05);  // svgf's own are untouched
+  EXPECT_EQ(default_of(all[2], "atrous_iterations"), 4.0);
 }
 
 TEST(Pipelines, ParameterDefaultsAreTheSpecifiedOnes) {

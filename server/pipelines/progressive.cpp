@@ -1,0 +1,80 @@
+// progressive: progressive SVGF (Dundr 2018, paper 004; docs/pipelines.md
+// "progressive") as a variant of the SVGF chain (svgf_chain.hpp): svgf's
+// signals and passes with paper 004's constants (parameter_defaults), its
+// 3x3 a-trous kernel in its step order, its luminance weight (a parameter),
+// no luminance weight for young pixels instead of SVGF's spatial variance
+// estimate, and, with a sample_count plane, fewer than one sample per pixel:
+// unsampled pixels keep their history, pixels without data take no part.
+#include <optional>
+#include <string>
+
+#include "pipelines/definitions.hpp"
+#include "pipelines/split_signals.hpp"
+#include "pipelines/svgf_chain.hpp"
+
+namespace dn::pipelines {
+namespace {
+
+using protocol::ChannelId;
+
+SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
+  SvgfVariant v = svgf_variant_from(config, p);
+  v.signals = radiance_or_split_signals(config, v.emission);
+  for (SvgfSignal& s : v.signals) s.clip = false;  // paper 004 clips nothing (check_channels)
+  v.kernel = AtrousKernel::Box3x3;
+  v.steps = p.progressive_step_order == 0.0f ? StepOrder::FinestFirst : StepOrder::Increasing;
+  v.luminance_weight = p.progressive_luminance_form == 0.0f ? LuminanceWeight::VarianceGuided : LuminanceWeight::Variance;
+  v.young_variance = YoungVariance::LuminanceOff;
+  if (has_channel(config, ChannelId::SampleCount)) v.validity_mask = ChannelId::SampleCount;
+  return v;
+}
+
+GraphSpec build(const SessionConfig& config) {
+  GraphSpec g = begin_graph(config);
+  const SvgfVariant v = variant(config, g.parameters);
+  add_svgf_inputs(g, config, v);
+  add_svgf_buffers(g, v);
+  g.add_output(config);
+  add_svgf_passes(g, config, v);
+  return g;
+}
+
+std::optional<ConfigError> check_channels(const SessionConfig& config) {
+  // svgf's history clipping reads every neighbour's current sample, which
+  // fewer than one sample per pixel does not have: refused, not ignored.
+  for (size_t i = 0; i < config.parameters.size(); ++i)
+    if (config.parameters[i].name == "clip_roughness" && config.parameters[i].value != 0.0)
+      return ConfigError{protocol::ErrorCode::InvalidParameter,
+                         "OPEN_SESSION.parameters[" + std::to_string(i) + "].value",
+                         "progressive does not clip histories: clip_roughness must be 0"};
+  return check_split_channels(config, "progressive", /*radiance_allowed=*/true);
+}
+
+}  // namespace
+
+PipelineDefinition progressive_definition() {
+  PipelineDefinition d;
+  d.description.name = "progressive";
+  d.description.summary =
+      "Progressive SVGF (Dundr 2018): the svgf chain with a 3x3 a-trous kernel (steps 1, 16, 8, 4, 2), blend "
+      "max(0.1, 1/age), no luminance weight for young pixels and a final clamped TAA blend; with sample_count, fewer "
+      "than one sample per pixel (unsampled pixels keep their history).";
+  d.description.required_channels = protocol::channel_bit(ChannelId::Albedo) |
+                                     protocol::channel_bit(ChannelId::Normal) |
+                                     protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+  d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) | split_channel_bits() |
+                                     protocol::channel_bit(ChannelId::Emission) |
+                                     protocol::channel_bit(ChannelId::SampleCount);
+  d.parameter_groups = {"svgf", "progressive"};
+  // Paper 004's constants (§4.2-4.5): a = 0.1 for colour and moments, 5
+  // a-trous passes, sigma_N 64, the final blend's fixed ratio 0.1; no clipping.
+  d.parameter_defaults = {{"alpha_colour", 0.1},     {"alpha_moments", 0.1}, {"atrous_iterations", 5},
+                          {"phi_normal", 64},        {"taa_alpha", 0.1},     {"taa_static_alpha", 0.1},
+                          {"clip_roughness", 0}};
+  d.description.parameters = parameters_of(d.parameter_groups, d.parameter_defaults);
+  d.build = build;
+  d.check_channels = check_channels;
+  return d;
+}
+
+}  // namespace dn::pipelines

@@ -1,0 +1,338 @@
+// progressive (paper 004) on the device: the properties IMPLEMENTATION-NOTES
+// B.4 names, each against an expectation computed here: the accumulation is a
+// running mean, then an exponential average; the moments' steady-state
+// variance carries the exponential average's bias; constant input comes back;
+// a noise-free step edge stays sharp (and blurs without the luminance
+// weight); below one sample per pixel, unsampled pixels keep their state bit
+// for bit, pixels without data never reach a neighbour, and a stratified
+// schedule leaves no hole after 1/f frames. The pass-by-pass comparison with
+// the CPU reference is progressive_reference_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "gpu_test_env.hpp"
+#include "pipelines/graph.hpp"
+#include "svgf_inputs.hpp"
+
+namespace dn {
+namespace {
+
+using namespace svgf_inputs;
+
+class ProgressiveTest : public test::GpuTest {};
+
+// A still, flat, fronto-parallel surface: albedo, normal, depth and motion
+// constant, so every tap passes the geometry tests and only the signal varies.
+struct FlatFrames {
+  int w, h;
+  float albedo = 0.5f;
+  test::HostFrame frame(const std::vector<float>& radiance, const std::vector<float>* sample_count = nullptr) const {
+    const size_t n = static_cast<size_t>(w) * h;
+    test::HostFrame f;
+    f.info.motion = MotionConvention::PixelsToPrevious;
+    f.add(ChannelId::Radiance, Format::F32, radiance);
+    f.add(ChannelId::Albedo, Format::F32, std::vector<float>(3 * n, albedo));
+    std::vector<float> normal(3 * n, 0.0f);
+    for (size_t i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+    f.add(ChannelId::Normal, Format::F32, normal);
+    f.add(ChannelId::Depth, Format::F32, std::vector<float>(n, 2.0f));
+    f.add(ChannelId::Motion, Format::F32, std::vector<float>(2 * n, 0.0f));
+    if (sample_count) f.add(ChannelId::SampleCount, Format::F32, *sample_count);
+    return f;
+  }
+};
+
+pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::Parameter> params = {},
+                                            bool masked = false) {
+  std::vector<protocol::ChannelDecl> channels = {{ChannelId::Radiance, Format::F32},
+                                                 {ChannelId::Albedo, Format::F32},
+                                                 {ChannelId::Normal, Format::F32},
+                                                 {ChannelId::Depth, Format::F32},
+                                                 {ChannelId::Motion, Format::F32}};
+  if (masked) channels.push_back({ChannelId::SampleCount, Format::F32});
+  return test::make_config("progressive", w, h, channels, Format::F32, std::move(params));
+}
+
+// Temporal accumulation alone: no a-trous iteration, no final blend.
+const std::vector<protocol::Parameter> kAccumulationOnly = {
+    {"atrous_iterations", 0}, {"taa_alpha", 0}, {"taa_static_alpha", 0}};
+
+// Grey radiance (luminance = the value: Rec. 709 weights sum to 1).
+std::vector<float> grey(const std::vector<double>& v) {
+  std::vector<float> out(3 * v.size());
+  for (size_t i = 0; i < v.size(); ++i) out[3 * i] = out[3 * i + 1] = out[3 * i + 2] = static_cast<float>(v[i]);
+  return out;
+}
+
+// Paper 004 §4.2: r = max(a, 1/age), a = 0.1: for the first 1/a = 10 frames
+// the output is the arithmetic mean of the frames so far, then each frame
+// moves it by 0.1 toward the new one.
+TEST_F(ProgressiveTest, AccumulationIsTheRunningMeanThenAnExponentialAverage) {
+  const int w = 32, h = 16, n = w * h;
+  FlatFrames scene{w, h};
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, kAccumulationOnly));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> value(0.0, 2.0);
+  std::vector<double> sum(n, 0.0), ema(n, 0.0);
+  for (int t = 0; t < 16; ++t) {
+    std::vector<double> x(n);
+    for (double& v : x) v = value(rng);
+    const auto out = run(*pipe, scene.frame(grey(x)));
+    for (int i = 0; i < n; ++i) {
+      sum[i] += x[i];
+      ema[i] = t == 0 ? x[i] : ema[i] + std::max(0.1, 1.0 / (t + 1)) * (x[i] - ema[i]);
+      // The exponential average and the mean agree for t < 10; after that only the former holds.
+      const double want = t < 10 ? sum[i] / (t + 1) : ema[i];
+      ASSERT_NEAR(out[3 * i], want, 2e-5 * std::max(want, 1.0)) << "frame " << t << " pixel " << i;
+    }
+    if (t >= 12) {  // and it is no longer the running mean: the test can tell them apart
+      double apart = 0.0;
+      for (int i = 0; i < n; ++i) apart = std::max(apart, std::fabs(ema[i] - sum[i] / (t + 1)));
+      EXPECT_GT(apart, 0.01);
+    }
+  }
+}
+
+// With the exponential average of weight a, the moments' estimate m2 - m1^2
+// of i.i.d. samples of variance s^2 settles at s^2 * 2 (1 - a) / (2 - a),
+// 0.947 s^2 for a = 0.1 (IMPLEMENTATION-NOTES B.3): not s^2.
+TEST_F(ProgressiveTest, SteadyStateMomentVarianceIsTheExponentialAveragesBiasedOne) {
+  const int w = 96, h = 64, n = w * h;
+  const double sigma = 0.25, a = 0.1;
+  FlatFrames scene{w, h};
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, kAccumulationOnly));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  ASSERT_NE(graph, nullptr);
+  graph->set_capture(true);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(1.0, sigma);
+  double sum = 0.0;
+  int count = 0;
+  for (int t = 0; t < 100; ++t) {
+    std::vector<double> x(n);
+    for (double& v : x) v = noise(rng);
+    run(*pipe, scene.frame(grey(x)));
+    if (t < 40) continue;  // the start-up (0.9^30 of it left) is gone
+    const auto temporal = test::decode_output(graph->captured("svgf_reproject", "svgf_temporal"), Format::F32);
+    for (int i = 0; i < n; ++i) {
+      const double m1 = temporal[4 * i], m2 = temporal[4 * i + 1];
+      sum += (m2 - m1 * m1) * scene.albedo * scene.albedo;  // moments of the demodulated luminance, x / albedo
+      ++count;
+    }
+  }
+  const double measured = sum / count, expected = sigma * sigma * 2.0 * (1.0 - a) / (2.0 - a);
+  EXPECT_NEAR(measured / expected, 1.0, 0.02) << "measured " << measured << ", expected " << expected;
+  EXPECT_LT(measured, 0.98 * sigma * sigma);  // the bias is there
+}
+
+TEST_F(ProgressiveTest, ConstantInputIsReturnedExactly) {
+  const int w = 48, h = 32, n = w * h;
+  FlatFrames scene{w, h};
+  std::vector<float> radiance(3 * n);
+  for (int i = 0; i < n; ++i) {
+    radiance[3 * i] = 0.25f;
+    radiance[3 * i + 1] = 1.5f;
+    radiance[3 * i + 2] = 3000.0f;
+  }
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h));
+  for (int t = 0; t < 8; ++t) {
+    const auto out = run(*pipe, scene.frame(radiance));
+    for (int i = 0; i < 3 * n; ++i)
+      ASSERT_NEAR(out[i], radiance[i], 1e-5 * radiance[i]) << "frame " << t << " element " << i;
+  }
+}
+
+// A noise-free step in luminance on one surface: once the pixels are old
+// enough for the luminance weight (luminance_min_age), their variance is 0
+// and the weight stops every tap across the step. The first frames, younger
+// than that, are filtered without it, and the history takes that blur (it is
+// the first iteration's output), which the exponential average then lets go
+// at 0.9 per frame (0.09 of the step left after 8 frames, 2e-4 after 64).
+// With the weight never on, the filter keeps blurring it. Without the final
+// blend, which would keep the young frames' blur longer.
+TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminanceWeight) {
+  const int w = 48, h = 16, n = w * h;
+  FlatFrames scene{w, h};
+  std::vector<double> step(n);
+  for (int i = 0; i < n; ++i) step[i] = (i % w) < w / 2 ? 0.2 : 1.0;
+  auto edge_error = [&](std::vector<protocol::Parameter> params) {
+    params.push_back({"taa_alpha", 0});
+    params.push_back({"taa_static_alpha", 0});
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, params));
+    std::vector<float> out;
+    for (int t = 0; t < 64; ++t) out = run(*pipe, scene.frame(grey(step)));
+    double worst = 0.0;
+    for (int i = 0; i < n; ++i) worst = std::max(worst, std::fabs(out[3 * i] - step[i]));
+    return worst;
+  };
+  EXPECT_LT(edge_error({}), 1e-3);
+  EXPECT_GT(edge_error({{"luminance_min_age", 1024}}), 0.05);
+}
+
+// Below one sample per pixel: sample_count 0 leaves a pixel's history (colour,
+// length, moments, depth, normal) exactly as it was, while sampled pixels move.
+TEST_F(ProgressiveTest, UnsampledPixelsKeepTheirStateBitForBit) {
+  const int w = 40, h = 24, n = w * h;
+  FlatFrames scene{w, h};
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {}, true));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  ASSERT_NE(graph, nullptr);
+  graph->set_capture(true);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> value(0.0, 2.0);
+  std::vector<uint8_t> colour_before, aux_before;
+  for (int t = 0; t < 10; ++t) {
+    std::vector<float> count(n);
+    std::vector<double> x(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;  // every pixel once in 4 frames
+      if (count[i] > 0.0f) x[i] = value(rng);
+    }
+    run(*pipe, scene.frame(grey(x), &count));
+    // The history after the frame: colour (rewritten by the feedback
+    // iteration), aux (moments, depth, normal: by the variance pass).
+    const auto colour = graph->captured("svgf_atrous_0", "svgf_colour");
+    const auto aux = graph->captured("svgf_variance", "svgf_aux");
+    ASSERT_EQ(colour.size(), size_t(16) * n);
+    if (t >= 4) {  // every pixel has data
+      int sampled_changed = 0;
+      for (int i = 0; i < n; ++i) {
+        const bool same = std::memcmp(&colour[16 * i], &colour_before[16 * i], 16) == 0 &&
+                          std::memcmp(&aux[16 * i], &aux_before[16 * i], 16) == 0;
+        if (count[i] == 0.0f)
+          ASSERT_TRUE(same) << "frame " << t << ": unsampled pixel " << i << "'s history changed";
+        else
+          sampled_changed += same ? 0 : 1;
+      }
+      EXPECT_EQ(sampled_changed, n / 4) << "frame " << t;
+    }
+    colour_before = colour;
+    aux_before = aux;
+  }
+}
+
+// Frame 0 at 1/4 spp: three pixels in four have no data (no sample, no
+// history). Whatever their radiance plane holds, none of it reaches the
+// output, and their empty value (0) does not darken a neighbour: a constant
+// sampled signal comes back exactly everywhere. After 4 frames of the
+// stratified schedule every pixel has data (history length >= 1).
+TEST_F(ProgressiveTest, PixelsWithoutDataNeverReachANeighbourAndFourFramesLeaveNoHole) {
+  const int w = 40, h = 24, n = w * h;
+  FlatFrames scene{w, h};
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {}, true));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  ASSERT_NE(graph, nullptr);
+  graph->set_capture(true);
+  const float garbage[] = {1e30f, -5.0f, NAN, INFINITY, 123.0f};
+  for (int t = 0; t < 4; ++t) {
+    std::vector<float> count(n), radiance(3 * n);
+    int without_data = 0;
+    for (int i = 0; i < n; ++i) {
+      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      for (int c = 0; c < 3; ++c) radiance[3 * i + c] = count[i] > 0.0f ? 0.8f : garbage[(i + c) % 5];
+    }
+    const auto out = run(*pipe, scene.frame(radiance, &count));
+    for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(out[i], 0.8f, 1e-5f) << "frame " << t << " element " << i;
+    const auto temporal = test::decode_output(graph->captured("svgf_reproject", "svgf_temporal"), Format::F32);
+    for (int i = 0; i < n; ++i) without_data += temporal[4 * i + 2] == 0.0f ? 1 : 0;
+    EXPECT_EQ(without_data, t < 3 ? n - (t + 1) * n / 4 : 0) << "frame " << t;
+  }
+}
+
+// The standard-deviation luminance weight (the default) is scale-equivariant:
+// radiance times k gives output times k, on a noisy masked sequence too.
+TEST_F(ProgressiveTest, OutputScalesWithInput) {
+  const int w = 40, h = 24, n = w * h;
+  FlatFrames scene{w, h};
+  std::vector<std::vector<float>> frames, counts;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> value(0.0, 2.0);
+  for (int t = 0; t < 6; ++t) {
+    std::vector<float> count(n), radiance(3 * n, 0.0f);
+    for (int i = 0; i < n; ++i) {
+      count[i] = ((i % w) + 2 * (i / w) + t) % 2 == 0 ? 1.0f : 0.0f;
+      if (count[i] > 0.0f)
+        for (int c = 0; c < 3; ++c) radiance[3 * i + c] = static_cast<float>(value(rng) * (1 + c));
+    }
+    frames.push_back(radiance);
+    counts.push_back(count);
+  }
+  auto sequence = [&](float k) {
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, {}, true));
+    std::vector<float> out;
+    for (int t = 0; t < 6; ++t) {
+      std::vector<float> scaled = frames[t];
+      for (float& v : scaled) v *= k;
+      out = run(*pipe, scene.frame(scaled, &counts[t]));
+    }
+    return out;
+  };
+  const auto base = sequence(1.0f);
+  for (float k : {1e-3f, 1e3f}) {
+    const auto scaled = sequence(k);
+    for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(scaled[i] / k, base[i], 1e-4 * std::max(base[i], 1e-3f)) << k;
+  }
+}
+
+// Hard cases on every guide and the mask: NaN, infinite, huge, negative and
+// zero values never make the output (or a later frame's) non-finite.
+TEST_F(ProgressiveTest, BadInputsNeverReachTheOutput) {
+  const int w = 40, h = 24, n = w * h;
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {}, true));
+  const float bad[] = {NAN, INFINITY, -INFINITY, 1e30f, -1.0f, 0.0f, 1e-40f};
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> value(0.0f, 2.0f);
+  for (int t = 0; t < 6; ++t) {
+    std::vector<float> radiance(3 * n), albedo(3 * n), normal(3 * n, 0.0f), depth(n), motion(2 * n), count(n);
+    for (int i = 0; i < n; ++i) {
+      const bool hit = (i * 7 + t) % 5 == 0;
+      const float b = bad[(i + t) % 7];
+      for (int c = 0; c < 3; ++c) {
+        radiance[3 * i + c] = hit && c == 0 ? b : value(rng);
+        albedo[3 * i + c] = hit && c == 1 ? b : 0.5f;
+      }
+      normal[3 * i + 2] = hit && i % 3 == 0 ? b : 1.0f;
+      depth[i] = hit && i % 3 == 1 ? b : 2.0f;
+      motion[2 * i] = hit && i % 3 == 2 ? b : 0.0f;
+      motion[2 * i + 1] = 0.0f;
+      count[i] = hit && i % 2 == 0 ? b : float((i + t) % 2);
+    }
+    test::HostFrame f;
+    f.info.motion = MotionConvention::PixelsToPrevious;
+    f.add(ChannelId::Radiance, Format::F32, radiance);
+    f.add(ChannelId::Albedo, Format::F32, albedo);
+    f.add(ChannelId::Normal, Format::F32, normal);
+    f.add(ChannelId::Depth, Format::F32, depth);
+    f.add(ChannelId::Motion, Format::F32, motion);
+    f.add(ChannelId::SampleCount, Format::F32, count);
+    const auto out = run(*pipe, f);
+    for (int i = 0; i < 3 * n; ++i) ASSERT_TRUE(std::isfinite(out[i])) << "frame " << t << " element " << i;
+  }
+}
+
+TEST(ProgressiveValidate, ChannelsAndParameters) {
+  EXPECT_FALSE(pipelines::validate(progressive_config(16, 16)).has_value());
+  EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {}, true)).has_value());
+  EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {{"step_order", 1}, {"luminance_form", 1}})).has_value());
+  // Clipping is svgf's, not paper 004's: refused, not ignored.
+  const auto clip = pipelines::validate(progressive_config(16, 16, {{"alpha_colour", 0.2}, {"clip_roughness", 0.5}}));
+  ASSERT_TRUE(clip.has_value());
+  EXPECT_EQ(clip->code, protocol::ErrorCode::InvalidParameter);
+  EXPECT_EQ(clip->field, "OPEN_SESSION.parameters[1].value");
+  EXPECT_NE(clip->message.find("clip_roughness"), std::string::npos) << clip->message;
+  auto rough = progressive_config(16, 16);
+  rough.channels.push_back({ChannelId::Roughness, Format::F32});
+  const auto e = pipelines::validate(rough);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->code, protocol::ErrorCode::InvalidChannel);
+  const auto bad_order = pipelines::validate(progressive_config(16, 16, {{"step_order", 2}}));
+  ASSERT_TRUE(bad_order.has_value());
+  EXPECT_EQ(bad_order->code, protocol::ErrorCode::InvalidParameter);
+}
+
+}  // namespace
+}  // namespace dn
