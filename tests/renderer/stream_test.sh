@@ -37,6 +37,13 @@ done
 for f in 0000 0001; do
   test -s "$dir/guide/denoised_$f.exr"
 done
+# Fewer than one sample per pixel: progressive takes sample_count, so dnrender streams it.
+"$render" --scene 2 --frames 4 --width 64 --height 36 --spp 0.25 --server "unix://$sock" --pipeline progressive \
+  --out "$dir/progressive" 2>"$dir/progressive.log"
+grep -q "channels:.* sample_count" "$dir/progressive.log"
+for f in 0000 0003; do
+  test -s "$dir/progressive/denoised_$f.exr"
+done
 # Sample statistics (--stats, channels 51-54, fp32): streamed to stat, which requires them...
 "$render" --scene 2 --frames 2 --width 64 --height 36 --spp 4 --stats --server "unix://$sock" --pipeline stat \
   --out "$dir/stat" 2>"$dir/stat.log"
