@@ -51,6 +51,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   const bool reset = f.reset || !has_history_;
   const int iterations = p_.atrous_iterations;
   const int tap = std::min(p_.feedback_tap, std::max(iterations - 1, 0));
+  // Fewer than one sample per pixel: the pixels without a sample this frame.
+  const bool masked = !f.sample_count.empty();
 
   // Inputs: sanitized radiance (split: diffuse, specular), guarded albedo, depth, sanitized normals.
   const bool split = !f.diffuse.empty();
@@ -219,7 +221,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         add(ix + 1, iy, tx * (1 - ty));
         add(ix, iy + 1, (1 - tx) * ty);
         add(ix + 1, iy + 1, tx * ty);
-        if (sw < 1e-3) {  // 3x3 box of valid taps around the pixel containing p_prev
+        // Falcor's fallback, the 3x3 box of valid taps around the pixel containing p_prev; not when masked: a pixel
+        // without history there mostly had no sample yet, and missing values are not filled from neighbours.
+        if (sw < 1e-3 && !masked) {
           sc[0] = sc[1] = sc[2] = sm1 = sm2 = sl = sw = 0.0;
           const int cx = static_cast<int>(std::floor(px)), cy = static_cast<int>(std::floor(py));
           for (int yy = -1; yy <= 1; ++yy)
@@ -307,6 +311,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           pm2 = pm1 * pm1;
         }
       }
+      // Not sampled this frame: the history as reprojected (no data without one).
+      if (masked && !(f.sample_count[i] > 0.0)) {
+        for (int k = 0; k < 3; ++k) colour[3 * i + k] = pc[k];
+        len[i] = valid ? plen : 0.0;
+        m1[i] = pm1;
+        m2[i] = pm2;
+        continue;
+      }
       len[i] = valid ? std::min(plen + 1.0, p_.max_history) : 1.0;
       const double ac = valid ? std::max(1.0 / len[i], p_.alpha_colour) : 1.0;
       const double am = valid ? std::max(1.0 / len[i], p_.alpha_moments) : 1.0;
@@ -315,6 +327,12 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       m2[i] = (1 - am) * pm2 + am * l * l;
     }
   ch.temporal = colour;
+  // No data: a foreground pixel of length 0 (only an unsampled pixel without history has one).
+  std::vector<bool> no_data(n, false);
+  for (int i = 0; i < n; ++i) {
+    no_data[i] = fg[i] && len[i] == 0.0;
+    if (no_data[i]) hz[i] = 0.0;  // nothing reprojects from it next frame
+  }
 
   // Pass 2: variance, of one sample or (variance_of_mean) of the temporal
   // mean: divided by the samples it averages, len while the blend weight is
@@ -329,11 +347,23 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     for (int x = 0; x < w; ++x) {
       const int i = y * w + x;
       if (!fg[i]) continue;
+      if (no_data[i]) {
+        var[i] = kSvgfNoData;
+        continue;
+      }
       if (len[i] >= 4.0) {
         // m2 - m1^2 cancels; in single precision as on the device, which
         // decides the HDR step gate and the edge-stopping of sharp pixels.
         const float f1 = float(m1[i]), f2 = float(m2[i]);
         var[i] = std::max(0.0f, f2 - f1 * f1) / samples_averaged(len[i]);
+        continue;
+      }
+      if (!p_.spatial_estimate) {
+        // Without the 7x7 estimate, a young pixel's own moments: in double, so
+        // one sample's (or a copy's) cancel exactly, as on the device, where
+        // fp32 rounding of the double moments would leave a residual that a
+        // luminance weight on sqrt(variance) blows up.
+        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]) / samples_averaged(len[i]);
         continue;
       }
       // Luminance weight relative to the darker of p and q (HDR step rule),
@@ -344,7 +374,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       for (int yy = -1; yy <= 1; ++yy)
         for (int xx = -1; xx <= 1; ++xx) {
           const int qx = x + xx, qy = y + yy;
-          if ((xx == 0 && yy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx]) continue;
+          if ((xx == 0 && yy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx] ||
+              no_data[qy * w + qx])
+            continue;
           // A threshold decision: in single precision, as on the device.
           if (float(luminance(&colour[3 * (qy * w + qx)])) >= 0.5f * float(l)) isolated = false;
         }
@@ -354,7 +386,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           const int qx = x + xx, qy = y + yy;
           if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
           const int q = qy * w + qx;
-          if (!fg[q]) continue;
+          if (!fg[q] || no_data[q]) continue;  // a pixel without data takes no part
           double wt = 1.0;
           if (q != i) {
             const double dist = std::sqrt(double(xx * xx + yy * yy));
@@ -375,7 +407,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     }
   ch.variance = var;
 
-  // Pass 3: a-trous iterations over (rgb, variance).
+  // Pass 3: a-trous iterations over (rgb, variance). A pixel without data
+  // (variance kSvgfNoData) is no tap and adds nothing of its own; it takes its
+  // taps' data, or stays without.
   std::vector<double> cur(4 * n);
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) cur[4 * i + k] = colour[3 * i + k];
@@ -383,9 +417,15 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   }
   std::vector<double> hist_colour = colour;
   ch.atrous.assign(iterations, {});
-  const double kernel[5] = {1.0 / 16, 1.0 / 4, 3.0 / 8, 1.0 / 4, 1.0 / 16};
+  const int r = p_.kernel_radius;
+  const double kernel[5] = {1.0 / 16, 1.0 / 4, 3.0 / 8, 1.0 / 4, 1.0 / 16};  // B3, relative to the centre's below
+  const double box[3] = {0.5, 1.0, 0.5};                                     // {1/4, 1/2, 1/4} / (1/2)
+  auto tap_weight = [&](int xx, int yy) {
+    return r == 2 ? kernel[xx + 2] * kernel[yy + 2] / (kernel[2] * kernel[2]) : box[xx + 1] * box[yy + 1];
+  };
   for (int it = 0; it < iterations; ++it) {
-    const int step = 1 << it;
+    const int level = p_.finest_first ? (it == 0 ? 0 : iterations - it) : it;
+    const int step = 1 << level;
     std::vector<double> next(4 * n);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -394,8 +434,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           for (int k = 0; k < 4; ++k) next[4 * i + k] = cur[4 * i + k];
           continue;
         }
-        // 3x3 Gaussian of the variance over the neighbours whose own noise
-        // explains their luminance step to p (HDR step rule, 3 sigmas).
+        const bool has_data = cur[4 * i + 3] != kSvgfNoData;
+        // 3x3 Gaussian of the variance over the neighbours with data whose own
+        // noise explains their luminance step to p (HDR step rule, 3 sigmas).
         const double l = luminance(&cur[4 * i]);
         double gv = 0, gw = 0;
         for (int yy = -1; yy <= 1; ++yy)
@@ -403,6 +444,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             const int qx = x + xx, qy = y + yy;
             if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
             const double* cq = &cur[4 * (qy * w + qx)];
+            if (cq[3] == kSvgfNoData) continue;
             // A threshold decision: in single precision, as on the device.
             if (!(xx == 0 && yy == 0) &&
                 !(std::fabs(float(l) - float(luminance(cq))) <= 3.0f * std::sqrt(float(cq[3]))))
@@ -411,34 +453,47 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             gv += k * cq[3];
             gw += k;
           }
+        const double g = gw > 0.0 ? gv / gw : 0.0;
         const double ramp = p_.luminance_ramp ? 8.0 - std::min(7.0, std::max(len[i] - 1.0, 0.0)) : 1.0;
-        const double phi_l = p_.phi_colour * ramp * std::sqrt(gv / gw + 1e-20);
+        // Luminance weight |l_p - l_q| / bandwidth; none for p without data or
+        // younger than luminance_min_age (its variance is unusable).
+        const bool luminance_on = has_data && !(len[i] < p_.luminance_min_age);
+        const double bandwidth = p_.luminance_form == 0 ? p_.phi_colour * ramp * std::sqrt(g + 1e-20)
+                                                        : ramp * (p_.sigma_luminance * g + p_.epsilon_luminance);
         double sc[3] = {0, 0, 0}, sv = 0, sw = 0;
-        for (int yy = -2; yy <= 2; ++yy)
-          for (int xx = -2; xx <= 2; ++xx) {
+        for (int yy = -r; yy <= r; ++yy)
+          for (int xx = -r; xx <= r; ++xx) {
             const int qx = x + step * xx, qy = y + step * yy;
             if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
             const int q = qy * w + qx;
-            if (!fg[q]) continue;
+            if (!fg[q] || cur[4 * q + 3] == kSvgfNoData) continue;
             double wt = 1.0;
             if (q != i) {
               const double dist = step * std::sqrt(double(xx * xx + yy * yy));
               const double wz = std::fabs(z[i] - z[q]) / (p_.phi_depth * std::max(dz[i], 1e-8) * dist);
-              const double wl = std::fabs(l - luminance(&cur[4 * q])) / phi_l;
-              wt = kernel[xx + 2] * kernel[yy + 2] / (kernel[2] * kernel[2]) * std::exp(-wz - wl) * normal_weight(i, q);
+              const double wl = luminance_on ? std::fabs(l - luminance(&cur[4 * q])) / bandwidth : 0.0;
+              wt = tap_weight(xx, yy) * std::exp(-wz - wl) * normal_weight(i, q);
             }
             for (int k = 0; k < 3; ++k) sc[k] += wt * cur[4 * q + k];
             sv += wt * wt * cur[4 * q + 3];
             sw += wt;
           }
+        if (!(sw > 0.0)) {  // neither p nor a tap has data
+          for (int k = 0; k < 3; ++k) next[4 * i + k] = 0.0;
+          next[4 * i + 3] = kSvgfNoData;
+          continue;
+        }
         for (int k = 0; k < 3; ++k) next[4 * i + k] = sc[k] / sw;
-        next[4 * i + 3] = p_.propagate_variance ? sv / (sw * sw) : cur[4 * i + 3];
+        // Without propagation p keeps its own variance (0 where it had none: the device's).
+        next[4 * i + 3] = p_.propagate_variance ? sv / (sw * sw) : (has_data ? cur[4 * i + 3] : 0.0);
       }
     cur = std::move(next);
     ch.atrous[it] = cur;
+    // Feedback: the history colour changes only where this frame has a sample.
     if (it == tap)
       for (int i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
+        if (!masked || f.sample_count[i] > 0.0)
+          for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
   }
 
   ch.colour = std::move(hist_colour);

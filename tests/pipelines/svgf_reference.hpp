@@ -23,7 +23,19 @@ struct SvgfParams {
   int variance_of_mean = 1;      // 1: the variance steering the a-trous is the temporal mean's (pass 2)
   int luminance_ramp = 0;        // 1: paper 001 Eq. 8, phi_l times 8 - min(7, length - 1) (pass 3)
   int propagate_variance = 1;    // 0: every a-trous iteration keeps the variance pass's estimate (pass 3)
+  // Progressive SVGF (paper 004) switches; their defaults are svgf's.
+  int kernel_radius = 2;            // a-trous taps -r..r: 2 the 5x5 B3 spline, 1 the 3x3 {1/4, 1/2, 1/4} (pass 3)
+  bool finest_first = false;        // steps 1, 2^(n-1), ..., 4, 2 instead of 1, 2, 4, ... (pass 3)
+  int luminance_form = 0;           // 0: phi_colour sqrt(g); 1: sigma_luminance g + epsilon_luminance (pass 3)
+  double sigma_luminance = 4.0;     // luminance_form 1
+  double epsilon_luminance = 0.05;  // luminance_form 1
+  bool spatial_estimate = true;     // false: young pixels' variance from their own moments, no 7x7 (pass 2)
+  double luminance_min_age = 0.0;   // no luminance weight where p's history length is below this (pass 3)
 };
+
+// The variance of a pixel without data (sample_count: never sampled, nothing
+// reprojected), as the device marks it (DN_SVGF_NO_DATA).
+inline constexpr double kSvgfNoData = -1.0;
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
 // pixels towards the previous frame. emission empty when the session has none.
@@ -41,6 +53,10 @@ struct SvgfFrame {
   std::vector<double> diffuse, specular;
   std::vector<double> specular_factor;
   std::vector<double> roughness;  // empty: the session has none (then nothing is clipped)
+  // Samples taken this frame, 1 per pixel (empty: every pixel sampled). A
+  // foreground pixel whose count is not > 0 (NaN: not) keeps its reprojected
+  // history unchanged, or has no data without one (progressive).
+  std::vector<double> sample_count;
   bool diffuse_lighting = false, specular_lighting = false;
   bool reset = false;
 };
@@ -53,7 +69,8 @@ class SvgfReference {
 
   // Results of the last step, per pass, of the radiance (or, split, diffuse: chain 0) or specular (chain 1) chain.
   const std::vector<double>& temporal_colour(int c = 0) const { return chains_[c].temporal; }  // 3 per pixel
-  const std::vector<double>& variance(int c = 0) const { return chains_[c].variance; }         // 1 per pixel
+  // 1 per pixel; kSvgfNoData at a pixel without data (also in atrous's .w)
+  const std::vector<double>& variance(int c = 0) const { return chains_[c].variance; }
   const std::vector<double>& atrous(int i, int c = 0) const { return chains_[c].atrous[i]; }   // 4 per pixel
   const std::vector<double>& history_length(int c = 0) const { return chains_[c].length; }     // 1 per pixel
   // The remodulated colour before the TAA blend (= the output without TAA), 3 per pixel.

@@ -1,0 +1,204 @@
+// progressive (progressive SVGF, paper 004) on the device against the
+// double-precision CPU reference (svgf_reference.cpp with paper 004's
+// switches), over frames of a moving scene, with and without fewer than one
+// sample per pixel (sample_count).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "frames.hpp"
+#include "gpu_test_env.hpp"
+#include "pipelines/pipeline.hpp"
+#include "svgf_inputs.hpp"
+#include "svgf_reference.hpp"
+
+namespace dn {
+namespace {
+
+using protocol::MotionConvention;
+using test::ChannelId;
+using test::Format;
+using namespace svgf_inputs;
+
+// svgf's channels (split: diffuse + specular) for the progressive pipeline,
+// plus a fp32 sample_count plane when masked.
+pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::Parameter> params, bool emission,
+                                            bool split, bool mask) {
+  const Format in = Format::F32;
+  std::vector<protocol::ChannelDecl> channels;
+  if (split) {
+    channels = {{ChannelId::Diffuse, in}, {ChannelId::Specular, in}};
+  } else {
+    channels = {{ChannelId::Radiance, in}};
+  }
+  for (ChannelId id : {ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion})
+    channels.push_back({id, in});
+  if (emission) channels.push_back({ChannelId::Emission, in});
+  if (mask) channels.push_back({ChannelId::SampleCount, Format::F32});
+  return test::make_config("progressive", w, h, channels, Format::F32, std::move(params));
+}
+
+// The reference with the progressive pipeline's own defaults
+// (server/pipelines/progressive.cpp), then the session's parameters.
+test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps) {
+  test::SvgfParams p;
+  p.alpha_colour = 0.1;
+  p.alpha_moments = 0.1;
+  p.atrous_iterations = 5;
+  p.phi_normal = 64;
+  p.taa_alpha = 0.1;
+  p.taa_static_alpha = 0.1;
+  p.clip_roughness = 0;
+  p.kernel_radius = 1;
+  p.finest_first = true;
+  p.spatial_estimate = false;
+  p.luminance_form = 0;
+  p.sigma_luminance = 4;
+  p.epsilon_luminance = 0.05;
+  p.luminance_min_age = 4;
+  for (const auto& q : ps) {
+    if (q.name == "alpha_colour") p.alpha_colour = q.value;
+    if (q.name == "alpha_moments") p.alpha_moments = q.value;
+    if (q.name == "max_history") p.max_history = q.value;
+    if (q.name == "atrous_iterations") p.atrous_iterations = static_cast<int>(q.value);
+    if (q.name == "feedback_tap") p.feedback_tap = static_cast<int>(q.value);
+    if (q.name == "phi_colour") p.phi_colour = q.value;
+    if (q.name == "phi_normal") p.phi_normal = q.value;
+    if (q.name == "phi_depth") p.phi_depth = q.value;
+    if (q.name == "taa_alpha") p.taa_alpha = q.value;
+    if (q.name == "taa_static_alpha") p.taa_static_alpha = q.value;
+    if (q.name == "variance_of_mean") p.variance_of_mean = static_cast<int>(q.value);
+    if (q.name == "luminance_ramp") p.luminance_ramp = static_cast<int>(q.value);
+    if (q.name == "propagate_variance") p.propagate_variance = static_cast<int>(q.value);
+    if (q.name == "step_order") p.finest_first = q.value == 0.0;
+    if (q.name == "luminance_form") p.luminance_form = static_cast<int>(q.value);
+    if (q.name == "sigma_luminance") p.sigma_luminance = q.value;
+    if (q.name == "epsilon_luminance") p.epsilon_luminance = q.value;
+    if (q.name == "luminance_min_age") p.luminance_min_age = q.value;
+  }
+  return p;
+}
+
+// A noisy specular signal loosely following the scene (as svgf_test.cpp's).
+std::vector<float> specular_of(const SvgfScene& s, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.3f, 1.7f);
+  std::vector<float> out(s.radiance.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = 0.4f * s.radiance[i] * u(rng);
+  return out;
+}
+
+// 1/4 spp: pixel (x, y) is sampled at frame t iff (x + 2y + t) % 4 == 0 (every
+// pixel once in 4 frames, neighbouring rows interleaved). Unsampled pixels
+// count 0, or NaN (also "not sampled") at every third.
+std::vector<float> quarter_spp(int w, int h, int t) {
+  std::vector<float> count(w * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      count[y * w + x] = (x + 2 * y + t) % 4 == 0 ? 1.0f : ((x + y) % 3 == 0 ? NAN : 0.0f);
+  return count;
+}
+
+struct Variant {
+  const char* name;
+  bool split, emission, mask;
+  std::vector<protocol::Parameter> params;
+  float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
+  int w = 64, h = 40;
+};
+
+void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
+
+class ProgressiveReferenceTest : public test::GpuTest, public testing::WithParamInterface<Variant> {};
+
+// Output after every frame against the reference (reset at frame 5), with
+// SvgfReferenceTest's tolerances.
+TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
+  const Variant& v = GetParam();
+  const int w = v.w, h = v.h;
+  auto config = progressive_config(w, h, v.params, v.emission, v.split, v.mask);
+  ASSERT_FALSE(pipelines::validate(config).has_value());
+  auto pipe = pipelines::create(ctx(), config);
+  test::SvgfReference ref(w, h, progressive_params(v.params));
+  SvgfSceneGen scene(w, h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
+  const int frames = 8;
+  double worst = 0.0;
+  size_t no_data_first = 0;
+  for (int t = 0; t < frames; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const uint32_t flags = t == 5 ? protocol::kFrameReset : 0u;
+    SvgfScene s = scene.frame(t);
+    std::vector<float> spec = v.split ? specular_of(s, 77 + t) : std::vector<float>{};
+    const std::vector<float> count = v.mask ? quarter_spp(w, h, t) : std::vector<float>{};
+    if (v.mask)  // nothing rendered where nothing was sampled
+      for (int i = 0; i < w * h; ++i)
+        if (!(count[i] > 0.0f))
+          for (int k = 0; k < 3; ++k) {
+            s.radiance[3 * i + k] = 0.0f;
+            if (v.split) spec[3 * i + k] = 0.0f;
+          }
+    test::HostFrame f = host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, flags, v.emission,
+                                   v.split ? &spec : nullptr);
+    test::SvgfFrame r = reference_frame(f, w, h, v.emission, v.split);
+    if (v.mask) {
+      f.add(ChannelId::SampleCount, Format::F32, count);
+      const auto& plane = f.plane(ChannelId::SampleCount);
+      r.sample_count = test::decode_plane(plane.bytes, plane.format);
+    }
+    const std::vector<float> got = run(*pipe, f);
+    const std::vector<double> want = ref.step(r);
+    if (t == 0)
+      no_data_first = std::count(ref.variance().begin(), ref.variance().end(), test::kSvgfNoData);
+    ASSERT_EQ(got.size(), want.size());
+    for (float g : got) ASSERT_TRUE(std::isfinite(g) && g >= 0.0f) << g;
+    const double rms = test::relative_rms(got, want);
+    worst = std::max(worst, rms);
+    EXPECT_LE(rms, 1e-3);
+    size_t gross = 0;
+    for (size_t i = 0; i < want.size(); ++i)
+      if (std::fabs(got[i] - want[i]) > 2e-2 * std::max(1.0, std::fabs(want[i]))) {
+        if (gross < 5)
+          ADD_FAILURE() << "pixel " << (i / 3) % w << "," << (i / 3) / w << " channel " << i % 3 << ": got "
+                        << got[i] << ", reference " << want[i];
+        ++gross;
+      }
+    EXPECT_EQ(gross, 0u) << "pixels that disagree by more than 2% (a different discrete decision)";
+  }
+  // The masked variants must exercise pixels without data (3/4 of the first frame's foreground).
+  if (v.mask) {
+    EXPECT_GT(no_data_first, size_t(w * h / 8));
+  }
+  std::printf("[ info     ] %s: worst relative RMS over %d frames %.3g\n", v.name, frames, worst);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Progressive, ProgressiveReferenceTest,
+    testing::Values(
+        Variant{"defaults", false, true, false, {}},
+        Variant{"step_order_increasing", false, true, false, {{"step_order", 1}}},
+        Variant{"variance_form", false, true, false, {{"luminance_form", 1}}},
+        Variant{"six_iterations", false, false, false, {{"atrous_iterations", 6}}},
+        Variant{"split", true, true, false, {}},
+        // 1/4 spp: a static camera (unsampled pixels keep their history
+        // exactly) and a moving one (they keep the reprojected history).
+        Variant{"quarter_spp_static", false, true, true, {}, 0.0f, 0.0f, 0.0f},
+        Variant{"quarter_spp_moving", false, true, true, {}},
+        // The luminance weight at every age (at 1/4 spp a history reaches
+        // length 4 only after 13 frames): p without data has none, and the
+        // variance Gaussian skips taps without data. Whole-pixel motion only:
+        // a bilinear blend of one valid tap leaves a single sample's moments
+        // with a rounding residual for a variance (exactly 0 or not, fp32 vs
+        // double), which decides the HDR step rule and, in the std-dev form,
+        // the luminance weight; the age gate is there for that.
+        Variant{"quarter_spp_static_luminance", false, false, true, {{"luminance_min_age", 0}}, 0.0f, 0.0f, 0.0f},
+        Variant{"quarter_spp_moving_variance_form", false, true, true,
+                {{"luminance_min_age", 0}, {"luminance_form", 1}}, 1.0f, -1.0f, 0.0f}),
+    [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace dn
