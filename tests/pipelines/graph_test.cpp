@@ -80,13 +80,15 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 6u);
+  ASSERT_EQ(sa.size(), 11u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
   EXPECT_EQ(sa[3], (gpu::SpecConstant{3, 4}));
   EXPECT_EQ(sa[4], (gpu::SpecConstant{4, 0}));  // CLASS_EDGES' default
   EXPECT_EQ(sa[5], (gpu::SpecConstant{5, 0}));  // SPATIAL_BANDWIDTH's default
+  EXPECT_EQ(sa[6], (gpu::SpecConstant{6, 2}));  // KERNEL_RADIUS's default: svgf's 5x5
+  for (uint32_t id = 7; id <= 10; ++id) EXPECT_EQ(sa[id], (gpu::SpecConstant{id, 0}));  // progressive's switches off
 }
 
 // Every configuration the tests use builds a graph that passes check().
@@ -98,7 +100,9 @@ TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
     for (const auto& c : protocol::kChannels)
       if (def.description.required_channels & protocol::channel_bit(c.id))
         channels.push_back({c.id, protocol::is_sample_statistic(c.id) ? Format::F32 : Format::F16});
-    if (def.description.name == "svgf") channels.push_back({ChannelId::Radiance, Format::F32});
+    if (def.description.name == "svgf" || def.description.name == "progressive")
+      channels.push_back({ChannelId::Radiance, Format::F32});
+    if (def.description.name == "progressive") channels.push_back({ChannelId::SampleCount, Format::F16});  // the mask
     // Split pipelines (specular required) take the diffuse part in either form.
     if (def.description.required_channels & protocol::channel_bit(ChannelId::Specular))
       channels.push_back({ChannelId::DiffuseLighting, Format::F32});
