@@ -20,7 +20,8 @@
 // h = {1/2, 1, 1/2} (the 3x3 {1/4, 1/2, 1/4}^2 / (1/2)^2). LUMINANCE_VARIANCE:
 // phi_l's place is taken by sigma_luminance * g + epsilon_luminance (paper
 // 004's variance form). AGE_GATED_LUMINANCE: no luminance term while p's
-// length < luminance_min_age. A pixel without data (variance
+// length < luminance_min_age, and no FEEDBACK write (its history stays the
+// unfiltered accumulation). MASKED: FEEDBACK writes only where sample_count > 0. A pixel without data (variance
 // DN_SVGF_NO_DATA, MASKED chains) is no tap and no variance-prefilter tap; as
 // p it starts from weight 0 without a luminance term, and stays without data
 // when no tap has any.
@@ -187,7 +188,8 @@ void main() {
       vec4 result = sw[k] > 0.0 ? vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k])
                                 : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
       dst.data[pi] = result;
-      if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0))
+      if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0) &&
+          (!AGE_GATED_LUMINANCE || temporal.data[pi].z >= min_age))
         colour_history.data[pi].rgb = result.rgb;
     }
   }

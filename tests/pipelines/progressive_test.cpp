@@ -314,6 +314,54 @@ TEST_F(ProgressiveTest, BadInputsNeverReachTheOutput) {
   }
 }
 
+// The history source (paper 004 §5, P7): a pixel's history is its unfiltered
+// accumulation until it is old enough for the luminance weight, then the
+// first iteration's output at each of its samples, never at a frame without
+// one. On a still, noise-free scene at 1/4 spp the output's image variance
+// (IMPLEMENTATION-NOTES B.4 6) then stops falling at the scene's own: the
+// young frames' blur (filtered without a luminance weight) is not kept, and
+// what the feedback still blurs (taps of nearly equal luminance) settles
+// where the exponential average's pull on each sample balances it. Without
+// the final blend, which lets the displayed young frames' blur go at 0.9 per
+// frame.
+TEST_F(ProgressiveTest, StillSceneStopsBlurringBelowOneSamplePerPixel) {
+  const int w = 48, h = 32, n = w * h;
+  FlatFrames scene{w, h};
+  std::vector<double> truth(n);
+  for (int i = 0; i < n; ++i) {
+    const int x = i % w, y = i / w;
+    truth[i] = 0.5 + 0.4 * std::sin(x / 2.0) * std::cos(y / 3.0) + (x > w / 2 ? 0.5 : 0.0);
+  }
+  auto image_variance = [&](auto value) {
+    double s = 0.0, s2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+      s += value(i);
+      s2 += value(i) * value(i);
+    }
+    return s2 / n - (s / n) * (s / n);
+  };
+  const double truth_variance = image_variance([&](int i) { return truth[i]; });
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {{"taa_alpha", 0}, {"taa_static_alpha", 0}}, true));
+  std::vector<double> variance_at;  // after frames 60, 120, 180, 240
+  double worst = 0.0;
+  for (int t = 0; t < 240; ++t) {
+    std::vector<float> count(n);
+    std::vector<double> x(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      if (count[i] > 0.0f) x[i] = truth[i];
+    }
+    const auto out = run(*pipe, scene.frame(grey(x), &count));
+    if (t % 60 == 59) variance_at.push_back(image_variance([&](int i) { return double(out[3 * i]); }));
+    if (t == 239)
+      for (int i = 0; i < n; ++i) worst = std::max(worst, std::fabs(out[3 * i] - truth[i]));
+  }
+  for (size_t k = 0; k < variance_at.size(); ++k)
+    EXPECT_GT(variance_at[k], 0.995 * truth_variance) << "after frame " << 60 * (k + 1);
+  EXPECT_GT(variance_at[3], 0.999 * variance_at[2]);  // no longer falling
+  EXPECT_LT(worst, 0.01);  // "blurred to constant" would be off by up to 0.9
+}
+
 TEST(ProgressiveValidate, ChannelsAndParameters) {
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16)).has_value());
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {}, true)).has_value());
@@ -336,3 +384,4 @@ TEST(ProgressiveValidate, ChannelsAndParameters) {
 
 }  // namespace
 }  // namespace dn
+

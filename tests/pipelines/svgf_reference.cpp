@@ -489,10 +489,12 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
     cur = std::move(next);
     ch.atrous[it] = cur;
-    // Feedback: the history colour changes only where this frame has a sample.
+    // Feedback: the history colour changes only where this frame has a sample
+    // and, with the age gate, only once the pixel is old enough for the
+    // luminance weight (a younger one keeps its unfiltered accumulation).
     if (it == tap)
       for (int i = 0; i < n; ++i)
-        if (!masked || f.sample_count[i] > 0.0)
+        if ((!masked || f.sample_count[i] > 0.0) && !(p_.luminance_min_age > 0.0 && len[i] < p_.luminance_min_age))
           for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
   }
 
