@@ -1,6 +1,7 @@
 #include "pipelines/svgf_chain.hpp"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -49,6 +50,14 @@ constexpr const char* kTaaHistory = "svgf_taa";
 constexpr const char* kClipPartial = "svgf_clip_partial";
 constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
 constexpr uint64_t kClipBytes = 16;
+// sparse_gbuffer: the packed 3x3 pyramid (gbuffer_fill.comp) of vec4(normal,
+// depth) fp32 and its validity (uint), and the filled planes the chain reads
+// instead of depth and normal, fp32 (1 and 3 per pixel).
+constexpr const char* kGbufferPyramid = "gbuffer_pyramid";
+constexpr const char* kGbufferValid = "gbuffer_valid";
+constexpr const char* kFilledDepth = "gbuffer_depth";
+constexpr const char* kFilledNormal = "gbuffer_normal";
+constexpr uint32_t kGbufferFactor = 3;
 
 uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
   return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
@@ -91,6 +100,49 @@ void bind_validity_mask(const SessionConfig& config, ChannelId mask, PassSpec& p
   pass.bind("sample_count", "sample_count").set("MASKED", 1u).set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
 }
 
+// The number of levels above level 0 of the 3x3 pyramid: down to one pixel.
+uint32_t gbuffer_levels(const SessionConfig& config) {
+  uint32_t levels = 0;
+  for (uint32_t side = std::max(config.width, config.height); side > 1; side = (side + kGbufferFactor - 1) / kGbufferFactor)
+    ++levels;
+  return levels;
+}
+
+// gbuffer_fill: seed level 0 from the planes, pull to the coarsest level,
+// push back down; the push at level 0 writes the filled planes.
+void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask) {
+  const uint32_t levels = gbuffer_levels(config);
+  auto args = [&](uint32_t level) {
+    return std::array<uint32_t, 4>{level, kGbufferFactor, config.width, config.height};
+  };
+  const gpu::Extent full = g.level(kGbufferFactor, 0);
+  g.add_pass("gbuffer_seed", "gbuffer_fill")
+      .bind("depth", "depth")
+      .bind("normal", "normal")
+      .bind("sample_count", "sample_count")
+      .bind("pyramid", kGbufferPyramid)
+      .bind("valid", kGbufferValid)
+      .set("MODE", 0u)
+      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
+      .set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)))
+      .over_grid(full, full, args(0));
+  for (uint32_t l = 1; l <= levels; ++l)
+    g.add_pass("gbuffer_pull_" + std::to_string(l), "gbuffer_fill")
+        .bind("pyramid", kGbufferPyramid)
+        .bind("valid", kGbufferValid)
+        .set("MODE", 1u)
+        .over_grid(g.level(kGbufferFactor, l), g.level(kGbufferFactor, l - 1), args(l));
+  for (uint32_t l = levels; l-- > 0;) {
+    PassSpec& push = g.add_pass("gbuffer_push_" + std::to_string(l), "gbuffer_fill");
+    push.bind("pyramid", kGbufferPyramid)
+        .bind("valid", kGbufferValid)
+        .set("MODE", 2u)
+        .over_grid(g.level(kGbufferFactor, l), g.level(kGbufferFactor, l + 1), args(l));
+    if (l == 0) push.bind("filled_depth", kFilledDepth).bind("filled_normal", kFilledNormal);
+  }
+}
+
 // One reproject / variance / a-trous chain; returns the buffer holding its
 // final illumination.
 std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index,
@@ -98,11 +150,13 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   const SvgfSignal& s = v.signals[index];
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
-  // Features: the signal's own (fp32 buffers) or the primary planes.
-  const std::string depth = s.features ? s.features->depth : "depth";
-  const std::string normal = s.features ? s.features->normal : "normal";
-  const uint32_t normal_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Normal));
-  const uint32_t depth_half = s.features ? 0u : is_half(channel_format(config, ChannelId::Depth));
+  // Features: the signal's own (fp32 buffers), the filled sparse G-buffer
+  // (fp32 buffers) or the primary planes.
+  const bool own = s.features.has_value() || v.sparse_gbuffer;
+  const std::string depth = s.features ? s.features->depth : v.sparse_gbuffer ? kFilledDepth : "depth";
+  const std::string normal = s.features ? s.features->normal : v.sparse_gbuffer ? kFilledNormal : "normal";
+  const uint32_t normal_half = own ? 0u : is_half(channel_format(config, ChannelId::Normal));
+  const uint32_t depth_half = own ? 0u : is_half(channel_format(config, ChannelId::Depth));
   const bool clip = v.clip && s.clip;
   if (clip) add_clip_prefilter(g, config, v, s, demodulate);
 
@@ -216,6 +270,7 @@ void check_supported(const SvgfVariant& v) {
   }
   if (v.validity_mask && *v.validity_mask != ChannelId::SampleCount)
     reject("validity mask: only the sample_count plane is one");
+  if (v.sparse_gbuffer && !v.validity_mask) reject("a sparse G-buffer needs the validity mask that says where it has data");
   if (v.validity_mask && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; }))
     reject("validity mask with a clipped signal: the clip box reads every neighbour's current sample");
   if (v.iterations > 16) reject("more than 16 a-trous iterations (step 2^16)");
@@ -256,6 +311,13 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   if (v.signals.size() > 1) g.add_scratch(kIllumC, kIlluminationBytes);
   // Guide and temporal are shared by the signals: each chain's variance pass
   // has read temporal before the next chain's reprojection rewrites it.
+  if (v.sparse_gbuffer) {
+    const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
+    g.add_scratch_elements(kGbufferPyramid, elements, 16);
+    g.add_scratch_elements(kGbufferValid, elements, 4);
+    g.add_scratch(kFilledDepth, 4);
+    g.add_scratch(kFilledNormal, 12);
+  }
   g.add_scratch(kGuide, kGuideBytes);
   g.add_scratch(kTemporal, kTemporalBytes);
   const bool clips = v.clip && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; });
@@ -271,6 +333,7 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     add_supersample_assign(g, config);
     for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
   }
+  if (v.sparse_gbuffer) add_gbuffer_fill(g, config, *v.validity_mask);
   std::vector<std::string> results;
   results.push_back(add_chain(g, config, v, 0, kIllumA, kIllumB));
   if (v.signals.size() > 1) results.push_back(add_chain(g, config, v, 1, kIllumC, results[0] == kIllumA ? kIllumB : kIllumA));
@@ -304,12 +367,12 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
           .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
   }
   if (v.taa)
-    remodulate.bind("depth", "depth")
+    remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
         .bind("motion", "motion")
         .bind("taa_history", kTaaHistory)
         .bind("taa_current", kTemporal)
         .bind("taa_previous", kGuide)
-        .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
+        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)))
         .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
 
   if (v.taa)

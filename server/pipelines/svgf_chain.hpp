@@ -95,6 +95,10 @@ struct SvgfVariant {
   // frame; the others keep their history as it is, and a pixel with neither
   // has no data, which no neighbour takes (paper 004 §5; svgf_reproject's MASKED).
   std::optional<protocol::ChannelId> validity_mask;
+  // With a validity mask: the depth and normal planes hold nothing where
+  // the mask is 0 (a ray-traced G-buffer below one sample per pixel); the
+  // chain reads them filled by gbuffer_fill's 3x3 pull-push pyramid.
+  bool sparse_gbuffer = false;
   bool taa = false;                  // final svgf_taa pass
   bool emission = false;             // add the Emission plane back after filtering
   bool roughness = false;            // the session has a Roughness plane (an input)

@@ -9,6 +9,7 @@
 // the CPU reference is progressive_reference_test.cpp.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -362,6 +363,169 @@ TEST_F(ProgressiveTest, StillSceneStopsBlurringBelowOneSamplePerPixel) {
   EXPECT_LT(worst, 0.01);  // "blurred to constant" would be off by up to 0.9
 }
 
+// CPU reference of gbuffer_fill's pull-push pyramid (docs/pipelines.md,
+// progressive, "Sparse G-buffer"), in double precision: per pixel (nx, ny, nz, z).
+std::vector<std::array<double, 4>> pull_push_reference(int w, int h, const std::vector<float>& depth,
+                                                       const std::vector<float>& normal,
+                                                       const std::vector<float>& count) {
+  struct Level {
+    int w, h;
+    std::vector<std::array<double, 4>> v;
+    std::vector<bool> valid;
+  };
+  std::vector<Level> levels(1);
+  levels[0] = {w, h, std::vector<std::array<double, 4>>(size_t(w) * h), std::vector<bool>(size_t(w) * h)};
+  for (int i = 0; i < w * h; ++i) {
+    const bool fg = std::isfinite(depth[i]) && depth[i] > 0.0f;
+    levels[0].v[i] = fg ? std::array<double, 4>{normal[3 * i], normal[3 * i + 1], normal[3 * i + 2], depth[i]}
+                        : std::array<double, 4>{0, 0, 0, 0};
+    levels[0].valid[i] = count[i] > 0.0f;
+  }
+  while (levels.back().w > 1 || levels.back().h > 1) {
+    const Level& f = levels.back();
+    Level c{(f.w + 2) / 3, (f.h + 2) / 3, {}, {}};
+    c.v.assign(size_t(c.w) * c.h, {0, 0, 0, 0});
+    c.valid.assign(size_t(c.w) * c.h, false);
+    for (int y = 0; y < c.h; ++y)
+      for (int x = 0; x < c.w; ++x) {
+        std::array<double, 4> sum{0, 0, 0, 0};
+        int fg = 0;
+        bool any = false;
+        for (int yy = 3 * y; yy < std::min(3 * y + 3, f.h); ++yy)
+          for (int xx = 3 * x; xx < std::min(3 * x + 3, f.w); ++xx) {
+            const int i = yy * f.w + xx;
+            if (!f.valid[i]) continue;
+            any = true;
+            if (f.v[i][3] > 0.0) {
+              for (int k = 0; k < 4; ++k) sum[k] += f.v[i][k];
+              ++fg;
+            }
+          }
+        auto& out = c.v[size_t(y) * c.w + x];
+        if (fg > 0) {
+          for (int k = 0; k < 4; ++k) out[k] = sum[k] / fg;
+          const double len = std::sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+          if (len > 0.0)
+            for (int k = 0; k < 3; ++k) out[k] /= len;
+        }
+        c.valid[size_t(y) * c.w + x] = any;
+      }
+    levels.push_back(std::move(c));
+  }
+  for (size_t l = levels.size() - 1; l-- > 0;) {
+    Level& f = levels[l];
+    const Level& c = levels[l + 1];
+    for (int y = 0; y < f.h; ++y)
+      for (int x = 0; x < f.w; ++x) {
+        const size_t i = size_t(y) * f.w + x, parent = size_t(y / 3) * c.w + x / 3;
+        if (!f.valid[i] && c.valid[parent]) {
+          f.v[i] = c.v[parent];
+          f.valid[i] = true;
+        }
+      }
+  }
+  std::vector<std::array<double, 4>> out(size_t(w) * h);
+  for (int i = 0; i < w * h; ++i) out[i] = levels[0].valid[i] ? levels[0].v[i] : std::array<double, 4>{0, 0, 0, 0};
+  return out;
+}
+
+// sparse_gbuffer: where sample_count is 0 the depth and normal planes hold
+// garbage; the chain reads them filled by the pull-push pyramid. A size no
+// power of 3 divides, a background corner, a 10x10 block without any sample
+// (filled from two levels up) and scattered samples elsewhere.
+TEST_F(ProgressiveTest, SparseGbufferIsFilledByThePyramidAndSampledPixelsKeepTheirOwn) {
+  const int w = 37, h = 23, n = w * h;
+  std::vector<float> depth(n), normal(3 * n), count(n), radiance(3 * n, 0.5f), albedo(3 * n, 0.5f), motion(2 * n, 0.0f);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const float garbage[] = {NAN, 0.0f, INFINITY, -3.0f, 1e30f};
+  for (int i = 0; i < n; ++i) {
+    const int x = i % w, y = i / w;
+    const bool block = x >= 20 && x < 30 && y >= 5 && y < 15;
+    count[i] = !block && u(rng) < 0.3f ? 1.0f : 0.0f;
+    const bool background = x < 6 && y < 5;
+    const float nx = 0.3f * std::sin(x / 4.0f), ny = 0.2f * std::cos(y / 3.0f);
+    const float len = std::sqrt(nx * nx + ny * ny + 1.0f);
+    if (count[i] > 0.0f) {
+      depth[i] = background ? INFINITY : 2.0f + 0.05f * x + 0.02f * y;
+      normal[3 * i] = nx / len;
+      normal[3 * i + 1] = ny / len;
+      normal[3 * i + 2] = 1.0f / len;
+    } else {
+      depth[i] = garbage[i % 5];
+      for (int k = 0; k < 3; ++k) normal[3 * i + k] = garbage[(i + k) % 5];
+    }
+  }
+  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {{"sparse_gbuffer", 1}}, true));
+  auto* graph = dynamic_cast<pipelines::GraphPipeline*>(pipe.get());
+  ASSERT_NE(graph, nullptr);
+  graph->set_capture(true);
+  test::HostFrame f;
+  f.info.motion = MotionConvention::PixelsToPrevious;
+  f.add(ChannelId::Radiance, Format::F32, radiance);
+  f.add(ChannelId::Albedo, Format::F32, albedo);
+  f.add(ChannelId::Normal, Format::F32, normal);
+  f.add(ChannelId::Depth, Format::F32, depth);
+  f.add(ChannelId::Motion, Format::F32, motion);
+  f.add(ChannelId::SampleCount, Format::F32, count);
+  const auto out = run(*pipe, f);
+  for (float v : out) ASSERT_TRUE(std::isfinite(v));
+  const auto filled_depth = test::decode_output(graph->captured("gbuffer_push_0", "gbuffer_depth"), Format::F32);
+  const auto filled_normal = test::decode_output(graph->captured("gbuffer_push_0", "gbuffer_normal"), Format::F32);
+  ASSERT_EQ(filled_depth.size(), size_t(n));
+  const auto want = pull_push_reference(w, h, depth, normal, count);
+  int filled_foreground = 0;
+  for (int i = 0; i < n; ++i) {
+    const bool fg = std::isfinite(depth[i]) && depth[i] > 0.0f;
+    if (count[i] > 0.0f) {  // its own, bit for bit (background as 0)
+      ASSERT_EQ(filled_depth[i], fg ? depth[i] : 0.0f) << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(filled_normal[3 * i + k], fg ? normal[3 * i + k] : 0.0f) << i;
+      continue;
+    }
+    ASSERT_NEAR(filled_depth[i], want[i][3], 1e-5 * std::max(1.0, want[i][3])) << "pixel " << i;
+    for (int k = 0; k < 3; ++k) ASSERT_NEAR(filled_normal[3 * i + k], want[i][k], 1e-5) << "pixel " << i;
+    filled_foreground += want[i][3] > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(filled_foreground, n / 2);  // the holes were filled, not left as background
+  // The block's centre is 4 pixels from any sample: filled from two levels up.
+  EXPECT_GT(filled_depth[10 * w + 25], 2.0f);
+}
+
+// On a flat scene the filled G-buffer is the true one, so a sparse session
+// whose unsampled pixels hold garbage gives what a complete one gives.
+TEST_F(ProgressiveTest, SparseGbufferOnAFlatSceneEqualsTheCompleteOne) {
+  const int w = 40, h = 24, n = w * h;
+  FlatFrames scene{w, h};
+  auto complete = pipelines::create(ctx(), progressive_config(w, h, {}, true));
+  auto sparse = pipelines::create(ctx(), progressive_config(w, h, {{"sparse_gbuffer", 1}}, true));
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> value(0.0, 2.0);
+  for (int t = 0; t < 6; ++t) {
+    std::vector<float> count(n);
+    std::vector<double> x(n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      if (count[i] > 0.0f) x[i] = value(rng);
+    }
+    test::HostFrame full = scene.frame(grey(x), &count);
+    test::HostFrame holes = full;
+    std::vector<float> depth(n, 2.0f), normal(3 * n, 0.0f);
+    for (int i = 0; i < n; ++i) {
+      normal[3 * i + 2] = 1.0f;
+      if (count[i] == 0.0f) {
+        depth[i] = NAN;
+        normal[3 * i + 2] = 0.0f;
+      }
+    }
+    for (auto& plane : holes.planes) {
+      if (plane.id == ChannelId::Depth) plane.bytes = test::encode_plane(depth, Format::F32);
+      if (plane.id == ChannelId::Normal) plane.bytes = test::encode_plane(normal, Format::F32);
+    }
+    const auto a = run(*complete, full), b = run(*sparse, holes);
+    for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(b[i], a[i], 1e-6f * std::max(a[i], 1.0f)) << "frame " << t << " " << i;
+  }
+}
+
 TEST(ProgressiveValidate, ChannelsAndParameters) {
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16)).has_value());
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {}, true)).has_value());
@@ -377,6 +541,11 @@ TEST(ProgressiveValidate, ChannelsAndParameters) {
   const auto e = pipelines::validate(rough);
   ASSERT_TRUE(e.has_value());
   EXPECT_EQ(e->code, protocol::ErrorCode::InvalidChannel);
+  const auto sparse = pipelines::validate(progressive_config(16, 16, {{"sparse_gbuffer", 1}}));
+  ASSERT_TRUE(sparse.has_value());
+  EXPECT_EQ(sparse->code, protocol::ErrorCode::InvalidParameter);
+  EXPECT_NE(sparse->message.find("sample_count"), std::string::npos) << sparse->message;
+  EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {{"sparse_gbuffer", 1}}, true)).has_value());
   const auto bad_order = pipelines::validate(progressive_config(16, 16, {{"step_order", 2}}));
   ASSERT_TRUE(bad_order.has_value());
   EXPECT_EQ(bad_order->code, protocol::ErrorCode::InvalidParameter);

@@ -129,7 +129,8 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   for (const auto& p : all[7].parameters) progressive_names.push_back(p.name);
   expected = svgf_names;
   expected.insert(expected.end(),
-                  {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance", "luminance_min_age"});
+                  {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance", "luminance_min_age",
+                   "sparse_gbuffer"});
   EXPECT_EQ(progressive_names, expected);
   auto default_of = [](const pipelines::PipelineDescription& d, const std::string& name) {
     for (const auto& p : d.parameters)
