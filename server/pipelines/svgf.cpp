@@ -24,15 +24,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   return v;
 }
 
-GraphSpec build(const SessionConfig& config) {
-  GraphSpec g = begin_graph(config);
-  const SvgfVariant v = variant(config, g.parameters);
-  add_svgf_inputs(g, config, v);
-  add_svgf_buffers(g, v);
-  g.add_output(config);
-  add_svgf_passes(g, config, v);
-  return g;
-}
+GraphSpec build(const SessionConfig& config) { return svgf_graph(config, variant); }
 
 std::optional<ConfigError> check_channels(const SessionConfig& config) {
   return check_split_channels(config, "svgf", /*radiance_allowed=*/true);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "pipelines/definitions.hpp"
 #include "pipelines/supersample.hpp"
 
 namespace dn::pipelines {
@@ -383,6 +384,16 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .bind("history", kTaaHistory)
         .set("OUTPUT_HALF", result_half);
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
+}
+
+GraphSpec svgf_graph(const SessionConfig& config, SvgfVariant (*variant)(const SessionConfig&, const Parameters&)) {
+  GraphSpec g = begin_graph(config);
+  const SvgfVariant v = variant(config, g.parameters);
+  add_svgf_inputs(g, config, v);
+  add_svgf_buffers(g, v);
+  g.add_output(config);
+  add_svgf_passes(g, config, v);
+  return g;
 }
 
 }  // namespace dn::pipelines

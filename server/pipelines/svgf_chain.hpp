@@ -133,4 +133,9 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
 void add_svgf_buffers(GraphSpec& g, const SvgfVariant& variant);
 void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& variant);
 
+// The whole graph of a variant with nothing of the caller's own (svgf,
+// progressive): begin_graph, the variant made from the session's resolved
+// parameters, inputs, buffers, the output plane, passes.
+GraphSpec svgf_graph(const SessionConfig& config, SvgfVariant (*variant)(const SessionConfig&, const Parameters&));
+
 }  // namespace dn::pipelines
