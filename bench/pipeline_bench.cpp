@@ -65,12 +65,15 @@ struct Options {
   int warmup = 2;
   int copy_reps = 10;
   std::vector<dn::protocol::Parameter> parameters;  // --param NAME=VALUE, for every pipeline benched
+  int sample_period = 1;  // --spp 1/k: a sample_count plane, each pixel sampled once in k frames
 };
 
 [[noreturn]] void usage(const char* argv0, int code) {
   std::fprintf(code ? stderr : stdout,
                "usage: %s [--pipeline NAME]... [--size WxH]... [--fp16] [--device SELECTOR]\n"
-               "          [--frames N] [--warmup N] [--copy-reps N] [--param NAME=VALUE]...\n"
+               "          [--frames N] [--warmup N] [--copy-reps N] [--param NAME=VALUE]... [--spp-period K]\n"
+               "--spp-period K (> 1): pipelines that take sample_count (progressive) get one, each pixel\n"
+               "sampled once in every K frames ((x + 2y + t) mod K = 0; radiance 0 elsewhere).\n"
                "Per-pass device time of each pipeline against a plain copy of the same bytes.\n",
                argv0);
   std::exit(code);
@@ -128,6 +131,8 @@ Options parse(int argc, char** argv) {
         usage(argv[0], 2);
       }
       o.parameters.push_back({v.substr(0, eq), x});
+    } else if (a == "--spp-period") {
+      o.sample_period = count(1);
     } else if (a == "--help" || a == "-h") {
       usage(argv[0], 0);
     } else {
@@ -186,7 +191,7 @@ struct HostPlanes {
   std::map<ChannelId, std::vector<float>> values;
 };
 
-HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed) {
+HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed, int sample_period) {
   HostPlanes p;
   const size_t n = size_t{w} * h;
   auto want = [&](ChannelId id) { return (needed & dn::protocol::channel_bit(id)) != 0; };
@@ -249,6 +254,16 @@ HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed) {
     p.values[ChannelId::StatM2] = std::move(m2);
     p.values[ChannelId::StatM3] = std::move(m3);
   }
+  // Fewer than one sample per pixel: the mask, and no radiance where it is 0.
+  if (want(ChannelId::SampleCount)) {
+    std::vector<float> count(n);
+    for (size_t i = 0; i < n; ++i) {
+      count[i] = (i % w + 2 * (i / w) + size_t(t)) % size_t(sample_period) == 0 ? 1.0f : 0.0f;
+      if (count[i] == 0.0f)
+        for (int c = 0; c < 3; ++c) radiance[3 * i + c] = 0.0f;
+    }
+    p.values[ChannelId::SampleCount] = std::move(count);
+  }
   if (want(ChannelId::Radiance)) p.values[ChannelId::Radiance] = std::move(radiance);
   if (want(ChannelId::Albedo)) p.values[ChannelId::Albedo] = std::move(albedo);
   if (want(ChannelId::Normal)) p.values[ChannelId::Normal] = std::move(normal);
@@ -286,10 +301,10 @@ struct EncodedFrame {
   uint64_t input_bytes = 0;
 };
 
-EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t) {
+EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t, int sample_period) {
   uint64_t needed = 0;
   for (const auto& c : config.channels) needed |= dn::protocol::channel_bit(c.id);
-  HostPlanes planes = make_planes(config.width, config.height, t, needed);
+  HostPlanes planes = make_planes(config.width, config.height, t, needed, sample_period);
   EncodedFrame f;
   f.bytes.reserve(config.channels.size());
   f.frame.info.frame_index = static_cast<uint64_t>(t);
@@ -312,7 +327,8 @@ EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t) {
 // requires split lighting, F0 and roughness), plus radiance where it is only
 // optional (svgf); optional split lighting and emission would add passes, so
 // they are left out and the svgf row stays comparable.
-std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format) {
+std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format,
+                                                     int sample_period) {
   std::vector<dn::protocol::ChannelDecl> out;
   // The sample statistics are fp32 only (docs/protocol.md §7.7).
   for (const auto& c : dn::protocol::kChannels)
@@ -322,6 +338,8 @@ std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::Pipelin
   const uint64_t radiance = dn::protocol::channel_bit(dn::protocol::ChannelId::Radiance);
   if (!(desc.required_channels & radiance) && (desc.optional_channels & radiance))
     out.insert(out.begin(), {dn::protocol::ChannelId::Radiance, format});
+  const uint64_t mask = dn::protocol::channel_bit(dn::protocol::ChannelId::SampleCount);
+  if (sample_period > 1 && (desc.optional_channels & mask)) out.push_back({dn::protocol::ChannelId::SampleCount, format});
   return out;
 }
 
@@ -450,7 +468,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   config.height = h;
   config.pipeline = desc.name;
   config.output_format = o.format;
-  config.channels = channels_for(desc, o.format);
+  config.channels = channels_for(desc, o.format, o.sample_period);
   config.parameters = o.parameters;
   if (auto err = dn::pipelines::validate(config)) {
     row.error = err->field + ": " + err->message;
@@ -476,7 +494,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   std::vector<double> totals;
   std::vector<uint8_t> output;
   for (int t = 0; t < o.frames; ++t) {
-    EncodedFrame f = make_frame(config, t);
+    EncodedFrame f = make_frame(config, t, o.sample_period);
     std::vector<dn::protocol::PassTiming> timings;
     pipe->process(f.frame, true, output, timings);
     if (t == 0)
