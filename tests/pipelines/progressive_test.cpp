@@ -281,37 +281,42 @@ TEST_F(ProgressiveTest, OutputScalesWithInput) {
 
 // Hard cases on every guide and the mask: NaN, infinite, huge, negative and
 // zero values never make the output (or a later frame's) non-finite.
+// With the G-buffer complete and sparse (then the bad guides of unsampled
+// pixels go through the pyramid and the bad ones of sampled pixels seed it).
 TEST_F(ProgressiveTest, BadInputsNeverReachTheOutput) {
-  const int w = 40, h = 24, n = w * h;
-  auto pipe = pipelines::create(ctx(), progressive_config(w, h, {}, true));
-  const float bad[] = {NAN, INFINITY, -INFINITY, 1e30f, -1.0f, 0.0f, 1e-40f};
-  std::mt19937 rng(21);
-  std::uniform_real_distribution<float> value(0.0f, 2.0f);
-  for (int t = 0; t < 6; ++t) {
-    std::vector<float> radiance(3 * n), albedo(3 * n), normal(3 * n, 0.0f), depth(n), motion(2 * n), count(n);
-    for (int i = 0; i < n; ++i) {
-      const bool hit = (i * 7 + t) % 5 == 0;
-      const float b = bad[(i + t) % 7];
-      for (int c = 0; c < 3; ++c) {
-        radiance[3 * i + c] = hit && c == 0 ? b : value(rng);
-        albedo[3 * i + c] = hit && c == 1 ? b : 0.5f;
+  for (double sparse : {0.0, 1.0}) {
+    SCOPED_TRACE(sparse ? "sparse G-buffer" : "complete G-buffer");
+    const int w = 40, h = 24, n = w * h;
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, {{"sparse_gbuffer", sparse}}, true));
+    const float bad[] = {NAN, INFINITY, -INFINITY, 1e30f, -1.0f, 0.0f, 1e-40f};
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> value(0.0f, 2.0f);
+    for (int t = 0; t < 6; ++t) {
+      std::vector<float> radiance(3 * n), albedo(3 * n), normal(3 * n, 0.0f), depth(n), motion(2 * n), count(n);
+      for (int i = 0; i < n; ++i) {
+        const bool hit = (i * 7 + t) % 5 == 0;
+        const float b = bad[(i + t) % 7];
+        for (int c = 0; c < 3; ++c) {
+          radiance[3 * i + c] = hit && c == 0 ? b : value(rng);
+          albedo[3 * i + c] = hit && c == 1 ? b : 0.5f;
+        }
+        normal[3 * i + 2] = hit && i % 3 == 0 ? b : 1.0f;
+        depth[i] = hit && i % 3 == 1 ? b : 2.0f;
+        motion[2 * i] = hit && i % 3 == 2 ? b : 0.0f;
+        motion[2 * i + 1] = 0.0f;
+        count[i] = hit && i % 2 == 0 ? b : float((i + t) % 2);
       }
-      normal[3 * i + 2] = hit && i % 3 == 0 ? b : 1.0f;
-      depth[i] = hit && i % 3 == 1 ? b : 2.0f;
-      motion[2 * i] = hit && i % 3 == 2 ? b : 0.0f;
-      motion[2 * i + 1] = 0.0f;
-      count[i] = hit && i % 2 == 0 ? b : float((i + t) % 2);
+      test::HostFrame f;
+      f.info.motion = MotionConvention::PixelsToPrevious;
+      f.add(ChannelId::Radiance, Format::F32, radiance);
+      f.add(ChannelId::Albedo, Format::F32, albedo);
+      f.add(ChannelId::Normal, Format::F32, normal);
+      f.add(ChannelId::Depth, Format::F32, depth);
+      f.add(ChannelId::Motion, Format::F32, motion);
+      f.add(ChannelId::SampleCount, Format::F32, count);
+      const auto out = run(*pipe, f);
+      for (int i = 0; i < 3 * n; ++i) ASSERT_TRUE(std::isfinite(out[i])) << "frame " << t << " element " << i;
     }
-    test::HostFrame f;
-    f.info.motion = MotionConvention::PixelsToPrevious;
-    f.add(ChannelId::Radiance, Format::F32, radiance);
-    f.add(ChannelId::Albedo, Format::F32, albedo);
-    f.add(ChannelId::Normal, Format::F32, normal);
-    f.add(ChannelId::Depth, Format::F32, depth);
-    f.add(ChannelId::Motion, Format::F32, motion);
-    f.add(ChannelId::SampleCount, Format::F32, count);
-    const auto out = run(*pipe, f);
-    for (int i = 0; i < 3 * n; ++i) ASSERT_TRUE(std::isfinite(out[i])) << "frame " << t << " element " << i;
   }
 }
 
