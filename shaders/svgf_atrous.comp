@@ -47,8 +47,18 @@
 #include "sanitize.glsl"
 #include "luminance.glsl"
 #include "svgf_guards.glsl"
+#include "reproject.glsl"
 #include "pass.glsl"
 #include "passes/svgf_atrous.pass"
+
+// DISPLAY_FILL's sources: foreground pixels with a normal and data.
+bool dn_fill_source(ivec2 q, out vec3 value) {
+  uint qi = uint(q.y) * frame.size.x + uint(q.x);
+  vec4 s = src.data[qi];
+  value = s.rgb;
+  return uintBitsToFloat(guide.data[qi].x) > 0.0 && s.w != DN_SVGF_NO_DATA;
+}
+#include "ring_fill.glsl"
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 #define R KERNEL_RADIUS
@@ -187,6 +197,8 @@ void main() {
       // Still no data where neither p nor any tap has any.
       vec4 result = sw[k] > 0.0 ? vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k])
                                 : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
+      vec3 fill;
+      if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA && dn_ring_fill(p, uvec2(size), fill)) result = vec4(fill, 0.0);
       dst.data[pi] = result;
       if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0) &&
           (!AGE_GATED_LUMINANCE || temporal.data[pi].z >= min_age))

@@ -20,6 +20,18 @@
 #include "clip.glsl"
 #include "reflect.glsl"
 
+// MASKED: whether pixel q has a sample this frame (a NaN count is none).
+bool sampled(uint q) { return DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, q) > 0.0; }
+
+// An unsampled background pixel's fill sources: the background pixels
+// sampled this frame (background keeps no history).
+bool dn_fill_source(ivec2 q, out vec3 value) {
+  uint qi = uint(q.y) * frame.size.x + uint(q.x);
+  value = dn_svgf_current(qi);
+  return sampled(qi) && !dn_is_foreground(dn_svgf_depth(qi));
+}
+#include "ring_fill.glsl"
+
 // History clipping (CLIP): the box a history is clipped to. Paper 001's
 // box, the per-channel min/max of the prefiltered current signal
 // (svgf_clip_prefilter) over the 5x5 foreground pixels around p, narrowed to
@@ -138,6 +150,14 @@ void main() {
   vec2 m = vec2(l, l * l);
   float z = dn_svgf_depth(p);
   if (!dn_is_foreground(z)) {
+    // Background is passed through; below one sample per pixel an unsampled
+    // one shows its nearest sampled background neighbours (else it is 0).
+    vec3 fill;
+    if (MASKED && !sampled(p) && dn_ring_fill(pos, size, fill)) {
+      d = fill;
+      l = dn_luminance(d);
+      m = vec2(l, l * l);
+    }
     illum.data[p] = vec4(d, 0.0);
     if (WRITE_GUIDE) guide.data[p] = uvec4(0u);
     temporal.data[p] = vec4(m, 0.0, l);
@@ -233,7 +253,7 @@ void main() {
                           floatBitsToUint(grad.x), REFLECTION ? uint(reflection.data[p].z) : 0u);
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
-  if (MASKED && !(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, p) > 0.0)) {
+  if (MASKED && !sampled(p)) {
     illum.data[p] = vec4(prev, 0.0);
     temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));
     return;

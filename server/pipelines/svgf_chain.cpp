@@ -219,7 +219,8 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .set("CLASS_EDGES", s.motion == MotionSource::Reflection)
         .set("KERNEL_RADIUS", v.kernel == AtrousKernel::B3_5x5 ? 2u : 1u)
         .set("LUMINANCE_VARIANCE", v.luminance_weight == LuminanceWeight::Variance)
-        .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff);
+        .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff)
+        .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations);
     if (i == tap) atrous.bind("colour_history", colour);
     if (i == tap && v.validity_mask) bind_validity_mask(config, *v.validity_mask, atrous);
     if (!s.spatial_bandwidth.empty()) atrous.bind("bandwidth", s.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);

@@ -80,7 +80,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 11u);
+  ASSERT_EQ(sa.size(), 12u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
@@ -88,7 +88,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   EXPECT_EQ(sa[4], (gpu::SpecConstant{4, 0}));  // CLASS_EDGES' default
   EXPECT_EQ(sa[5], (gpu::SpecConstant{5, 0}));  // SPATIAL_BANDWIDTH's default
   EXPECT_EQ(sa[6], (gpu::SpecConstant{6, 2}));  // KERNEL_RADIUS's default: svgf's 5x5
-  for (uint32_t id = 7; id <= 10; ++id) EXPECT_EQ(sa[id], (gpu::SpecConstant{id, 0}));  // progressive's switches off
+  for (uint32_t id = 7; id <= 11; ++id) EXPECT_EQ(sa[id], (gpu::SpecConstant{id, 0}));  // progressive's switches off
 }
 
 // Every configuration the tests use builds a graph that passes check().

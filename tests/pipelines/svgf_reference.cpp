@@ -168,6 +168,29 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           }
       }
   };
+  // ring_fill.glsl: the mean over the smallest square ring around (x, y),
+  // radius 1 to 8, holding any pixel q for which source(q, value) is true.
+  auto ring_fill = [&](int x, int y, auto source, double* mean) {
+    for (int r = 1; r <= 8; ++r) {
+      double sum[3] = {0, 0, 0}, v[3];
+      int count = 0;
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; dx += (std::abs(dy) == r ? 1 : 2 * r)) {
+          const int qx = x + dx, qy = y + dy;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h || !source(qy * w + qx, v)) continue;
+          for (int k = 0; k < 3; ++k) sum[k] += v[k];
+          ++count;
+        }
+      if (count > 0) {
+        for (int k = 0; k < 3; ++k) mean[k] = sum[k] / count;
+        return true;
+      }
+    }
+    return false;
+  };
+  auto has_normal_at = [&](int q) {
+    return nrm[3 * q] * nrm[3 * q] + nrm[3 * q + 1] * nrm[3 * q + 1] + nrm[3 * q + 2] * nrm[3 * q + 2] > 0.0;
+  };
   auto clipped_here = [&](int i) { return !(f.roughness[i] >= p_.clip_roughness); };
 
   auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod, bool clip) {
@@ -187,10 +210,18 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       const int i = y * w + x;
       const double l = luminance(&d[3 * i]);
       if (!fg[i]) {
-        for (int k = 0; k < 3; ++k) colour[3 * i + k] = d[3 * i + k];
+        double bg[3] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
+        // Below one sample per pixel an unsampled background pixel shows the
+        // mean of the nearest ring of sampled background pixels.
+        if (masked && !(f.sample_count[i] > 0.0))
+          ring_fill(x, y, [&](int q, double* v) {
+            for (int k = 0; k < 3; ++k) v[k] = d[3 * q + k];
+            return f.sample_count[q] > 0.0 && !fg[q];
+          }, bg);
+        for (int k = 0; k < 3; ++k) colour[3 * i + k] = bg[k];
         len[i] = 0.0;
-        m1[i] = l;
-        m2[i] = l * l;
+        m1[i] = luminance(bg);
+        m2[i] = m1[i] * m1[i];
         continue;
       }
       const double* nc = &nrm[3 * i];
@@ -481,6 +512,16 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         if (!(sw > 0.0)) {  // neither p nor a tap has data
           for (int k = 0; k < 3; ++k) next[4 * i + k] = 0.0;
           next[4 * i + 3] = kSvgfNoData;
+          // The last iteration's display fill: the nearest ring of foreground
+          // pixels with a normal and data.
+          double fill[3];
+          if (masked && it + 1 == iterations && ring_fill(x, y, [&](int q, double* v) {
+                for (int k = 0; k < 3; ++k) v[k] = cur[4 * q + k];
+                return fg[q] && has_normal_at(q) && cur[4 * q + 3] != kSvgfNoData;
+              }, fill)) {
+            for (int k = 0; k < 3; ++k) next[4 * i + k] = fill[k];
+            next[4 * i + 3] = 0.0;
+          }
           continue;
         }
         for (int k = 0; k < 3; ++k) next[4 * i + k] = sc[k] / sw;
