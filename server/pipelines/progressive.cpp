@@ -10,6 +10,7 @@
 
 #include "pipelines/definitions.hpp"
 #include "pipelines/split_signals.hpp"
+#include "pipelines/supersample.hpp"
 #include "pipelines/svgf_chain.hpp"
 
 namespace dn::pipelines {
@@ -58,12 +59,13 @@ PipelineDefinition progressive_definition() {
       "Progressive SVGF (Dundr 2018): the svgf chain with a 3x3 a-trous kernel (steps 1, 16, 8, 4, 2), blend "
       "max(0.1, 1/age), no luminance weight for young pixels and a final clamped TAA blend; with sample_count, fewer "
       "than one sample per pixel (unsampled pixels keep their history).";
-  d.description.required_channels = protocol::channel_bit(ChannelId::Albedo) |
-                                     protocol::channel_bit(ChannelId::Normal) |
-                                     protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
-  d.description.optional_channels = protocol::channel_bit(ChannelId::Radiance) | split_channel_bits() |
-                                     protocol::channel_bit(ChannelId::Emission) |
-                                     protocol::channel_bit(ChannelId::SampleCount);
+  // svgf's channels, without roughness (nothing is clipped) and the extra
+  // samples (not combined with a validity mask), plus the mask.
+  const PipelineDescription svgf = svgf_definition().description;
+  d.description.required_channels = svgf.required_channels;
+  d.description.optional_channels =
+      (svgf.optional_channels & ~(protocol::channel_bit(ChannelId::Roughness) | extra_sample_channel_bits())) |
+      protocol::channel_bit(ChannelId::SampleCount);
   d.parameter_groups = {"svgf", "progressive"};
   // Paper 004's constants (§4.2-4.5): a = 0.1 for colour and moments, 5
   // a-trous passes, sigma_N 64, the final blend's fixed ratio 0.1; no clipping.
