@@ -188,6 +188,7 @@ void main() {
     }
   }
 
+  uint fill_mask = 0u;  // DISPLAY_FILL: the block pixels still without data
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
       int k = j * B + i;
@@ -197,12 +198,21 @@ void main() {
       // Still no data where neither p nor any tap has any.
       vec4 result = sw[k] > 0.0 ? vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k])
                                 : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
-      vec3 fill;
-      if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA && dn_ring_fill(p, uvec2(size), fill)) result = vec4(fill, 0.0);
+      if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask |= 1u << uint(k);
       dst.data[pi] = result;
       if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0) &&
           (!AGE_GATED_LUMINANCE || temporal.data[pi].z >= min_age))
         colour_history.data[pi].rgb = result.rgb;
+    }
+  }
+  // DISPLAY_FILL, outside the unrolled block: the ring search is long and
+  // rare, and unrolled once per block pixel it made this pass 13x slower.
+  if (DISPLAY_FILL && fill_mask != 0u) {
+    [[dont_unroll]] for (int k = 0; k < B * B; ++k) {
+      if ((fill_mask & (1u << uint(k))) == 0u) continue;
+      ivec2 p = base + STEP * ivec2(k % B, k / B);
+      vec3 fill;
+      if (dn_ring_fill(p, uvec2(size), fill)) dst.data[uint(p.y) * uint(size.x) + uint(p.x)] = vec4(fill, 0.0);
     }
   }
 }
