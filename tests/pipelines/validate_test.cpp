@@ -32,7 +32,7 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
 TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemporalAndProgressive) {
   const auto& all = pipelines::available_pipelines();
   ASSERT_EQ(all.size(), 8u);
-  // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for every SVGF-chain pipeline.
+  // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for svgf, svgf-fb and reflect (not progressive).
   uint64_t extra_samples = 0;
   for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
   EXPECT_EQ(all[2].name, "svgf");
