@@ -89,6 +89,7 @@ void main() {
   float sigma_l = DN_PARAM_VALUE(progressive, sigma_luminance);
   float eps_l = DN_PARAM_VALUE(progressive, epsilon_luminance);
   float min_age = DN_PARAM_VALUE(progressive, luminance_min_age);
+  float ramp_in = DN_PARAM_VALUE(progressive, luminance_ramp_in);
 
   // Block pixels: centre data.
   float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];
@@ -143,6 +144,9 @@ void main() {
         }
         float len = temporal.data[pi].z;
         float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
+        // luminance_ramp_in r: the age gate's weight comes in over r samples,
+        // bandwidth x 2^r, ..., 2 (switched on at once, the display jumps).
+        if (AGE_GATED_LUMINANCE && min_age > 0.0) widen *= exp2(clamp(min_age + ramp_in - len, 0.0, ramp_in));
         float gvar = gw > 0.0 ? gv / gw : 0.0;
         ipl[k] = LUMINANCE_VARIANCE ? 1.0 / (widen * (sigma_l * gvar + eps_l))
                                     : 1.0 / (phi_c * widen * sqrt(gvar + DN_SVGF_VARIANCE_EPS));

@@ -80,6 +80,7 @@ test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps) 
     if (q.name == "sigma_luminance") p.sigma_luminance = q.value;
     if (q.name == "epsilon_luminance") p.epsilon_luminance = q.value;
     if (q.name == "luminance_min_age") p.luminance_min_age = q.value;
+    if (q.name == "luminance_ramp_in") p.luminance_ramp_in = q.value;
   }
   return p;
 }
@@ -188,6 +189,10 @@ INSTANTIATE_TEST_SUITE_P(
         // exactly) and a moving one (they keep the reprojected history).
         Variant{"quarter_spp_static", false, true, true, {}, 0.0f, 0.0f, 0.0f},
         Variant{"quarter_spp_moving", false, true, true, {}},
+        // The weight coming in over 3 samples past an age gate of 1 (so that
+        // 8 frames at 1/4 spp reach it).
+        Variant{"quarter_spp_static_ramp_in", false, false, true, {{"luminance_min_age", 1}, {"luminance_ramp_in", 3}},
+                0.0f, 0.0f, 0.0f},
         // The luminance weight at every age (at 1/4 spp a history reaches
         // length 4 only after 13 frames): p without data has none, and the
         // variance Gaussian skips taps without data. Whole-pixel motion only:

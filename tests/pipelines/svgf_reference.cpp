@@ -485,10 +485,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             gw += k;
           }
         const double g = gw > 0.0 ? gv / gw : 0.0;
-        const double ramp = p_.luminance_ramp ? 8.0 - std::min(7.0, std::max(len[i] - 1.0, 0.0)) : 1.0;
+        double ramp = p_.luminance_ramp ? 8.0 - std::min(7.0, std::max(len[i] - 1.0, 0.0)) : 1.0;
         // Luminance weight |l_p - l_q| / bandwidth; none for p without data or
         // younger than luminance_min_age (its variance is unusable).
         const bool luminance_on = has_data && !(len[i] < p_.luminance_min_age);
+        // Age-gated: the weight comes in over luminance_ramp_in samples, bandwidth x 2^r, ..., 2.
+        if (p_.luminance_min_age > 0.0)
+          ramp *= std::exp2(std::clamp(p_.luminance_min_age + p_.luminance_ramp_in - len[i], 0.0, p_.luminance_ramp_in));
         const double bandwidth = p_.luminance_form == 0 ? p_.phi_colour * ramp * std::sqrt(g + 1e-20)
                                                         : ramp * (p_.sigma_luminance * g + p_.epsilon_luminance);
         double sc[3] = {0, 0, 0}, sv = 0, sw = 0;

@@ -31,6 +31,7 @@ struct SvgfParams {
   double epsilon_luminance = 0.05;  // luminance_form 1
   bool spatial_estimate = true;     // false: young pixels' variance from their own moments, no 7x7 (pass 2)
   double luminance_min_age = 0.0;   // no luminance weight where p's history length is below this (pass 3)
+  double luminance_ramp_in = 0.0;  // progressive: the weight comes in over this many samples past luminance_min_age
 };
 
 // The variance of a pixel without data (sample_count: never sampled, nothing
