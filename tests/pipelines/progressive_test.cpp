@@ -58,6 +58,10 @@ pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::
   return test::make_config("progressive", w, h, channels, Format::F32, std::move(params));
 }
 
+// The sample_count of pixel i (image width w) at frame t of a 1/4-spp
+// schedule that samples every pixel once in every 4 frames.
+float quarter_spp_count(int i, int w, int t) { return ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f; }
+
 // Temporal accumulation alone: no a-trous iteration, no final blend.
 const std::vector<protocol::Parameter> kAccumulationOnly = {
     {"atrous_iterations", 0}, {"taa_alpha", 0}, {"taa_static_alpha", 0}};
@@ -190,7 +194,7 @@ TEST_F(ProgressiveTest, UnsampledPixelsKeepTheirStateBitForBit) {
     std::vector<float> count(n);
     std::vector<double> x(n, 0.0);
     for (int i = 0; i < n; ++i) {
-      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;  // every pixel once in 4 frames
+      count[i] = quarter_spp_count(i, w, t);
       if (count[i] > 0.0f) x[i] = value(rng);
     }
     run(*pipe, scene.frame(grey(x), &count));
@@ -233,7 +237,7 @@ TEST_F(ProgressiveTest, PixelsWithoutDataNeverReachANeighbourAndFourFramesLeaveN
     std::vector<float> count(n), radiance(3 * n);
     int without_data = 0;
     for (int i = 0; i < n; ++i) {
-      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      count[i] = quarter_spp_count(i, w, t);
       for (int c = 0; c < 3; ++c) radiance[3 * i + c] = count[i] > 0.0f ? 0.8f : garbage[(i + c) % 5];
     }
     const auto out = run(*pipe, scene.frame(radiance, &count));
@@ -388,7 +392,7 @@ TEST_F(ProgressiveTest, StillSceneStopsBlurringBelowOneSamplePerPixel) {
     std::vector<float> count(n);
     std::vector<double> x(n, 0.0);
     for (int i = 0; i < n; ++i) {
-      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      count[i] = quarter_spp_count(i, w, t);
       if (count[i] > 0.0f) x[i] = truth[i];
     }
     const auto out = run(*pipe, scene.frame(grey(x), &count));
@@ -543,7 +547,7 @@ TEST_F(ProgressiveTest, SparseGbufferOnAFlatSceneEqualsTheCompleteOne) {
     std::vector<float> count(n);
     std::vector<double> x(n, 0.0);
     for (int i = 0; i < n; ++i) {
-      count[i] = ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f;
+      count[i] = quarter_spp_count(i, w, t);
       if (count[i] > 0.0f) x[i] = value(rng);
     }
     test::HostFrame full = scene.frame(grey(x), &count);

@@ -44,6 +44,31 @@ double distance3(const double* a, const double* b) {
 
 }  // namespace
 
+void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& values) {
+  for (const auto& q : values) {
+    if (q.name == "alpha_colour") p.alpha_colour = q.value;
+    if (q.name == "alpha_moments") p.alpha_moments = q.value;
+    if (q.name == "max_history") p.max_history = q.value;
+    if (q.name == "atrous_iterations") p.atrous_iterations = static_cast<int>(q.value);
+    if (q.name == "feedback_tap") p.feedback_tap = static_cast<int>(q.value);
+    if (q.name == "phi_colour") p.phi_colour = q.value;
+    if (q.name == "phi_normal") p.phi_normal = q.value;
+    if (q.name == "phi_depth") p.phi_depth = q.value;
+    if (q.name == "taa_alpha") p.taa_alpha = q.value;
+    if (q.name == "taa_static_alpha") p.taa_static_alpha = q.value;
+    if (q.name == "clip_roughness") p.clip_roughness = q.value;
+    if (q.name == "variance_of_mean") p.variance_of_mean = static_cast<int>(q.value);
+    if (q.name == "luminance_ramp") p.luminance_ramp = static_cast<int>(q.value);
+    if (q.name == "propagate_variance") p.propagate_variance = static_cast<int>(q.value);
+    if (q.name == "step_order") p.finest_first = q.value == 0.0;
+    if (q.name == "luminance_form") p.luminance_form = static_cast<int>(q.value);
+    if (q.name == "sigma_luminance") p.sigma_luminance = q.value;
+    if (q.name == "epsilon_luminance") p.epsilon_luminance = q.value;
+    if (q.name == "luminance_min_age") p.luminance_min_age = q.value;
+    if (q.name == "luminance_ramp_in") p.luminance_ramp_in = q.value;
+  }
+}
+
 SvgfReference::SvgfReference(int width, int height, SvgfParams params) : w_(width), h_(height), p_(params) {}
 
 std::vector<double> SvgfReference::step(const SvgfFrame& f) {

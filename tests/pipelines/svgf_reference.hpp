@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "dn/protocol/messages.hpp"
+
 namespace dn::test {
 
 struct SvgfParams {
@@ -37,6 +39,10 @@ struct SvgfParams {
 // The variance of a pixel without data (sample_count: never sampled, nothing
 // reprojected), as the device marks it (DN_SVGF_NO_DATA).
 inline constexpr double kSvgfNoData = -1.0;
+
+// Session parameters (the svgf and progressive groups, by name) into the
+// reference's: each named one replaces the field's current value.
+void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& values);
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
 // pixels towards the previous frame. emission empty when the session has none.

@@ -47,22 +47,7 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
   ASSERT_FALSE(pipelines::validate(config).has_value());
   auto pipe = pipelines::create(ctx(), config);
   test::SvgfParams params;
-  for (const auto& p : v.params) {
-    if (p.name == "alpha_colour") params.alpha_colour = p.value;
-    if (p.name == "alpha_moments") params.alpha_moments = p.value;
-    if (p.name == "max_history") params.max_history = p.value;
-    if (p.name == "atrous_iterations") params.atrous_iterations = static_cast<int>(p.value);
-    if (p.name == "feedback_tap") params.feedback_tap = static_cast<int>(p.value);
-    if (p.name == "phi_colour") params.phi_colour = p.value;
-    if (p.name == "phi_normal") params.phi_normal = p.value;
-    if (p.name == "phi_depth") params.phi_depth = p.value;
-    if (p.name == "taa_alpha") params.taa_alpha = p.value;
-    if (p.name == "taa_static_alpha") params.taa_static_alpha = p.value;
-    if (p.name == "clip_roughness") params.clip_roughness = p.value;
-    if (p.name == "variance_of_mean") params.variance_of_mean = static_cast<int>(p.value);
-    if (p.name == "luminance_ramp") params.luminance_ramp = static_cast<int>(p.value);
-    if (p.name == "propagate_variance") params.propagate_variance = static_cast<int>(p.value);
-  }
+  test::apply_parameters(params, v.params);
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
   const int frames = 7;
