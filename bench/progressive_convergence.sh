@@ -53,6 +53,8 @@
 # (path frame 0) at --still-ref-spp, the point references; all cached under
 # --cache (the point references as progressive_point_<scene>_<W>x<H>_n<N>[_jitter]/:
 # delete them when the renderer changes).
+# --param NAME=VALUE (repeatable) passes a parameter to the progressive
+# sessions (dn denoise --param), to measure a variant; svgf keeps its defaults.
 # --jitter renders the noisy frames (and the point references) with dnrender
 # --jitter: per-frame Halton jitter for the moving camera; the still camera
 # keeps frame 0's jitter (dnrender takes the held frame's), so its sample 0
@@ -74,10 +76,12 @@ out=out/progressive_convergence
 cache=out/cache
 docs=0
 jitter=0
+params=()
 usage() {
   cat <<USAGE
 usage: bench/progressive_convergence.sh [--scenes "1 3"] [--size WxH] [--frames F] [--ref-spp S]
                                         [--still-ref-spp S] [--point-ref-frames N] [--seed S] [--jitter]
+                                        [--param NAME=VALUE ...]
                                         [--out DIR] [--cache DIR] [--docs]
 defaults: --scenes "$scenes" --size $size --frames $frames --ref-spp $ref_spp --still-ref-spp $still_ref_spp
           --point-ref-frames $point_frames --seed $seed --out $out
@@ -93,6 +97,7 @@ while [ $# -gt 0 ]; do
     --point-ref-frames) point_frames=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --jitter) jitter=1; shift ;;
+    --param) params+=(--param "$2"); shift 2 ;;
     --out) out=$2; shift 2 ;;
     --cache) cache=$2; shift 2 ;;
     --docs) docs=1; shift ;;
@@ -175,8 +180,10 @@ for s in $scenes; do
       read -r method pipeline x tag <<< "$row"
       res="$dir/$camera/${method}_$tag"
       input="$dir/$camera/input_$tag/frame_%04d.exr"
+      pipeline_params=()
+      [ "$pipeline" != progressive ] || pipeline_params=(${params[@]+"${params[@]}"})
       "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" --preset dnrender \
-        --input "$input" --start 0 --end $((frames - 1)) \
+        ${pipeline_params[@]+"${pipeline_params[@]}"} --input "$input" --start 0 --end $((frames - 1)) \
         --output "$res/frame_%04d.exr" --exr-float --summary "$res.summary.tsv"
       "$metrics" --output "$res/frame_%04d.exr" "${ref[@]}" --input "$input" --frames "$frames" > "$res.tsv"
       if [ "$camera" = still ]; then

@@ -43,6 +43,22 @@ float taa_weight(vec2 mv) {
   return mix(moving, still, dn_stillness(mv));
 }
 
+// DISPLAY_LAG (progressive's display_lag; paper 004 5's buffer one step
+// behind): the state s per pixel by which svgf_taa's 3x3 clamp gives way,
+// max(s, 0). s = -1 (armed) while the pixel's history holds fewer than
+// luminance_min_age samples; 1 at the first frame it holds that many, when its
+// history switches source and its filter gains the luminance weight: the
+// display then moves to the new filter at the blend's ratio instead of
+// snapping into the new 3x3 box; then s shrinks by (1 - weight) a frame.
+// Motion ends it (x stillness: the clamp keeps a moving highlight from
+// ghosting); 0 without a usable TAA history. prev_s: the previous state at
+// the reprojection's heaviest tap.
+float display_lag(uint p, bool valid, float weight, vec2 mv, float prev_s) {
+  if (colour_history.data[p].a < DN_PARAM_VALUE(progressive, luminance_min_age)) return -1.0;
+  if (!valid) return 0.0;
+  return (prev_s < 0.0 ? 1.0 : prev_s * (1.0 - weight)) * dn_stillness(mv);
+}
+
 // TAA: the previous final output at p + mv, bilinear over the taps inside the
 // image (renormalized); none (weight 1) when reset, background, motion not
 // finite or the accepted weight < DN_MIN_TAP_WEIGHT (off-screen), and not
@@ -50,6 +66,7 @@ float taa_weight(vec2 mv) {
 void taa_prepare(uint p, vec3 c) {
   uvec2 size = frame.size.xy;
   vec3 prev = vec3(0.0);
+  float prev_lag = 0.0;
   bool valid = false;
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
   float weight = dn_is_finite(mv) ? taa_weight(mv) : 1.0;
@@ -58,20 +75,25 @@ void taa_prepare(uint p, vec3 c) {
   if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 s = vec3(0.0);
-    float sw = 0.0;
+    float sw = 0.0, heaviest = 0.0;
     ivec2 taps[4] = ivec2[4](origin, origin + ivec2(1, 0), origin + ivec2(0, 1), origin + ivec2(1, 1));
     for (int k = 0; k < 4; ++k) {
       if (!dn_inside(taps[k], size)) continue;
       s += weights[k] * taa_history_at(taps[k]);
       sw += weights[k];
+      if (DISPLAY_LAG && weights[k] > heaviest) {
+        heaviest = weights[k];
+        prev_lag = taa_lag.data[uint(taps[k].y) * size.x + uint(taps[k].x)];
+      }
     }
     if (sw >= DN_MIN_TAP_WEIGHT) {
       valid = true;
       prev = s / sw;
     }
   }
+  float lag = DISPLAY_LAG ? display_lag(p, valid, weight, mv, prev_lag) : 0.0;
   taa_current.data[p] = vec4(c, valid ? weight : 1.0);
-  taa_previous.data[p] = vec4(prev, 0.0);
+  taa_previous.data[p] = vec4(prev, lag);
 }
 
 void main() {

@@ -5,8 +5,10 @@
 // reprojected previous final output is clamped per RGB channel to the
 // min/max of the current colour over the 3x3 neighbourhood (the taps inside
 // the image) and out = mix(clamped, current, a); elsewhere out = current.
-// out goes to Output (session format) and to the TAA history (fp32). One
-// invocation per pixel pair.
+// out goes to Output (session format) and to the TAA history (fp32).
+// DISPLAY_LAG: the clamped value gives way to the unclamped one by
+// max(previous.a, 0) (svgf_remodulate's display_lag), and previous.a is kept
+// for the next frame. One invocation per pixel pair.
 //
 // Resources: passes/svgf_taa.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -30,9 +32,12 @@ vec3 blend(uint p) {
         lo = min(lo, v);
         hi = max(hi, v);
       }
-    vec3 prev = clamp(previous.data[p].rgb, lo, hi);
+    vec4 reprojected = previous.data[p];
+    vec3 prev = clamp(reprojected.rgb, lo, hi);
+    if (DISPLAY_LAG) prev = mix(prev, reprojected.rgb, max(reprojected.a, 0.0));
     out_c = mix(prev, c.rgb, c.a);
   }
+  if (DISPLAY_LAG) lag.data[p] = previous.data[p].a;
   history.data[3u * p] = out_c.r;
   history.data[3u * p + 1u] = out_c.g;
   history.data[3u * p + 2u] = out_c.b;

@@ -28,6 +28,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   v.young_variance = YoungVariance::LuminanceOff;
   if (has_channel(config, ChannelId::SampleCount)) v.validity_mask = ChannelId::SampleCount;
   v.sparse_gbuffer = p.progressive_sparse_gbuffer != 0.0f;  // check_channels: only with sample_count
+  v.display_lag = v.taa && p.progressive_display_lag != 0.0f;
   return v;
 }
 

@@ -22,6 +22,10 @@ constexpr uint64_t kAuxHistoryBytes = 16;
 // TAA: the previous final output, rgb fp32, one persistent copy (read by
 // svgf_remodulate, rewritten by svgf_taa after it).
 constexpr uint64_t kTaaHistoryBytes = 12;
+// SvgfVariant::display_lag: the lag state per pixel, fp32, one persistent
+// copy (read by svgf_remodulate, rewritten by svgf_taa).
+constexpr const char* kTaaLag = "svgf_taa_lag";
+constexpr uint64_t kTaaLagBytes = 4;
 // SvgfVariant::display: the displayed frame, rgb fp32.
 constexpr uint64_t kDisplayBytes = 12;
 // Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
@@ -273,6 +277,7 @@ void check_supported(const SvgfVariant& v) {
   if (v.validity_mask && *v.validity_mask != ChannelId::SampleCount)
     reject("validity mask: only the sample_count plane is one");
   if (v.sparse_gbuffer && !v.validity_mask) reject("a sparse G-buffer needs the validity mask that says where it has data");
+  if (v.display_lag && !v.taa) reject("display_lag lags the final blend: it needs taa");
   if (v.validity_mask && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; }))
     reject("validity mask with a clipped signal: the clip box reads every neighbour's current sample");
   if (v.iterations > 16) reject("more than 16 a-trous iterations (step 2^16)");
@@ -301,6 +306,7 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
   }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
+  if (v.display_lag) g.add_persistent(kTaaLag, kTaaLagBytes);
   if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
   if (v.extra_samples) {
     std::vector<std::string> inputs;
@@ -376,14 +382,18 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .bind("taa_previous", kGuide)
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)))
         .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+  if (v.display_lag)
+    remodulate.bind("colour_history", v.signals[0].history + "_colour").bind("taa_lag", kTaaLag).set("DISPLAY_LAG", 1u);
 
-  if (v.taa)
-    g.add_pass("svgf_taa", "svgf_taa")
-        .bind("current", kTemporal)
+  if (v.taa) {
+    PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
+    taa.bind("current", kTemporal)
         .bind("previous", kGuide)
         .bind("result", result)
         .bind("history", kTaaHistory)
         .set("OUTPUT_HALF", result_half);
+    if (v.display_lag) taa.bind("lag", kTaaLag).set("DISPLAY_LAG", 1u);
+  }
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
 }
 

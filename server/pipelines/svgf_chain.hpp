@@ -100,6 +100,9 @@ struct SvgfVariant {
   // chain reads them filled by gbuffer_fill's 3x3 pull-push pyramid.
   bool sparse_gbuffer = false;
   bool taa = false;                  // final svgf_taa pass
+  // With taa: the display one step behind where a still pixel's history
+  // switches source (progressive's display_lag; svgf_remodulate's display_lag).
+  bool display_lag = false;
   bool emission = false;             // add the Emission plane back after filtering
   bool roughness = false;            // the session has a Roughness plane (an input)
   bool clip = false;                 // clip the signals marked clip where roughness < clip_roughness (needs roughness)

@@ -61,6 +61,7 @@ test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps) 
   p.sigma_luminance = 4;
   p.epsilon_luminance = 0.05;
   p.luminance_min_age = 4;
+  p.display_lag = true;
   test::apply_parameters(p, ps);
   return p;
 }
@@ -169,6 +170,13 @@ INSTANTIATE_TEST_SUITE_P(
         // exactly) and a moving one (they keep the reprojected history).
         Variant{"quarter_spp_static", false, true, true, {}, 0.0f, 0.0f, 0.0f},
         Variant{"quarter_spp_moving", false, true, true, {}},
+        // A still camera at 1 spp: pixels come of age at frame 3, and the
+        // display lags across the switch (display_lag) until the reset at 5;
+        // and the same clamped throughout.
+        Variant{"still_display_lag", false, true, false, {}, 0.0f, 0.0f, 0.0f},
+        Variant{"still_no_display_lag", false, true, false, {{"display_lag", 0}}, 0.0f, 0.0f, 0.0f},
+        // Sub-pixel motion: the lag shrinks with the stillness.
+        Variant{"creeping_display_lag", false, true, false, {}, 0.02f, 0.01f, 0.0f},
         // The weight coming in over 3 samples past an age gate of 1 (so that
         // 8 frames at 1/4 spp reach it).
         Variant{"quarter_spp_static_ramp_in", false, false, true, {{"luminance_min_age", 1}, {"luminance_ramp_in", 3}},

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -176,6 +177,51 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
   };
   EXPECT_LT(edge_error({}), 1e-3);
   EXPECT_GT(edge_error({{"luminance_min_age", 1024}}), 0.05);
+}
+
+// Paper 004 5's buffer one step behind (display_lag): on the same noise-free
+// step, still, at 1 spp, the young frames (0-2) show the blur of the filter
+// without a luminance weight, and at frame 3 every pixel comes of age and the
+// filter returns the step. The final blend (fixed ratio 0.1) must then move
+// the display toward it continuously: at frame 3 exactly 0.1 of the way, with
+// no clamp, and no later frame more than 0.3 of the distance frame 2 left;
+// the clamp comes back as the state decays, so by frame 64 the step is sharp.
+// Clamped throughout (display_lag 0), the pixels beyond the step's 3x3 box
+// snap to it at frame 3: the visible switch this buffer hides.
+TEST_F(ProgressiveTest, TheDisplayFollowsTheHistorySwitchContinuously) {
+  const int w = 48, h = 16, n = w * h;
+  FlatFrames scene{w, h};
+  std::vector<double> step(n);
+  for (int i = 0; i < n; ++i) step[i] = (i % w) < w / 2 ? 0.2 : 1.0;
+  auto frames = [&](std::vector<protocol::Parameter> params) {
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params)));
+    std::vector<std::vector<float>> out;
+    for (int t = 0; t < 64; ++t) out.push_back(run(*pipe, scene.frame(grey(step))));
+    return out;
+  };
+  const auto lagged = frames({});
+  double blur = 0.0;  // the young frames' largest distance from the step
+  for (int i = 0; i < n; ++i) blur = std::max(blur, std::fabs(double(lagged[2][3 * i]) - step[i]));
+  ASSERT_GT(blur, 0.05) << "the young frames must blur the step for the switch to show";
+  for (int i = 0; i < n; ++i) {
+    const double want = 0.9 * lagged[2][3 * i] + 0.1 * step[i];
+    ASSERT_NEAR(lagged[3][3 * i], want, 1e-5) << "pixel " << i % w << "," << i / w;
+  }
+  double largest_change = 0.0;
+  for (int t = 3; t < 64; ++t)
+    for (int i = 0; i < n; ++i)
+      largest_change = std::max(largest_change, double(std::fabs(lagged[t][3 * i] - lagged[t - 1][3 * i])));
+  EXPECT_LE(largest_change, 0.3 * blur);
+  double left = 0.0;
+  for (int i = 0; i < n; ++i) left = std::max(left, std::fabs(double(lagged[63][3 * i]) - step[i]));
+  EXPECT_LT(left, 1e-3);
+
+  const auto clamped = frames({{"display_lag", 0}});
+  double snap = 0.0;
+  for (int i = 0; i < n; ++i) snap = std::max(snap, double(std::fabs(clamped[3][3 * i] - clamped[2][3 * i])));
+  EXPECT_GT(snap, 0.6 * blur);
+  std::printf("[ info     ] young blur %.4f; largest change per frame from frame 3: %.4f lagged, %.4f clamped\n", blur,
+              largest_change, snap);
 }
 
 // Below one sample per pixel: sample_count 0 leaves a pixel's history (colour,

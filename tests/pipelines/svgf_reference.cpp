@@ -66,6 +66,7 @@ void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& val
     if (q.name == "epsilon_luminance") p.epsilon_luminance = q.value;
     if (q.name == "luminance_min_age") p.luminance_min_age = q.value;
     if (q.name == "luminance_ramp_in") p.luminance_ramp_in = q.value;
+    if (q.name == "display_lag") p.display_lag = q.value != 0.0;
   }
 }
 
@@ -608,25 +609,38 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // to the 3x3 min/max of the current colour, out = mix(clamped, current, a):
   // a = taa_alpha (1 when 0) where |mv| >= 0.05 px, falling linearly to
   // taa_static_alpha at |mv| = 0 when that is smaller; no blend when a = 1.
+  // display_lag: a state s per pixel, -1 while chain 0's length is below
+  // luminance_min_age, else 0 without that blend, else (1 where the previous
+  // state, at the bilinear tap of the largest weight (the first of equals),
+  // is below 0, else that state x (1 - a)) x the stillness; the clamped value
+  // moves toward the unclamped one by max(s, 0).
   if (p_.taa_alpha > 0.0 || p_.taa_static_alpha > 0.0) {
     const double moving = p_.taa_alpha > 0.0 ? p_.taa_alpha : 1.0;
     const std::vector<double>& cur_c = remodulated_;
+    std::vector<double> lag(n, 0.0);
+    if (lag_.empty()) lag_.assign(n, 0.0);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const int i = y * w + x;
+        const bool young = p_.display_lag && chains_[0].length[i] < p_.luminance_min_age;
+        if (young) lag[i] = -1.0;
         const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
         if (reset || !fg[i] || !std::isfinite(mvx) || !std::isfinite(mvy)) continue;
         const double fx = x + mvx, fy = y + mvy;  // previous position - 0.5
         if (!(fx > -1.0 && fy > -1.0 && fx < w && fy < h)) continue;
         const double bx = std::floor(fx), by = std::floor(fy), tx = fx - bx, ty = fy - by;
         const int ox = static_cast<int>(bx), oy = static_cast<int>(by);
-        double s[3] = {0.0, 0.0, 0.0}, sw = 0.0;
+        double s[3] = {0.0, 0.0, 0.0}, sw = 0.0, heaviest = 0.0, prev_lag = 0.0;
         for (int k = 0; k < 4; ++k) {
           const int qx = ox + (k & 1), qy = oy + (k >> 1);
           if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
           const double wk = ((k & 1) ? tx : 1.0 - tx) * ((k >> 1) ? ty : 1.0 - ty);
           for (int c = 0; c < 3; ++c) s[c] += wk * taa_[3 * (qy * w + qx) + c];
           sw += wk;
+          if (wk > heaviest) {
+            heaviest = wk;
+            prev_lag = lag_[qy * w + qx];
+          }
         }
         if (!(sw >= static_cast<double>(1e-3f))) continue;
         const double still = std::clamp(1.0 - std::hypot(mvx, mvy) / 0.05, 0.0, 1.0);
@@ -634,6 +648,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
                              ? moving + (p_.taa_static_alpha - moving) * still
                              : moving;
         if (a >= 1.0) continue;
+        if (p_.display_lag && !young) lag[i] = (prev_lag < 0.0 ? 1.0 : prev_lag * (1.0 - a)) * still;
+        const double give = std::max(lag[i], 0.0);
         for (int c = 0; c < 3; ++c) {
           double lo = cur_c[3 * i + c], hi = lo;
           for (int dy = -1; dy <= 1; ++dy)
@@ -643,11 +659,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
               lo = std::min(lo, cur_c[3 * (qy * w + qx) + c]);
               hi = std::max(hi, cur_c[3 * (qy * w + qx) + c]);
             }
-          const double prev = std::clamp(s[c] / sw, lo, hi);
+          const double clamped = std::clamp(s[c] / sw, lo, hi);
+          const double prev = clamped + (s[c] / sw - clamped) * give;
           out[3 * i + c] = prev * (1.0 - a) + cur_c[3 * i + c] * a;
         }
       }
     taa_ = out;
+    lag_ = std::move(lag);
   }
 
   z_ = std::move(hz);

@@ -34,6 +34,7 @@ struct SvgfParams {
   bool spatial_estimate = true;     // false: young pixels' variance from their own moments, no 7x7 (pass 2)
   double luminance_min_age = 0.0;   // no luminance weight where p's history length is below this (pass 3)
   double luminance_ramp_in = 0.0;  // progressive: the weight comes in over this many samples past luminance_min_age
+  bool display_lag = false;        // progressive: pass 5's clamp gives way as a still pixel comes of age
 };
 
 // The variance of a pixel without data (sample_count: never sampled, nothing
@@ -99,6 +100,8 @@ class SvgfReference {
   std::vector<double> z_, n_;
   // TAA history: the previous final output, 3 per pixel.
   std::vector<double> taa_;
+  // display_lag's state per pixel (pass 5).
+  std::vector<double> lag_;
   std::vector<double> remodulated_;
 };
 

@@ -130,7 +130,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   expected = svgf_names;
   expected.insert(expected.end(),
                   {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance", "luminance_min_age",
-                   "luminance_ramp_in", "sparse_gbuffer"});
+                   "luminance_ramp_in", "display_lag", "sparse_gbuffer"});
   EXPECT_EQ(progressive_names, expected);
   auto default_of = [](const pipelines::PipelineDescription& d, const std::string& name) {
     for (const auto& p : d.parameters)
