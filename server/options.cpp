@@ -88,6 +88,12 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_session_bytes); }},
       {"--max-output-buffer", "BYTES", "queued output per connection before its reading pauses (default 256M)",
        [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_output_buffer_bytes); }},
+      {"--max-queued-output", "BYTES",
+       "queued output per connection above which it is closed (a peer that does not read; default 1G)",
+       [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_queued_output_bytes); }},
+      {"--receive-budget", "BYTES",
+       "declared sizes of all messages being received at once; a message beyond it gets an ERROR (default 4G)",
+       [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.receive_budget_bytes); }},
       {"--max-resolution", "WxH", "largest session resolution (default 8192x8192)",
        [](ServerOptions& o, std::string_view v) {
          auto x = v.find('x');
@@ -100,6 +106,19 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.idle_timeout_s); }},
       {"--heartbeat", "SECONDS", "PING a connection that sent nothing for this long, 0 = never (default 30)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.heartbeat_s); }},
+      {"--message-timeout", "SECONDS",
+       "a started message must complete within this plus its size at --min-receive-rate, else ERROR and close "
+       "(default 30)",
+       [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.message_timeout_s) && o.message_timeout_s > 0; }},
+      {"--min-receive-rate", "BYTES", "bytes per second a started message must average, K/M/G suffixes (default 1M)",
+       [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.min_receive_rate); }},
+      {"--write-timeout", "SECONDS",
+       "close a connection whose queued output made no progress for this long, 0 = never (default 60)",
+       [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.write_timeout_s); }},
+      {"--dead-peer", "SECONDS",
+       "TCP keepalive and TCP_USER_TIMEOUT: a peer that vanished without closing is dropped after about this "
+       "long, 0 = the kernel's defaults (default 120)",
+       [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.dead_peer_s) && (o.dead_peer_s == 0 || o.dead_peer_s >= 2); }},
       {"--shutdown-grace", "SECONDS", "on SIGTERM, time allowed to finish frames in flight (default 30)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.shutdown_grace_s); }},
       {"--cache-dir", "DIR",

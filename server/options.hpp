@@ -23,11 +23,17 @@ struct ServerOptions {
   uint64_t max_message_bytes = 1ull << 30;
   uint64_t max_session_bytes = 2ull << 30;   // device bytes per session
   uint64_t max_output_buffer_bytes = 256ull << 20;  // per connection, before reading pauses
+  uint64_t max_queued_output_bytes = 1ull << 30;    // per connection: above it the connection is closed
+  uint64_t receive_budget_bytes = 4ull << 30;       // all connections: declared sizes of messages being received
   uint32_t max_width = 8192;
   uint32_t max_height = 8192;
   double handshake_timeout_s = 5.0;
   double idle_timeout_s = 300.0;         // nothing received for this long: close (0 = never)
   double heartbeat_s = 30.0;             // nothing received for this long: send PING
+  double message_timeout_s = 30.0;       // a started message gets this long plus its size at min_receive_rate
+  uint64_t min_receive_rate = 1ull << 20;  // bytes per second a started message must average (with the above)
+  double write_timeout_s = 60.0;         // queued output and nothing written for this long: close (0 = never)
+  double dead_peer_s = 120.0;            // TCP keepalive and TCP_USER_TIMEOUT: a vanished peer is noticed in this time
   double shutdown_grace_s = 30.0;        // SIGTERM: time allowed to finish frames in flight
   std::string log_level = "info";
   std::string cache_dir;                 // on-disk pipeline cache; default: the user's cache dir (server/cache_dir.hpp)

@@ -52,6 +52,7 @@ double seconds_since(Clock::time_point t, Clock::time_point now) {
 
 Server::Server(ServerOptions options, gpu::Context& device, std::string device_name)
     : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
+  receive_budget_.limit = options_.receive_budget_bytes;
 
   // Context-wide resources the pipelines declare (svgf-fb's F_beta table):
   // made once per device before any session can bind them, then shared
@@ -200,8 +201,9 @@ void Server::accept_from(net::Listener& listener) {
     uint64_t id = next_connection_id_++;
     ++counters_.connections_accepted;
     // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
-    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, net::peer_name(addr, is_unix), kControlMessageBytes);
-    net::tune_socket(fd, is_unix);
+    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, net::peer_name(addr, is_unix), kControlMessageBytes,
+                                                  &receive_budget_);
+    net::tune_socket(fd, is_unix, options_.dead_peer_s);
     net::Connection& c = *conn;
     connections_[id] = std::move(conn);
     loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
@@ -238,7 +240,15 @@ void Server::on_connection_event(uint64_t id, uint32_t events) {
   }
   if (events & (EPOLLIN | EPOLLHUP)) {
     auto status = c->read_available(
-        [&](const protocol::Header& h, std::vector<uint8_t>&& payload) { handle_message(*c, h, std::move(payload)); },
+        [&](const protocol::Header& h, std::vector<uint8_t>&& payload, bool refused) {
+          if (!refused) return handle_message(*c, h, std::move(payload));
+          log::warn("receive.budget_refused", {{"conn", c->id()}, {"peer", c->peer()}, {"bytes", h.payload_length}});
+          send_error(*c, h.request_id, ErrorCode::LimitExceeded, "header.payload_length",
+                     "the server's receive budget (--receive-budget " + std::to_string(options_.receive_budget_bytes) +
+                         " bytes) is taken by other messages being received; this " +
+                         std::to_string(h.payload_length) + "-byte payload was dropped: send it again later",
+                     !c->authenticated);
+        },
         kReadBudgetPerEvent);
     if (status == net::Connection::ReadStatus::Closed) {
       // A peer that only shut down its sending side still gets the results of its frames.
@@ -248,7 +258,7 @@ void Server::on_connection_event(uint64_t id, uint32_t events) {
       const auto& e = c->read_error();
       log::warn("protocol.framing_error", {{"conn", id}, {"field", e.field}, {"reason", e.message}});
       send_error(*c, 0, e.code, e.field, e.message, true);
-    } else if ((events & EPOLLHUP) && c->reading_paused) {
+    } else if ((events & EPOLLHUP) && c->reading_paused()) {
       return close_connection(id, "peer hung up");
     }
   }
@@ -277,15 +287,15 @@ void Server::refresh_message_limit(net::Connection& c) {
 
 void Server::update_interest(net::Connection& c) {
   // Pause reading while the peer does not take its output; resume below half the limit.
-  if (!c.reading_paused && c.queued_bytes() > options_.max_output_buffer_bytes) c.reading_paused = true;
-  if (c.reading_paused) {
+  if (!c.reading_paused() && c.queued_bytes() > options_.max_output_buffer_bytes) c.set_reading_paused(true);
+  if (c.reading_paused()) {
     bool window_full = false;
     for (uint64_t sid : c.owned_sessions)
       if (const Session* s = sessions_.find(sid); s && s->in_flight >= options_.max_frames_in_flight) window_full = true;
-    if (!window_full && c.queued_bytes() <= options_.max_output_buffer_bytes / 2) c.reading_paused = false;
+    if (!window_full && c.queued_bytes() <= options_.max_output_buffer_bytes / 2) c.set_reading_paused(false);
   }
   uint32_t events = 0;
-  if (!c.reading_paused && !c.close_after_flush) events |= EPOLLIN;
+  if (!c.reading_paused() && !c.close_after_flush) events |= EPOLLIN;
   if (c.has_pending_output()) events |= EPOLLOUT;
   loop_.modify(c.fd(), events);
 }
@@ -401,9 +411,42 @@ void Server::check_timers() {
   gpu::TransientPool::of(device_).trim(std::chrono::seconds(30));
   std::vector<std::pair<uint64_t, const char*>> to_close;
   for (auto& [id, c] : connections_) {
+    // A peer that does not take its output: bounded in bytes and in time.
+    if (c->queued_bytes() > options_.max_queued_output_bytes) {
+      log::warn("connection.output_overflow", {{"conn", id}, {"peer", c->peer()}, {"queued_bytes", c->queued_bytes()}});
+      to_close.emplace_back(id, "queued output above --max-queued-output");
+      continue;
+    }
+    if (c->has_pending_output() && options_.write_timeout_s > 0 &&
+        seconds_since(c->last_write_progress(), now) > options_.write_timeout_s) {
+      log::warn("connection.write_timeout",
+                {{"conn", id}, {"peer", c->peer()}, {"queued_bytes", c->queued_bytes()}, {"timeout_s", options_.write_timeout_s}});
+      to_close.emplace_back(id, "write timeout");
+      continue;
+    }
     if (c->close_after_flush) {
       if (!has_work(*c)) to_close.emplace_back(id, "closed after error");
       continue;
+    }
+    // A started message must finish in message_timeout_s plus its size at
+    // min_receive_rate, however its bytes trickle in (each one refreshes the idle clock).
+    if (c->receiving() && !c->reading_paused()) {
+      const double allowed = options_.message_timeout_s + static_cast<double>(c->message_bytes_declared()) /
+                                                              static_cast<double>(options_.min_receive_rate);
+      if (seconds_since(c->message_started(), now) > allowed) {
+        log::warn("connection.message_timeout", {{"conn", id},
+                                                 {"peer", c->peer()},
+                                                 {"received", c->message_bytes_received()},
+                                                 {"declared", c->message_bytes_declared()}});
+        send_error(*c, 0, ErrorCode::Timeout, "",
+                   "a message was started " + std::to_string(static_cast<int64_t>(allowed)) + " s ago and has " +
+                       std::to_string(c->message_bytes_received()) + " of its " +
+                       (c->message_bytes_declared() ? std::to_string(c->message_bytes_declared()) : std::string("24+")) +
+                       " bytes (--message-timeout, --min-receive-rate)",
+                   true);
+        update_interest(*c);
+        continue;
+      }
     }
     if (!c->authenticated) {
       if (seconds_since(c->created, now) > options_.handshake_timeout_s) {

@@ -79,6 +79,7 @@ class Server {
   std::string device_name_;
   net::EventLoop loop_;
   std::vector<net::Listener> listeners_;
+  net::ReceiveBudget receive_budget_;  // --receive-budget, shared by every connection
   std::map<uint64_t, std::unique_ptr<net::Connection>> connections_;
   SessionRegistry sessions_;
   uint64_t next_connection_id_ = 1;

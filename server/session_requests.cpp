@@ -122,7 +122,7 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
   job.frame = std::move(m);
   job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
   scheduler_->submit(s, std::move(job));
-  if (s->in_flight >= options_.max_frames_in_flight) c.reading_paused = true;  // backpressure: stop reading
+  if (s->in_flight >= options_.max_frames_in_flight) c.set_reading_paused(true);  // backpressure: stop reading
 }
 
 void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {

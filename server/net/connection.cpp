@@ -9,16 +9,40 @@
 
 namespace dn::server::net {
 
-Connection::Connection(int fd, uint64_t id, bool is_unix, std::string peer, uint64_t max_message_bytes)
-    : fd_(fd), id_(id), is_unix_(is_unix), peer_(std::move(peer)), reader_(max_message_bytes) {}
+Connection::Connection(int fd, uint64_t id, bool is_unix, std::string peer, uint64_t max_message_bytes,
+                       ReceiveBudget* budget)
+    : fd_(fd), id_(id), is_unix_(is_unix), peer_(std::move(peer)), reader_(max_message_bytes), budget_(budget) {
+  if (!budget_) return;
+  reader_.set_admission([this](const protocol::Header& h) {
+    if (h.payload_length <= kBudgetedBytes) return true;
+    if (budget_->in_use + h.payload_length > budget_->limit) return false;
+    budget_->in_use += h.payload_length;
+    budget_held_ = h.payload_length;
+    return true;
+  });
+}
 
 Connection::~Connection() {
+  release_budget();
   if (fd_ >= 0) ::close(fd_);
+}
+
+void Connection::set_reading_paused(bool paused) {
+  if (paused == reading_paused_) return;
+  const Clock::time_point now = Clock::now();
+  if (paused) paused_since_ = now;
+  else message_started_ += now - paused_since_;
+  reading_paused_ = paused;
+}
+
+void Connection::release_budget() {
+  if (budget_ && budget_held_) budget_->in_use -= budget_held_;
+  budget_held_ = 0;
 }
 
 Connection::ReadStatus Connection::read_available(const MessageHandler& handler, size_t budget) {
   size_t consumed = 0;
-  while (!reading_paused && !close_after_flush && consumed < budget) {
+  while (!reading_paused_ && !close_after_flush && consumed < budget) {
     std::span<uint8_t> target = reader_.writable();
     ssize_t n = ::recv(fd_, target.data(), target.size(), 0);
     if (n < 0) {
@@ -27,6 +51,7 @@ Connection::ReadStatus Connection::read_available(const MessageHandler& handler,
       return ReadStatus::Closed;
     }
     if (n == 0) return ReadStatus::Closed;
+    if (reader_.bytes_buffered() == 0) message_started_ = Clock::now();
     consumed += static_cast<size_t>(n);
     bytes_in += static_cast<uint64_t>(n);
     last_received = Clock::now();
@@ -37,7 +62,9 @@ Connection::ReadStatus Connection::read_available(const MessageHandler& handler,
         return ReadStatus::Failed;
       case protocol::MessageReader::Status::Ready: {
         protocol::Header header = reader_.header();
-        handler(header, reader_.take_payload());
+        const bool refused = reader_.refused();
+        release_budget();
+        handler(header, reader_.take_payload(), refused);
         break;
       }
     }
@@ -55,6 +82,7 @@ void Connection::queue(Bytes bytes, uint64_t watch_session) {
       }
     }
   }
+  if (out_.empty()) last_write_progress_ = Clock::now();
   queued_bytes_ += bytes->size();
   out_.push_back(Outgoing{std::move(bytes), 0, watch_session});
 }
@@ -77,6 +105,7 @@ bool Connection::flush() {
       return false;
     }
     size_t written = static_cast<size_t>(n);
+    if (written > 0) last_write_progress_ = Clock::now();
     bytes_out += written;
     queued_bytes_ -= written;
     while (written > 0) {

@@ -17,12 +17,26 @@ namespace dn::server::net {
 using Clock = std::chrono::steady_clock;
 using Bytes = std::shared_ptr<const std::vector<uint8_t>>;
 
+// Declared sizes of the large messages all connections are receiving at
+// once (--receive-budget): one bound on what headers can make the server
+// commit to, whatever the number of peers.
+struct ReceiveBudget {
+  uint64_t limit = 0;
+  uint64_t in_use = 0;
+};
+
 class Connection {
  public:
   enum class ReadStatus { Open, Closed, Failed };
-  using MessageHandler = std::function<void(const protocol::Header&, std::vector<uint8_t>&& payload)>;
+  // A complete message; refused: its payload was beyond the receive budget and dropped (empty).
+  using MessageHandler =
+      std::function<void(const protocol::Header&, std::vector<uint8_t>&& payload, bool refused)>;
 
-  Connection(int fd, uint64_t id, bool is_unix, std::string peer, uint64_t max_message_bytes);
+  // Payloads above kBudgetedBytes take their declared size from `budget`
+  // (may be null: no budget) while they are being received.
+  static constexpr uint64_t kBudgetedBytes = 64u << 10;
+  Connection(int fd, uint64_t id, bool is_unix, std::string peer, uint64_t max_message_bytes,
+             ReceiveBudget* budget = nullptr);
   ~Connection();
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
@@ -38,6 +52,11 @@ class Connection {
   const protocol::DecodeError& read_error() const { return reader_.error(); }
   // Largest message accepted from now on: bounds what one peer can make us allocate.
   void set_max_message_bytes(uint64_t bytes) { reader_.set_max_message_bytes(bytes); }
+  // A message is partly received: since when, how much of it, of how much (0: header not complete).
+  bool receiving() const { return reader_.bytes_buffered() > 0; }
+  Clock::time_point message_started() const { return message_started_; }
+  uint64_t message_bytes_received() const { return reader_.bytes_buffered(); }
+  uint64_t message_bytes_declared() const { return reader_.bytes_declared(); }
 
   // Queues an encoded message. A watch message (watch_session != 0) replaces
   // an older one of the same session that has not started going out, so a
@@ -47,6 +66,8 @@ class Connection {
   bool flush();
   bool has_pending_output() const { return !out_.empty(); }
   uint64_t queued_bytes() const { return queued_bytes_; }
+  // Last time queued output went out (or was queued onto an empty queue).
+  Clock::time_point last_write_progress() const { return last_write_progress_; }
 
   // Connection lifecycle flags, owned by the server.
   bool authenticated = false;
@@ -54,7 +75,10 @@ class Connection {
   // connection may carry (docs/protocol.md §10).
   uint8_t negotiated_minor = 0;
   bool close_after_flush = false;  // a fatal error was queued; stop reading, close once flushed
-  bool reading_paused = false;
+  // Backpressure: the server stops reading this connection. Time paused does
+  // not count against the message in progress (its deadline moves on).
+  bool reading_paused() const { return reading_paused_; }
+  void set_reading_paused(bool paused);
   Clock::time_point created = Clock::now();
   Clock::time_point last_received = Clock::now();
   Clock::time_point last_ping_sent{};
@@ -74,9 +98,17 @@ class Connection {
   uint64_t id_;
   bool is_unix_;
   std::string peer_;
+  void release_budget();
+
   protocol::MessageReader reader_;
+  ReceiveBudget* budget_;
+  uint64_t budget_held_ = 0;  // this connection's share of budget_->in_use
+  Clock::time_point message_started_{};
+  bool reading_paused_ = false;
+  Clock::time_point paused_since_{};
   std::deque<Outgoing> out_;
   uint64_t queued_bytes_ = 0;
+  Clock::time_point last_write_progress_ = Clock::now();
 };
 
 }  // namespace dn::server::net

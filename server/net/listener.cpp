@@ -84,6 +84,16 @@ namespace {
 [[noreturn]] void fail(const Endpoint& e, const char* what) {
   throw std::runtime_error("listen " + e.url + ": " + what + ": " + std::strerror(errno));
 }
+
+// True when a connect to the socket path succeeds (or would: EAGAIN, a full backlog).
+bool unix_socket_answers(const sockaddr_un& addr) {
+  int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  int rc = ::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr);
+  bool answers = rc == 0 || errno == EAGAIN || errno == EINPROGRESS;
+  ::close(fd);
+  return answers;
+}
 }  // namespace
 
 Listener open_listener(const Endpoint& e, bool other_users) {
@@ -95,13 +105,27 @@ Listener open_listener(const Endpoint& e, bool other_users) {
     sockaddr_un addr{};
     addr.sun_family = AF_UNIX;
     std::memcpy(addr.sun_path, e.path.c_str(), e.path.size() + 1);
-    // A stale socket file from a previous run would make bind fail; only remove sockets.
+    // A stale socket file from a previous run would make bind fail; only remove
+    // sockets, and only one nothing listens on: a live server keeps its path.
     struct stat st{};
-    if (::lstat(e.path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) ::unlink(e.path.c_str());
+    if (::lstat(e.path.c_str(), &st) == 0 && S_ISSOCK(st.st_mode)) {
+      if (unix_socket_answers(addr)) {
+        ::close(l.fd);
+        throw std::runtime_error("listen " + e.url + ": another process is listening on " + e.path +
+                                 " (a second server? stop it or choose another path)");
+      }
+      ::unlink(e.path.c_str());
+    }
     mode_t old = ::umask(0077);  // owner-only socket file: peer credentials are checked too
     int rc = ::bind(l.fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
     ::umask(old);
-    if (rc == 0) ::chmod(e.path.c_str(), other_users ? 0666 : 0600);
+    if (rc == 0) {
+      ::chmod(e.path.c_str(), other_users ? 0666 : 0600);
+      if (::lstat(e.path.c_str(), &st) == 0) {
+        l.socket_dev = st.st_dev;
+        l.socket_ino = st.st_ino;
+      }
+    }
     if (rc != 0) {
       int saved = errno;
       ::close(l.fd);
@@ -153,7 +177,11 @@ Listener open_listener(const Endpoint& e, bool other_users) {
 void close_listener(Listener& l) {
   if (l.fd >= 0) {
     ::close(l.fd);
-    if (l.endpoint.kind == Endpoint::Kind::Unix) ::unlink(l.endpoint.path.c_str());
+    // Only the file this listener created: another server may have taken the path since.
+    struct stat st{};
+    if (l.endpoint.kind == Endpoint::Kind::Unix && ::lstat(l.endpoint.path.c_str(), &st) == 0 &&
+        st.st_dev == l.socket_dev && st.st_ino == l.socket_ino)
+      ::unlink(l.endpoint.path.c_str());
   }
   l.fd = -1;
 }

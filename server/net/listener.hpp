@@ -25,9 +25,14 @@ struct Listener {
   Endpoint endpoint;
   int fd = -1;
   uint16_t bound_port = 0;  // the real port when 0 was asked for
+  // Unix: the socket file this process created (device, inode), so that
+  // closing removes it and never a file another process put there since.
+  uint64_t socket_dev = 0, socket_ino = 0;
 };
 
 // Creates a non-blocking listening socket; throws std::runtime_error naming the endpoint and errno.
+// A Unix socket path where something answers (another server) is refused; a
+// socket file nothing answers on (a crashed run's) is replaced.
 // A Unix socket file is owner-only (0600) unless `other_users` is set, when it
 // is 0666 and the server's peer-credential check alone decides who may talk.
 Listener open_listener(const Endpoint& endpoint, bool other_users = false);

@@ -159,6 +159,66 @@ TEST(MessageReader, PayloadBufferIsExactlyPayloadLength) {
   EXPECT_EQ(payload.capacity(), payload_length);
 }
 
+// A header alone must not make the server's memory resident (issue 15): the
+// payload is reserved (untouched pages cost no RSS) and made writable, and
+// zero-filled, one step (4 MiB) at a time as bytes arrive.
+TEST(MessageReader, LargePayloadBecomesWritableStepByStep) {
+  const uint32_t payload_length = 64u << 20;
+  std::vector<uint8_t> header = Bytes{}.raw({0x44, 0x4E, 0x53, 0x56, 1, 0}).zeros(18).v;
+  put_u16(header, 6, 6);  // FRAME
+  put_u32(header, 12, payload_length);
+  MessageReader reader(1ull << 30);
+  std::copy(header.begin(), header.end(), reader.writable().begin());
+  ASSERT_EQ(reader.commit(24), MessageReader::Status::NeedMore);
+  EXPECT_EQ(reader.bytes_declared(), 24u + payload_length);
+  size_t steps = 0, filled = 0;
+  while (filled < payload_length) {
+    std::span<uint8_t> w = reader.writable();
+    ASSERT_GT(w.size(), 0u);
+    EXPECT_LE(w.size(), size_t{4} << 20) << "more than one step writable at byte " << filled;
+    filled += w.size();
+    ++steps;
+    reader.commit(w.size());
+  }
+  EXPECT_EQ(steps, payload_length / (4u << 20));
+  EXPECT_EQ(reader.status(), MessageReader::Status::Ready);
+  EXPECT_EQ(reader.take_payload().size(), payload_length);
+}
+
+// A payload the owner's admission refuses (a server's receive budget) is read
+// and dropped: the stream stays in step and the next message is whole.
+TEST(MessageReader, RefusedPayloadIsDroppedAndTheStreamStaysInStep) {
+  const std::vector<uint8_t> plane(200000, 7);
+  Frame f;
+  f.planes = {{ChannelId::Radiance, Format::F32, plane}};
+  std::vector<uint8_t> stream = encode(f, 5);
+  const std::vector<uint8_t> stats = encode(StatsRequest{}, 6);
+  stream.insert(stream.end(), stats.begin(), stats.end());
+  MessageReader reader(kMaxMessage);
+  std::vector<uint64_t> asked;
+  reader.set_admission([&](const Header& h) {
+    asked.push_back(h.payload_length);
+    return h.payload_length < 100000;
+  });
+  std::vector<std::pair<uint64_t, bool>> got;  // request id, refused
+  size_t pos = 0;
+  while (pos < stream.size()) {
+    std::span<uint8_t> w = reader.writable();
+    const size_t n = std::min(w.size(), stream.size() - pos);
+    std::copy_n(stream.begin() + pos, n, w.begin());
+    pos += n;
+    if (reader.commit(n) == MessageReader::Status::Ready) {
+      const bool refused = reader.refused();
+      got.emplace_back(reader.header().request_id, refused);
+      EXPECT_TRUE(reader.take_payload().empty() || !refused);
+    }
+  }
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0], std::make_pair(uint64_t{5}, true));
+  EXPECT_EQ(got[1], std::make_pair(uint64_t{6}, false));
+  EXPECT_EQ(asked.size(), 1u) << "an empty payload needs no admission";
+}
+
 TEST(MessageReader, OversizeHeaderFailsBeforeAnyAllocation) {
   struct Case {
     uint16_t type;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -101,9 +102,21 @@ class MessageReader {
   const DecodeError& error() const { return error_; }
   // Bytes of the current message received so far (header + payload).
   uint64_t bytes_buffered() const { return header_filled_ + payload_filled_; }
+  // The current message's size (header + payload) once its header is read, else 0.
+  uint64_t bytes_declared() const { return header_filled_ == kHeaderSize ? kHeaderSize + header_.payload_length : 0; }
+
+  // Admission of a payload, asked once its header is read (a server's
+  // receive budget): when it returns false the payload is read and dropped
+  // (the stream stays in step), the message comes out Ready with refused()
+  // true and take_payload() empty.
+  void set_admission(std::function<bool(const Header&)> admit) { admit_ = std::move(admit); }
+  bool refused() const { return refused_; }
 
  private:
   uint64_t max_message_bytes_;
+  std::function<bool(const Header&)> admit_;
+  bool refused_ = false;
+  std::vector<uint8_t> discard_;  // where a refused payload is read to
   Status status_ = Status::NeedMore;
   uint8_t header_bytes_[kHeaderSize] = {};
   size_t header_filled_ = 0;
