@@ -78,6 +78,15 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_number(v, o.max_sessions) && o.max_sessions >= 1; }},
       {"--max-connections", "N", "open connections (default 256)",
        [](ServerOptions& o, std::string_view v) { return parse_number(v, o.max_connections) && o.max_connections >= 1; }},
+      {"--max-connections-per-peer", "N",
+       "open connections per peer: per uid for Unix-socket and loopback TCP peers, else per IP address "
+       "(default half of --max-connections)",
+       [](ServerOptions& o, std::string_view v) {
+         return parse_number(v, o.max_connections_per_peer) && o.max_connections_per_peer >= 1;
+       }},
+      {"--max-unauthenticated", "N",
+       "connections that have not completed HELLO, all peers together (default half of --max-connections)",
+       [](ServerOptions& o, std::string_view v) { return parse_number(v, o.max_unauthenticated) && o.max_unauthenticated >= 1; }},
       {"--max-in-flight", "N", "frames in flight per session before reading pauses (default 4)",
        [](ServerOptions& o, std::string_view v) {
          return parse_number(v, o.max_frames_in_flight) && o.max_frames_in_flight >= 1 && o.max_frames_in_flight <= 64;

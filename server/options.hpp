@@ -19,6 +19,8 @@ struct ServerOptions {
   uint32_t workers = 2;                  // device worker threads
   uint32_t max_sessions = 16;
   uint32_t max_connections = 256;
+  uint32_t max_connections_per_peer = 0;  // per uid (Unix socket, loopback TCP) or remote IP; 0: half of max_connections
+  uint32_t max_unauthenticated = 0;      // before HELLO, all peers together; 0: half of max_connections
   uint32_t max_frames_in_flight = 4;     // per session, before reading from its connection pauses
   uint64_t max_message_bytes = 1ull << 30;
   uint64_t max_session_bytes = 2ull << 30;   // device bytes per session

@@ -20,6 +20,7 @@
 #include "gpu/transient_pool.hpp"
 #include "server/handshake.hpp"
 #include "server/log.hpp"
+#include "server/net/peer_identity.hpp"
 #include "server/net/socket_options.hpp"
 #include "server/stats.hpp"
 #include "server/net/auth.hpp"
@@ -205,14 +206,32 @@ void Server::accept_from(net::Listener& listener) {
                                                   &receive_budget_);
     net::tune_socket(fd, is_unix, options_.dead_peer_s);
     net::Connection& c = *conn;
+    c.peer_identity = net::peer_identity(fd, addr, is_unix);
     connections_[id] = std::move(conn);
+    count_connection(c, +1);
+    ++unauthenticated_;
     loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
-    log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}});
+    log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}});
 
-    if (connections_.size() > options_.max_connections) {
-      send_error(c, 0, ErrorCode::LimitExceeded, "connections",
-                 "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)",
-                 true);
+    // Limits, global then per peer: a flood from one peer is refused before
+    // it can take the slots every other peer needs.
+    std::string refusal;
+    // Both default to half of --max-connections: a flood from one peer, or of
+    // connections that never say HELLO, leaves the other half to everyone else.
+    const uint32_t half = std::max(1u, options_.max_connections / 2);
+    const uint32_t per_peer = options_.max_connections_per_peer ? options_.max_connections_per_peer : half;
+    const uint32_t unauthenticated = options_.max_unauthenticated ? options_.max_unauthenticated : half;
+    if (connections_.size() > options_.max_connections)
+      refusal = "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)";
+    else if (peer_connections_[c.peer_identity] > per_peer)
+      refusal = "peer " + c.peer_identity + " already has " + std::to_string(per_peer) +
+                " connections (--max-connections-per-peer)";
+    else if (unauthenticated_ > unauthenticated)
+      refusal = "server already has " + std::to_string(unauthenticated) +
+                " connections without HELLO (--max-unauthenticated)";
+    if (!refusal.empty()) {
+      log::warn("connection.refused", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}, {"reason", refusal}});
+      send_error(c, 0, ErrorCode::LimitExceeded, "connections", refusal, true);
       continue;
     }
     if (is_unix) {
@@ -372,6 +391,7 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
   }
   if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", true);
   c.authenticated = true;
+  --unauthenticated_;
   c.negotiated_minor = std::min(h.version_minor, protocol::kVersionMinor);
   protocol::Welcome w = make_welcome(options_, device_name_, h.version_minor);
   log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
@@ -383,6 +403,8 @@ void Server::close_connection(uint64_t id, const char* reason) {
   if (it == connections_.end()) return;
   std::unique_ptr<net::Connection> c = std::move(it->second);
   connections_.erase(it);
+  count_connection(*c, -1);
+  if (!c->authenticated) --unauthenticated_;
   loop_.remove(c->fd());
   counters_.bytes_in_closed += c->bytes_in;
   counters_.bytes_out_closed += c->bytes_out;
@@ -391,6 +413,12 @@ void Server::close_connection(uint64_t id, const char* reason) {
   for (uint64_t sid : c->watched_sessions)
     if (Session* s = sessions_.find(sid)) std::erase(s->watchers, id);
   log::debug("connection.close", {{"conn", id}, {"peer", c->peer()}, {"reason", reason}});
+}
+
+void Server::count_connection(const net::Connection& c, int delta) {
+  uint32_t& n = peer_connections_[c.peer_identity];
+  n += delta;
+  if (n == 0) peer_connections_.erase(c.peer_identity);
 }
 
 void Server::drain_completions() {

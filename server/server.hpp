@@ -81,6 +81,11 @@ class Server {
   std::vector<net::Listener> listeners_;
   net::ReceiveBudget receive_budget_;  // --receive-budget, shared by every connection
   std::map<uint64_t, std::unique_ptr<net::Connection>> connections_;
+  // Per-peer limits: open connections per peer identity, and those not
+  // through HELLO yet in all.
+  std::map<std::string, uint32_t> peer_connections_;
+  uint32_t unauthenticated_ = 0;
+  void count_connection(const net::Connection& c, int delta);
   SessionRegistry sessions_;
   uint64_t next_connection_id_ = 1;
 

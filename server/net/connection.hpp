@@ -70,6 +70,7 @@ class Connection {
   Clock::time_point last_write_progress() const { return last_write_progress_; }
 
   // Connection lifecycle flags, owned by the server.
+  std::string peer_identity;  // net::peer_identity(): what per-peer limits count
   bool authenticated = false;
   // min(client's HELLO minor, ours), set with authenticated: what this
   // connection may carry (docs/protocol.md §10).

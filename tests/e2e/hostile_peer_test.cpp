@@ -7,6 +7,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -256,6 +257,71 @@ TEST(HostilePeer, TcpConnectionsRunKeepalive) {
     EXPECT_EQ(timer.substr(0, 2), "02") << "the server's socket runs no keepalive timer: " << line;
   }
   EXPECT_TRUE(found) << "no /proc/net/tcp entry for the server's end " << want_local << " -> " << want_remote;
+}
+
+// Issue 15.4: 50 connections from another local user (uid 65534), half of
+// them through HELLO, used to take every slot of a 40-connection server, and
+// the next client could not connect at all. The per-peer limit (here 8 per
+// uid) refuses the flood and leaves room for everyone else.
+TEST(HostilePeer, AFloodFromOneUserNeverRefusesAnother) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to run the flood as another uid (setuid 65534)";
+  ServerProcess server({"--no-warm-up", "--max-connections", "40", "--max-connections-per-peer", "8"});
+  const std::string url = server.tcp_url();
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<uint16_t>(std::stoi(url.substr(url.rfind(':') + 1))));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::vector<uint8_t> hello;
+  protocol::encode(protocol::Hello{0, "flood", ""}, 1, 0, hello);
+  int ready[2], done[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  ASSERT_EQ(::pipe(done), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // only system calls from here on
+    ::close(ready[0]);
+    ::close(done[1]);  // the parent's end: its exit (even a failed test's) ends the wait below
+    ::alarm(120);
+    int opened = 0;
+    if (::setgid(65534) == 0 && ::setuid(65534) == 0) {
+      for (int i = 0; i < 50; ++i) {
+        int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+        if (fd < 0 || ::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) continue;
+        ++opened;
+        if (i % 2 == 0) (void)!::write(fd, hello.data(), hello.size());
+      }
+    } else {
+      opened = -1;
+    }
+    (void)!::write(ready[1], &opened, sizeof opened);
+    char c;
+    (void)!::read(done[0], &c, 1);  // hold every connection until the parent is done
+    ::_exit(0);
+  }
+  ::close(ready[1]);
+  ::close(done[0]);
+  int opened = 0;
+  ASSERT_EQ(::read(ready[0], &opened, sizeof opened), static_cast<ssize_t>(sizeof opened));
+  ASSERT_EQ(opened, 50) << "the flood could not run as uid 65534";
+  std::this_thread::sleep_for(1s);
+
+  RawClient good(url);
+  EXPECT_NO_THROW(good.hello()) << server.log();
+  const auto request = passthrough_session(16, 8);
+  const uint64_t sid = good.open(request);
+  auto f = make_frame(sid, 0, 16, 8, request.channels, 0.25f);
+  good.send(f.frame, 2);
+  auto r = good.receive();
+  ASSERT_TRUE(r);
+  EXPECT_NE(std::get_if<protocol::Result>(&r->message), nullptr);
+  const std::string log = server.log();
+  EXPECT_NE(log.find("identity=uid:65534"), std::string::npos) << log;
+  EXPECT_NE(log.find("--max-connections-per-peer"), std::string::npos) << log;
+
+  ::close(done[1]);  // the child's read returns: it exits, closing the flood
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ::close(ready[0]);
 }
 
 }  // namespace
