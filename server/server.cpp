@@ -392,6 +392,7 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
   if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", true);
   c.authenticated = true;
   --unauthenticated_;
+  c.administrator = !options_.token.empty();  // the token was checked above
   c.negotiated_minor = std::min(h.version_minor, protocol::kVersionMinor);
   protocol::Welcome w = make_welcome(options_, device_name_, h.version_minor);
   log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
@@ -513,6 +514,9 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
     live.frames_in_flight += s->in_flight;
     live.device_bytes += s->device_bytes();  // a closed one's is freed once its last frame leaves the device
     live.transient_bytes += s->transient_bytes();
+    // A session's id and figures only to its owner or an administrator: another
+    // local user must not learn what to ATTACH to (docs/server.md, "Security").
+    if (s->owner() != c.id() && !c.administrator) continue;
     const double pixels = static_cast<double>(uint64_t{s->config().width} * s->config().height);
     live.sessions_figures.push_back({id, s->frames_processed,
                                      static_cast<double>(s->device_bytes() - s->transient_bytes()) / pixels,

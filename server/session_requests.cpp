@@ -5,6 +5,7 @@
 
 #include "server/log.hpp"
 #include "server/server.hpp"
+#include "server/session/watch_key.hpp"
 
 namespace dn::server {
 
@@ -82,7 +83,15 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
     return update_interest(*c);
   }
 
-  auto session = sessions_.add(c->id(), config, std::move(built.pipeline));
+  std::shared_ptr<Session> session;
+  try {
+    session = sessions_.add(c->id(), config, std::move(built.pipeline));
+  } catch (const std::runtime_error& e) {  // no randomness for the watch key: refuse rather than guessable
+    log::error("session.create_failed", {{"conn", c->id()}, {"reason", e.what()}});
+    send_error(*c, request_id, ErrorCode::Internal, "OPEN_SESSION", std::string("cannot draw a watch key: ") + e.what(),
+               false);
+    return update_interest(*c);
+  }
   const uint64_t id = session->id();
   c->owned_sessions.push_back(id);
   refresh_message_limit(*c);  // before the next header is read: this session's frames may follow at once
@@ -95,9 +104,11 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
                              {"device_bytes", session->device_bytes()},
                              {"build_ms", built.build_ms},
                              {"compile_ms", built.compile_ms}});
-  send(*c, protocol::Session{id, config.width, config.height, config.pipeline, config.output_format,
-                             session->device_bytes(), false, config.channels},
-       request_id);
+  protocol::Session reply{id, config.width, config.height, config.pipeline, config.output_format,
+                         session->device_bytes(), false, config.channels};
+  // A 1.5 client cannot carry the key: its session can be watched by no one.
+  if (c->negotiated_minor >= protocol::kWatchKeyMinor) reply.watch_key = session->watch_key();
+  send(*c, reply, request_id);
   update_interest(*c);
 }
 
@@ -126,18 +137,33 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
 }
 
 void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
+  if (c.negotiated_minor < protocol::kWatchKeyMinor || !m.watch_key)
+    return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.watch_key",
+                      "ATTACH needs the session's watch key, which protocol 1." +
+                          std::to_string(int(protocol::kWatchKeyMinor)) + " adds; this connection speaks 1." +
+                          std::to_string(int(c.negotiated_minor)) + " (upgrade the client)",
+                      false);
   Session* found = sessions_.find(m.session_id);
-  if (!found || found->closing)
+  // Compare against a stand-in key when there is no session, so the time taken
+  // does not tell the two refusals apart either.
+  static const std::string kNoSessionKey(protocol::kWatchKeyLength, '-');
+  const bool key_ok = watch_key_matches(found ? found->watch_key() : kNoSessionKey, *m.watch_key);
+  // One refusal whether the id is unknown or the key wrong, so an id alone
+  // (guessed, or seen in a log) says nothing about what runs here.
+  if (!found || !key_ok || found->closing)
     return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
-                      "no open session " + std::to_string(m.session_id), false);
+                      "no open session " + std::to_string(m.session_id) + " with that watch key", false);
   Session& s = *found;
   if (std::find(s.watchers.begin(), s.watchers.end(), c.id()) == s.watchers.end()) s.watchers.push_back(c.id());
   if (std::find(c.watched_sessions.begin(), c.watched_sessions.end(), s.id()) == c.watched_sessions.end())
     c.watched_sessions.push_back(s.id());
   const auto& cfg = s.config();
   log::info("session.attach", {{"conn", c.id()}, {"session", s.id()}});
-  send(c, protocol::Session{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true, cfg.channels},
-       h.request_id);
+  // The watcher already holds the key; the reply does not repeat it.
+  protocol::Session reply{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true,
+                          cfg.channels};
+  reply.watch_key = std::string();
+  send(c, reply, h.request_id);
 }
 
 void Server::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {

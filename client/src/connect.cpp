@@ -9,6 +9,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -111,6 +112,7 @@ void ConnectionState::open(const std::string& client_name, const std::string& to
   Incoming in = wait_reply(id, std::chrono::duration_cast<Milliseconds>(deadline - Clock::now()) + Milliseconds(1));
   if (auto* w = std::get_if<protocol::Welcome>(&in.message)) {
     welcome_ = std::move(*w);
+    negotiated_minor_ = std::min(in.header.version_minor, protocol::kVersionMinor);
     return;
   }
   if (auto* e = std::get_if<protocol::Error>(&in.message)) {

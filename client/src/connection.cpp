@@ -58,6 +58,7 @@ Connection Connection::connect(std::string_view url, const ConnectOptions& optio
 
 const protocol::Welcome& Connection::welcome() const { return state_->welcome(); }
 const std::string& Connection::endpoint() const { return state_->endpoint(); }
+uint8_t Connection::protocol_minor() const { return state_->negotiated_minor(); }
 bool Connection::is_open() const { return state_ && state_->is_open(); }
 void Connection::close() {
   if (state_) state_->close();
@@ -121,11 +122,20 @@ Session Connection::open_session(const SessionDesc& desc) {
   return Session(state_, std::move(*s), window);
 }
 
-Watcher Connection::attach(uint64_t session_id) {
+Watcher Connection::attach(uint64_t session_id, std::string_view watch_key) {
+  const bool keyed = state_->negotiated_minor() >= protocol::kWatchKeyMinor;
+  if (keyed && (watch_key.empty() || !protocol::is_well_formed_watch_key(watch_key)))
+    throw Error::usage(protocol::ErrorCode::UnknownSession, "ATTACH.watch_key",
+                       "watch key '" + std::string(watch_key) + "' is not " +
+                           std::to_string(protocol::kWatchKeyLength) +
+                           " lowercase hex digits (the session's owner gets it in SESSION; dn denoise and dnrender "
+                           "print it)");
+  protocol::Attach attach{session_id, {}};
+  if (keyed) attach.watch_key = std::string(watch_key);  // an older server knows no key (docs/protocol.md §10)
   const uint64_t id = state_->next_request_id();
   state_->add_watch(id, session_id);
   try {
-    state_->send(protocol::Attach{session_id}, id, 0, true);
+    state_->send(attach, id, 0, true);
     detail::Incoming in = state_->wait_reply(id);
     auto* s = std::get_if<protocol::Session>(&in.message);
     if (!s) unexpected(*state_, in, "SESSION");

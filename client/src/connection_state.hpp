@@ -35,6 +35,8 @@ class ConnectionState {
 
   const std::string& endpoint() const { return endpoint_str_; }
   const protocol::Welcome& welcome() const { return welcome_; }
+  // min(server's WELCOME minor, ours): what this connection may carry (docs/protocol.md §10).
+  uint8_t negotiated_minor() const { return negotiated_minor_; }
   Milliseconds io_timeout() const { return io_timeout_; }
   bool is_open() const { return fd_ >= 0 && !broken_; }
   void close();
@@ -98,6 +100,7 @@ class ConnectionState {
   uint64_t max_message_bytes_;
   protocol::MessageReader reader_;
   protocol::Welcome welcome_;
+  uint8_t negotiated_minor_ = 0;
   uint64_t next_request_id_ = 1;
   std::vector<std::span<const uint8_t>> send_segments_;  // the message being sent, see send()
   std::optional<uint64_t> pong_due_;  // payload of a heartbeat PING not yet answered

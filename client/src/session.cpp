@@ -87,6 +87,17 @@ std::vector<float> Result::rgb() const {
 Session::Session(std::shared_ptr<detail::ConnectionState> state, protocol::Session info, uint32_t max_in_flight)
     : state_(std::move(state)), info_(std::move(info)), max_in_flight_(max_in_flight ? max_in_flight : 1) {}
 
+const std::string& Session::watch_key() const {
+  static const std::string kNone;
+  return info_.watch_key ? *info_.watch_key : kNone;
+}
+
+std::string Session::watch_command() const {
+  std::string cmd = "dn watch --server " + state_->endpoint() + " --session " + std::to_string(info_.session_id);
+  if (!watch_key().empty()) cmd += " --key " + watch_key();
+  return cmd;
+}
+
 Session::Session(Session&& o) noexcept
     : state_(std::move(o.state_)),
       info_(std::move(o.info_)),

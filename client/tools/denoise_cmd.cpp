@@ -243,9 +243,8 @@ int run_denoise(const std::vector<std::string>& argv) {
   }
   client::Session session = conn.open_session(desc);
   if (!quiet)
-    std::fprintf(stderr, "dn: session %llu (watch it with: dn watch --server %s --session %llu)\n",
-                 static_cast<unsigned long long>(session.id()), conn.endpoint().c_str(),
-                 static_cast<unsigned long long>(session.id()));
+    std::fprintf(stderr, "dn: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
+                 static_cast<unsigned long long>(session.id()), session.watch_command().c_str());
 
   // The summary's temporal error needs the frames too.
   const bool want_output = output || png || reference || args.has("summary");

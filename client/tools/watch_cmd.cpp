@@ -1,6 +1,7 @@
 // dn watch: attach to a running session read-only and write its newest frames.
 #include <charconv>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "args.hpp"
@@ -18,7 +19,8 @@ namespace {
 
 const std::vector<Args::Spec> kSpecs = {
     {"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
-    {"session", "", true, false, "id of the session to watch (see 'dn stats')", "ID"},
+    {"session", "", true, false, "id of the session to watch (printed by dn denoise and dnrender --server)", "ID"},
+    {"key", "", true, false, "the session's watch key (default $DN_WATCH_KEY; printed with the id)", "KEY"},
     {"output", "-o", true, false, "output pattern; .png (tone-mapped) or .exr by extension", "PATTERN"},
     {"count", "", true, false, "stop after N frames (default: until the session ends)", "N"},
     {"token-file", "", true, false, "file holding the auth token", "FILE"},
@@ -39,7 +41,8 @@ int run_watch(const std::vector<std::string>& argv) {
   Args args("watch", kSpecs);
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn watch --server URL --session ID --output 'w/frame_%%04d.png' [--count N]\n\noptions:\n%s",
+    std::printf("usage: dn watch --server URL --session ID --key KEY --output 'w/frame_%%04d.png' [--count N]\n\n"
+                "options:\n%s",
                 args.usage().c_str());
     return 0;
   }
@@ -55,6 +58,15 @@ int run_watch(const std::vector<std::string>& argv) {
     if (ec != std::errc() || ptr != e || session_id == 0)
       throw UsageError("--session: expected a session id (1 to 18446744073709551615), got '" + *session_text + "'");
   }
+  // The key is the capability to watch (protocol 1.6); from the environment so
+  // that it need not appear in a process listing.
+  std::string key = args.get_or("key", "");
+  if (key.empty())
+    if (const char* env = std::getenv("DN_WATCH_KEY"); env) key = env;
+  if (key.empty()) throw UsageError("missing --key KEY (or set DN_WATCH_KEY): the session's watch key, printed with its id");
+  if (!protocol::is_well_formed_watch_key(key))
+    throw UsageError("--key: expected the session's watch key, " + std::to_string(protocol::kWatchKeyLength) +
+                     " lowercase hex digits, got '" + key + "' (" + std::to_string(key.size()) + " characters)");
   const std::string output = args.require("output");
   const long long count = args.get_int("count", 0, 0, INT64_MAX);
   const bool quiet = args.has("quiet");
@@ -76,7 +88,7 @@ int run_watch(const std::vector<std::string>& argv) {
   if (auto tf = args.get("token-file")) copts.token_file = *tf;
   copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   client::Connection conn = client::Connection::connect(url, copts);
-  client::Watcher watcher = conn.attach(uint64_t(session_id));
+  client::Watcher watcher = conn.attach(uint64_t(session_id), key);
   const auto& info = watcher.info();
   if (!quiet)
     std::fprintf(stderr, "dn: watching session %llu on %s: %ux%u, pipeline %s\n", (unsigned long long)session_id,

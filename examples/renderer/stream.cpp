@@ -162,6 +162,9 @@ void FrameStreamer::open(const FrameBuffers& sample) {
       desc.parameters.push_back({std::string(client::kDemodulatedParameter), 1.0});
   }
   state_->session.emplace(state_->connection.open_session(desc));
+  if (!options.quiet)
+    std::fprintf(stderr, "dnrender: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
+                 static_cast<unsigned long long>(state_->session->id()), state_->session->watch_command().c_str());
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
 }
 

@@ -136,7 +136,32 @@ struct Ctx {
     return Field{type, name, index, sub};
   }
   bool newer_minor() const { return h.version_minor > kVersionMinor; }
+  // A field appended by minor n is on the wire when the sender's minor is >= n
+  // (a sender writes only what both sides know, docs/protocol.md §10).
+  bool has(uint8_t minor) const { return h.version_minor >= minor; }
 };
+
+// SESSION.watch_key and ATTACH.watch_key (1.6): empty or 32 lowercase hex digits.
+bool read_watch_key(Ctx& c, std::optional<std::string>& out) {
+  if (!c.has(kWatchKeyMinor)) {
+    out.reset();
+    return true;
+  }
+  const Field f = c.f("watch_key");
+  std::string key;
+  if (!c.r.str(key, f, kWatchKeyLength)) return false;
+  // The message does not repeat the key: a near miss of a real one would end up in logs.
+  if (!is_well_formed_watch_key(key)) {
+    std::string found = std::to_string(key.size()) + " bytes";
+    if (key.size() == kWatchKeyLength)
+      found = "byte " + std::to_string(key.find_first_not_of("0123456789abcdef")) + " is not one";
+    return c.r.fail(ErrorCode::Malformed, f,
+                    f.str() + " must be empty or " + std::to_string(kWatchKeyLength) +
+                        " lowercase hex digits (0-9, a-f); " + found);
+  }
+  out = std::move(key);
+  return true;
+}
 
 bool decode(Ctx& c, Hello& m) {
   Reader& r = c.r;
@@ -262,7 +287,8 @@ bool decode(Ctx& c, Session& m) {
       !read_format(r, m.output_format, c.f("output_format")))
     return false;
   if (!read_bool(r, m.read_only, c.f("read_only"))) return false;
-  return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels");
+  return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels") &&
+         read_watch_key(c, m.watch_key);
 }
 
 bool decode(Ctx& c, Frame& m) {
@@ -301,7 +327,9 @@ bool decode(Ctx& c, Result& m) {
          read_planes(r, m.planes, c.type, "planes");
 }
 
-bool decode(Ctx& c, Attach& m) { return c.r.u64(m.session_id, c.f("session_id")); }
+bool decode(Ctx& c, Attach& m) {
+  return c.r.u64(m.session_id, c.f("session_id")) && read_watch_key(c, m.watch_key);
+}
 bool decode(Ctx& c, Ping& m) { return c.r.u64(m.payload, c.f("payload")); }
 bool decode(Ctx& c, Pong& m) { return c.r.u64(m.payload, c.f("payload")); }
 bool decode(Ctx& c, CloseSession& m) { return c.r.u64(m.session_id, c.f("session_id")); }

@@ -177,6 +177,7 @@ struct Put {
     s.u8(m.read_only ? 1 : 0);
     s.u64(m.device_bytes);
     put_channels(s, m.channels);
+    if (m.watch_key) s.str(*m.watch_key);  // 1.6, for a peer that knows it
   }
   void operator()(const Frame& m) {
     const FrameInfo& f = m.info;
@@ -203,7 +204,10 @@ struct Put {
     }
     put_planes(s, m.planes);
   }
-  void operator()(const Attach& m) { s.u64(m.session_id); }
+  void operator()(const Attach& m) {
+    s.u64(m.session_id);
+    if (m.watch_key) s.str(*m.watch_key);  // 1.6, for a server that knows it
+  }
   void operator()(const Ping& m) { s.u64(m.payload); }
   void operator()(const Pong& m) { s.u64(m.payload); }
   void operator()(const CloseSession& m) { s.u64(m.session_id); }
@@ -223,9 +227,12 @@ struct Put {
 
 // The minor version whose fields the payload holds: the header always says
 // kVersionMinor (the sender's own), but a WELCOME for a 1.0 client stops
-// after the 1.0 fields (docs/protocol.md §10), so it is checked as 1.0.
+// after the 1.0 fields (docs/protocol.md §10), so it is checked as 1.0; a
+// SESSION or ATTACH without its watch key is a 1.5 payload.
 uint8_t payload_minor(const Message& message) {
   if (const auto* w = std::get_if<Welcome>(&message); w && !w->has_parameters) return 0;
+  if (const auto* s = std::get_if<Session>(&message); s && !s->watch_key) return kWatchKeyMinor - 1;
+  if (const auto* a = std::get_if<Attach>(&message); a && !a->watch_key) return kWatchKeyMinor - 1;
   return kVersionMinor;
 }
 

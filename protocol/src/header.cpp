@@ -16,7 +16,7 @@ uint64_t max_payload_bytes(MessageType type, uint64_t max_message_bytes) {
     case MessageType::Session: limit = 64 * 1024; break;
     case MessageType::Frame: limit = cap; break;
     case MessageType::Result: limit = cap; break;
-    case MessageType::Attach: limit = 8; break;
+    case MessageType::Attach: limit = 8 + 2 + kWatchKeyLength; break;  // session_id, 1.6 watch_key
     case MessageType::Ping: limit = 8; break;
     case MessageType::Pong: limit = 8; break;
     case MessageType::CloseSession: limit = 8; break;

@@ -75,6 +75,9 @@ class Connection {
   // min(client's HELLO minor, ours), set with authenticated: what this
   // connection may carry (docs/protocol.md §10).
   uint8_t negotiated_minor = 0;
+  // Presented the server's token (so one is configured): STATS shows it every
+  // session, not only its own (docs/server.md, "Security").
+  bool administrator = false;
   bool close_after_flush = false;  // a fatal error was queued; stop reading, close once flushed
   // Backpressure: the server stops reading this connection. Time paused does
   // not count against the message in progress (its deadline moves on).

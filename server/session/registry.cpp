@@ -1,5 +1,7 @@
 #include "server/session/registry.hpp"
 
+#include "server/session/watch_key.hpp"
+
 namespace dn::server {
 
 SessionRegistry::SessionRegistry() {
@@ -11,7 +13,7 @@ std::shared_ptr<Session> SessionRegistry::add(uint64_t owner, pipelines::Session
                                               std::unique_ptr<pipelines::Pipeline> pipeline) {
   uint64_t id;
   do id = ids_(); while (id == 0 || sessions_.count(id));
-  auto session = std::make_shared<Session>(id, owner, std::move(config), std::move(pipeline));
+  auto session = std::make_shared<Session>(id, owner, std::move(config), std::move(pipeline), new_watch_key());
   sessions_[id] = session;
   return session;
 }

@@ -1,5 +1,6 @@
 // The open sessions of a server, by id: random 64-bit ids (never 0, never
-// reused while open), lookup and removal. Touched only by the event loop.
+// reused while open; not secret: the watch key is), lookup and removal.
+// Touched only by the event loop.
 #pragma once
 
 #include <cstdint>
@@ -15,7 +16,7 @@ class SessionRegistry {
  public:
   SessionRegistry();
 
-  // Registers a new session of `owner` (a connection id) under a fresh id.
+  // Registers a new session of `owner` (a connection id) under a fresh id and watch key.
   std::shared_ptr<Session> add(uint64_t owner, pipelines::SessionConfig config,
                                std::unique_ptr<pipelines::Pipeline> pipeline);
   // nullptr when no such session is open.

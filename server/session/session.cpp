@@ -28,8 +28,12 @@ std::shared_ptr<const std::vector<uint8_t>> encode_shared(const protocol::Messag
 }  // namespace
 
 Session::Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config,
-                 std::unique_ptr<pipelines::Pipeline> pipeline)
-    : id_(id), owner_(owner), config_(std::move(config)), pipeline_(std::move(pipeline)) {
+                 std::unique_ptr<pipelines::Pipeline> pipeline, std::string watch_key)
+    : id_(id),
+      owner_(owner),
+      watch_key_(std::move(watch_key)),
+      config_(std::move(config)),
+      pipeline_(std::move(pipeline)) {
   device_bytes_ = pipeline_ ? pipeline_->device_bytes() : 0;
   transient_bytes_ = pipeline_ ? pipeline_->transient_bytes() : 0;
 }

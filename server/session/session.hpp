@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
@@ -41,11 +42,14 @@ uint64_t frame_message_bytes(const pipelines::SessionConfig& config);
 
 class Session {
  public:
-  Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config, std::unique_ptr<pipelines::Pipeline> pipeline);
+  Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config, std::unique_ptr<pipelines::Pipeline> pipeline,
+          std::string watch_key);
   ~Session();
 
   uint64_t id() const { return id_; }
   uint64_t owner() const { return owner_; }
+  // What ATTACH must present (protocol 1.6); given to the owner in SESSION.
+  const std::string& watch_key() const { return watch_key_; }
   const pipelines::SessionConfig& config() const { return config_; }
   // Device memory the session needs per frame; of which transient_bytes() is
   // scratch leased from the device's pool only while one of its frames runs.
@@ -77,6 +81,7 @@ class Session {
  private:
   uint64_t id_;
   uint64_t owner_;
+  std::string watch_key_;
   pipelines::SessionConfig config_;
   std::unique_ptr<pipelines::Pipeline> pipeline_;
   uint64_t device_bytes_;

@@ -8,6 +8,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 
@@ -66,7 +67,9 @@ std::optional<Received> Peer::recv(int timeout_ms) {
       Received r;
       r.header = reader_.header();
       r.payload = std::make_shared<std::vector<uint8_t>>(reader_.take_payload());
-      if (auto e = decode_payload(r.header, *r.payload, r.message)) {
+      Header as_read = r.header;
+      as_read.version_minor = std::min(as_read.version_minor, announced_minor_);
+      if (auto e = decode_payload(as_read, *r.payload, r.message)) {
         ADD_FAILURE() << "fake server: decode error at " << e->field << ": " << e->message;
         return std::nullopt;
       }
@@ -131,6 +134,7 @@ Hello Peer::handshake_with(const Welcome& welcome) {
 void Peer::send_welcome(const Welcome& welcome, uint64_t request_id) {
   std::vector<uint8_t> bytes = encode(welcome, request_id);
   if (!welcome.has_parameters) bytes[5] = 0;  // header version_minor: a 1.0 server
+  announced_minor_ = bytes[5];
   send_raw(bytes);
 }
 

@@ -47,6 +47,10 @@ class Peer {
  private:
   int fd_;
   bool eof_ = false;
+  // The minor version the WELCOME announced: later messages are decoded as
+  // that version reads them, so a field the client must not send to it
+  // (docs/protocol.md §10) fails the test as trailing bytes.
+  uint8_t announced_minor_ = protocol::kVersionMinor;
   protocol::MessageReader reader_{uint64_t{1} << 32};
 };
 

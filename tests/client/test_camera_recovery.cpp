@@ -333,6 +333,7 @@ void recording_server(test::Peer& peer, Log& log) {
       s.pipeline = o->pipeline;
       s.output_format = o->output_format;
       s.channels = o->channels;
+      s.watch_key = "00112233445566778899aabbccddeeff";
       peer.send(s, id);
     } else if (auto* f = std::get_if<protocol::Frame>(&m->message)) {
       log.infos.push_back(f->info);

@@ -48,6 +48,7 @@ void echo_server(Peer& peer, EchoLog& log, std::optional<uint64_t> fail_on = std
       session.pipeline = o->pipeline;
       session.output_format = o->output_format;
       session.channels = o->channels;
+      session.watch_key = "00112233445566778899aabbccddeeff";
       peer.send(session, id);
     } else if (auto* f = std::get_if<Frame>(&m->message)) {
       log.frames.push_back(f->info.frame_index);

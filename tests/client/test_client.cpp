@@ -19,6 +19,7 @@ using dn::test::Peer;
 using dn::test::Received;
 
 constexpr uint32_t W = 4, H = 3;
+constexpr const char* kKey = "00112233445566778899aabbccddeeff";  // a well-formed watch key (protocol 1.6)
 
 client::ConnectOptions opts(std::optional<std::string> token = std::nullopt) {
   client::ConnectOptions o;
@@ -45,6 +46,7 @@ OpenSession serve_open(Peer& peer, uint64_t session_id = 7) {
   s.output_format = o->output_format;
   s.device_bytes = 12345;
   s.channels = o->channels;
+  s.watch_key = kKey;
   peer.send(s, m->header.request_id);
   return *o;
 }
@@ -561,12 +563,14 @@ TEST(ClientSession, ReplyTimeoutIsTransportTimeout) {
 
 TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
   FakeServer server([&](Peer& peer) {
-    peer.handshake();
+    peer.handshake_with(dn::test::test_welcome_with_parameters());  // a server of this version: keys
     auto m = peer.recv();
     ASSERT_TRUE(m);
     auto* a = std::get_if<Attach>(&m->message);
     ASSERT_NE(a, nullptr);
+    EXPECT_EQ(a->watch_key, std::optional<std::string>(kKey)) << "ATTACH carries the key given to attach()";
     Session s;
+    s.watch_key = "";  // the reply to ATTACH does not repeat it
     s.session_id = a->session_id;
     s.width = W;
     s.height = H;
@@ -603,7 +607,8 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
     peer.recv(2000);
   });
   auto conn = client::Connection::connect(server.url(), opts());
-  client::Watcher w = conn.attach(42);
+  EXPECT_EQ(conn.protocol_minor(), kVersionMinor);
+  client::Watcher w = conn.attach(42, kKey);
   EXPECT_TRUE(w.info().read_only);
   EXPECT_EQ(w.session_id(), 42u);
   client::Result r = w.next();
@@ -623,20 +628,48 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
 
 TEST(ClientWatcher, AttachToUnknownSessionThrows) {
   FakeServer server([&](Peer& peer) {
-    peer.handshake();
+    peer.handshake();  // a 1.0 server: it knows no watch key, so none is sent
     auto m = peer.recv();
     ASSERT_TRUE(m);
+    auto* a = std::get_if<Attach>(&m->message);
+    ASSERT_NE(a, nullptr);
+    EXPECT_FALSE(a->watch_key.has_value());
+    EXPECT_EQ(m->header.payload_length, 8u);
     peer.send(Error{ErrorCode::UnknownSession, "ATTACH.session_id", "no session 3"}, m->header.request_id);
     peer.recv(2000);
   });
   auto conn = client::Connection::connect(server.url(), opts());
+  EXPECT_EQ(conn.protocol_minor(), 0);
   try {
-    conn.attach(3);
+    conn.attach(3, kKey);
     FAIL();
   } catch (const client::Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::UnknownSession);
     EXPECT_EQ(e.field(), "ATTACH.session_id");
   }
+}
+
+TEST(ClientWatcher, MalformedWatchKeyIsRefusedBeforeSending) {
+  bool got_attach = false;
+  FakeServer server([&](Peer& peer) {
+    peer.handshake_with(dn::test::test_welcome_with_parameters());
+    auto m = peer.recv(1000);
+    got_attach = m && std::holds_alternative<Attach>(m->message);
+  });
+  auto conn = client::Connection::connect(server.url(), opts());
+  for (const char* bad : {"", "00112233445566778899AABBCCDDEEFF", "0011", "00112233445566778899aabbccddeeff0"}) {
+    try {
+      conn.attach(42, bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const client::Error& e) {
+      EXPECT_EQ(e.kind(), client::ErrorKind::Usage) << bad;
+      EXPECT_EQ(e.field(), "ATTACH.watch_key") << bad;
+      EXPECT_NE(std::string(e.what()).find("32 lowercase hex digits"), std::string::npos) << e.what();
+    }
+  }
+  conn.close();
+  server.join();
+  EXPECT_FALSE(got_attach) << "a malformed key was sent";
 }
 
 }  // namespace

@@ -130,7 +130,7 @@ TEST(ClientParameters, OneOneServerTablesReachTheClientAndHelloSaysOneTwo) {
   EXPECT_EQ(svgf->parameters[1].description, "Number of a-trous iterations.");
   conn.close();
   server.join();
-  EXPECT_EQ(hello_minor, 5);  // the client's own version, 1.5
+  EXPECT_EQ(hello_minor, 6);  // the client's own version, 1.6
 }
 
 TEST(ClientParameters, MisspeltParameterFailsLocallyWithOneOneServer) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -166,6 +167,37 @@ TEST_F(Cli, DenoiseFailsClearlyOnServerError) {
   EXPECT_NE(log.find("no-such-pipeline"), std::string::npos) << log;
 }
 
+// The hint dn denoise prints is a command that watches the session: with its watch key.
+TEST_F(Cli, DenoisePrintsTheWatchCommandWithTheKey) {
+  ServerProcess server;
+  std::string log;
+  int rc = shell(std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
+                     " --pipeline accumulate --preset dnrender --input '" + dir_.string() +
+                     "/in/frame_%04d.exr' --start 0 --end 0",
+                 &log);
+  ASSERT_EQ(rc, 0) << log;
+  const std::regex hint("dn: session ([0-9]+) \\(watch it with: dn watch --server " + server.tcp_url() +
+                        " --session ([0-9]+) --key [0-9a-f]{32} --output 'watch/%04d.png'\\)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log, m, hint)) << log;
+  EXPECT_EQ(m[1].str(), m[2].str());
+}
+
+TEST_F(Cli, WatchNeedsAWellFormedKey) {
+  const std::string watch = std::string(DN_DN_PATH) + " watch --server tcp://127.0.0.1:1 --session 5 --output w.png";
+  std::string log;
+  EXPECT_EQ(shell("env -u DN_WATCH_KEY " + watch, &log), 2) << log;
+  EXPECT_NE(log.find("missing --key KEY (or set DN_WATCH_KEY)"), std::string::npos) << log;
+  EXPECT_EQ(shell(watch + " --key 0123456789ABCDEF0123456789abcdef", &log), 2) << log;
+  EXPECT_NE(log.find("--key: expected the session's watch key, 32 lowercase hex digits, got "
+                     "'0123456789ABCDEF0123456789abcdef'"),
+            std::string::npos)
+      << log;
+  // The key may come from the environment instead (here a short one, refused the same way).
+  EXPECT_EQ(shell("DN_WATCH_KEY=abc " + watch, &log), 2) << log;
+  EXPECT_NE(log.find("got 'abc' (3 characters)"), std::string::npos) << log;
+}
+
 TEST_F(Cli, WatchWritesTheSessionsLatestFrames) {
   // A short idle timeout: the watcher only receives, so it must answer the
   // server's heartbeat PINGs to stay attached while frames trickle in.
@@ -173,13 +205,14 @@ TEST_F(Cli, WatchWritesTheSessionsLatestFrames) {
   RawClient owner(server.tcp_url());
   owner.hello();
   auto request = passthrough_session(48, 32);
-  uint64_t sid = owner.open(request);
+  const protocol::Session opened = owner.open_session(request);
+  const uint64_t sid = opened.session_id;
 
   const std::string out = dir_.string() + "/watch";
   std::string log;
   std::thread watcher([&] {
     shell(std::string(DN_DN_PATH) + " watch --server " + server.tcp_url() + " --session " + std::to_string(sid) +
-              " --output '" + out + "/w_%04d.png' --count 3 --timeout 30",
+              " --key " + opened.watch_key.value_or("") + " --output '" + out + "/w_%04d.png' --count 3 --timeout 30",
           &log);
   });
   // Stream frames until the watcher has written three and exited.

@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
@@ -82,7 +83,9 @@ std::optional<Received> RawClient::receive(double timeout_s) {
         r.header = h;
         r.payload.assign(buffer_.begin() + protocol::kHeaderSize, buffer_.begin() + protocol::kHeaderSize + h.payload_length);
         buffer_.erase(buffer_.begin(), buffer_.begin() + protocol::kHeaderSize + h.payload_length);
-        if (auto err = protocol::decode_payload(h, r.payload, r.message))
+        protocol::Header as_read = h;
+        as_read.version_minor = std::min(h.version_minor, read_minor_);
+        if (auto err = protocol::decode_payload(as_read, r.payload, r.message))
           throw std::runtime_error("server sent a bad payload: " + err->field + ": " + err->message);
         return r;
       }
@@ -122,10 +125,14 @@ protocol::Welcome RawClient::hello(const std::string& token) {
 }
 
 uint64_t RawClient::open(const protocol::OpenSession& request, uint64_t request_id) {
+  return open_session(request, request_id).session_id;
+}
+
+protocol::Session RawClient::open_session(const protocol::OpenSession& request, uint64_t request_id) {
   send(request, request_id);
   auto r = receive();
   if (!r) throw std::runtime_error("no reply to OPEN_SESSION");
-  if (auto* s = std::get_if<protocol::Session>(&r->message)) return s->session_id;
+  if (auto* s = std::get_if<protocol::Session>(&r->message)) return *s;
   if (auto* e = std::get_if<protocol::Error>(&r->message))
     throw std::runtime_error("OPEN_SESSION refused: " + e->field + ": " + e->message);
   throw std::runtime_error("unexpected reply to OPEN_SESSION");

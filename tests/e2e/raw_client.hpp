@@ -28,6 +28,9 @@ class RawClient {
   void send(const protocol::Message& m, uint64_t request_id, uint32_t flags = 0);
   // Next message, or nullopt on timeout or when the server closed the connection.
   std::optional<Received> receive(double timeout_s = 20.0);
+  // Decode what arrives as a client of protocol 1.`minor` reads it (default:
+  // this version), so a field the server must not send it fails as trailing bytes.
+  void read_as_minor(uint8_t minor) { read_minor_ = minor; }
   // True when the server closed the connection (EOF) within the timeout.
   bool closed_by_server(double timeout_s = 10.0);
 
@@ -35,12 +38,15 @@ class RawClient {
   protocol::Welcome hello(const std::string& token = "");
   // OPEN_SESSION → SESSION id; throws on ERROR.
   uint64_t open(const protocol::OpenSession& request, uint64_t request_id = 1);
+  // OPEN_SESSION → the whole SESSION reply (with its watch key); throws on ERROR.
+  protocol::Session open_session(const protocol::OpenSession& request, uint64_t request_id = 1);
 
   int fd() const { return fd_; }
   void close();
 
  private:
   int fd_ = -1;
+  uint8_t read_minor_ = protocol::kVersionMinor;
   std::vector<uint8_t> buffer_;
 };
 

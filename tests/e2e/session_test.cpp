@@ -193,10 +193,11 @@ TEST(Session, WatcherSeesTheOwnersFrames) {
   RawClient owner(server.tcp_url());
   owner.hello();
   auto request = passthrough_session(32, 16);
-  uint64_t sid = owner.open(request);
+  const protocol::Session opened = owner.open_session(request);
+  const uint64_t sid = opened.session_id;
   RawClient watcher(server.tcp_url());
   watcher.hello();
-  watcher.send(protocol::Attach{sid}, 8);
+  watcher.send(protocol::Attach{sid, opened.watch_key}, 8);
   auto ack = watcher.receive();
   ASSERT_TRUE(ack);
   auto* s = std::get_if<protocol::Session>(&ack->message);
@@ -235,12 +236,13 @@ TEST(Session, SlowWatcherGetsTheLatestFrameAndNeverSlowsTheOwner) {
   owner.hello();
   constexpr uint32_t w = 256, h = 144;  // 442 KB per result
   auto request = passthrough_session(w, h);
-  uint64_t sid = owner.open(request);
+  const protocol::Session opened = owner.open_session(request);
+  const uint64_t sid = opened.session_id;
   RawClient watcher(server.tcp_url());
   int small = 64 * 1024;
   ::setsockopt(watcher.fd(), SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
   watcher.hello();
-  watcher.send(protocol::Attach{sid}, 8);
+  watcher.send(protocol::Attach{sid, opened.watch_key}, 8);
   ASSERT_TRUE(watcher.receive());  // SESSION (read-only)
 
   // The watcher reads nothing while the owner streams: the owner must not be slowed.

@@ -25,6 +25,7 @@ std::vector<uint8_t> as_minor(const protocol::Message& m, uint64_t request_id, u
 }
 
 protocol::Welcome welcome_for(RawClient& c, uint8_t minor) {
+  c.read_as_minor(minor);
   c.send_bytes(as_minor(protocol::Hello{0, "v1." + std::to_string(minor), ""}, 1, minor));
   auto r = c.receive();
   if (!r) throw std::runtime_error("no WELCOME");

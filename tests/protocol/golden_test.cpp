@@ -11,7 +11,7 @@ namespace {
 std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, minor})             // version 1.0 ... 1.5
+      .raw({0x01, minor})             // version 1.0 ... 1.6
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -105,11 +105,11 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello(5));  // the sender's own version: 1.5
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(6));  // the sender's own version: 1.6
 }
 
 TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
-  for (int minor : {0, 1, 2, 3, 4, 5}) {
+  for (int minor : {0, 1, 2, 3, 4, 5, 6}) {
     Decoded d;
     std::vector<uint8_t> storage;
     const auto bytes = golden_hello(minor);
@@ -173,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(5));
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(6));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session(5);
+  const auto bytes = golden_open_session(6);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;
@@ -197,6 +197,120 @@ TEST(Golden, OpenSessionBothWays) {
   const auto old = golden_open_session(0);
   ASSERT_FALSE(decode_message(old, kMaxMessage, d, storage));
   EXPECT_EQ(diff(o, d.message), "");
+}
+
+// SESSION, request_id 3, session 0x0102030405060708, 640x360 "svgf", F16
+// output, not read-only, 4096 device bytes, one channel (radiance F32), and
+// from 1.6 the watch key (§5.5).
+const char* const kKey = "0123456789abcdef0123456789abcdef";
+std::vector<uint8_t> golden_session(int minor) {
+  Bytes b;
+  b.raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
+      .raw({0x05, 0x00})                        // type 5 = SESSION
+      .raw({0x00, 0x00, 0x00, 0x00})            // flags
+      .raw({minor >= 6 ? 0x46 : 0x24, 0x00, 0x00, 0x00})  // payload_length 36, 70 with the key
+      .raw({0x03, 0, 0, 0, 0, 0, 0, 0})         // request_id 3
+      // payload
+      .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01})  // 0: session_id
+      .raw({0x80, 0x02, 0x00, 0x00})                          // 8: width 640
+      .raw({0x68, 0x01, 0x00, 0x00})                          // 12: height 360
+      .raw({0x04, 0x00}).text("svgf")                         // 16: pipeline
+      .raw({0x01})                                            // +0: output_format F16
+      .raw({0x00})                                            // +1: read_only 0
+      .raw({0x00, 0x10, 0, 0, 0, 0, 0, 0})                    // +2: device_bytes 4096
+      .raw({0x01, 0x00, 0x00, 0x02});                         // +10: 1 channel, radiance F32
+  if (minor >= 6) b.raw({0x20, 0x00}).text(kKey);             // 1.6: watch_key, 32 bytes
+  return b.v;
+}
+
+// ATTACH, request_id 9, session 0x0102030405060708, from 1.6 with the key (§5.8).
+std::vector<uint8_t> golden_attach(int minor) {
+  Bytes b;
+  b.raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
+      .raw({0x08, 0x00})                        // type 8 = ATTACH
+      .raw({0x00, 0x00, 0x00, 0x00})            // flags
+      .raw({minor >= 6 ? 0x2A : 0x08, 0x00, 0x00, 0x00})  // payload_length 8, 42 with the key
+      .raw({0x09, 0, 0, 0, 0, 0, 0, 0})         // request_id 9
+      .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01});  // session_id
+  if (minor >= 6) b.raw({0x20, 0x00}).text(kKey);             // 1.6: watch_key
+  return b.v;
+}
+
+Session golden_session_message(std::optional<std::string> key) {
+  Session s{0x0102030405060708u, 640, 360, "svgf", Format::F16, 4096, false, {{ChannelId::Radiance, Format::F32}}};
+  s.watch_key = std::move(key);
+  return s;
+}
+
+TEST(Golden, SessionWithTheWatchKeyBothWays) {
+  const Session s = golden_session_message(kKey);
+  EXPECT_EQ(encode(s, 3, 0), golden_session(6));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_session(6);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(s, d.message), "");
+}
+
+TEST(Golden, SessionFromAnOlderServerHasNoKey) {
+  for (int minor : {0, 5}) {
+    Decoded d;
+    std::vector<uint8_t> storage;
+    auto bytes = golden_session(minor);
+    auto err = decode_message(bytes, kMaxMessage, d, storage);
+    ASSERT_FALSE(err) << minor << ": " << err->field << ": " << err->message;
+    EXPECT_EQ(diff(golden_session_message(std::nullopt), d.message), "") << minor;
+  }
+  // A 1.6 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
+  std::vector<uint8_t> expected = golden_session(5);
+  expected[5] = 6;
+  EXPECT_EQ(encode(golden_session_message(std::nullopt), 3, 0), expected);
+}
+
+TEST(Golden, AttachWithTheWatchKeyBothWays) {
+  const Attach a{0x0102030405060708u, kKey};
+  EXPECT_EQ(encode(a, 9, 0), golden_attach(6));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_attach(6);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(a, d.message), "");
+  auto old = golden_attach(5);
+  ASSERT_FALSE(decode_message(old, kMaxMessage, d, storage));
+  EXPECT_EQ(diff(Attach{0x0102030405060708u, std::nullopt}, d.message), "");
+}
+
+TEST(Golden, WatchKeyMustBeEmptyOrThirtyTwoLowercaseHexDigits) {
+  for (const char* bad : {"0123456789ABCDEF0123456789abcdef", "0123456789abcdef0123456789abcdeg", "0123"}) {
+    SCOPED_TRACE(bad);
+    for (auto make : {golden_attach, golden_session}) {
+      std::vector<uint8_t> bytes = make(6);
+      const size_t at = bytes.size() - 34;  // the key's u16 length, then its 32 bytes
+      bytes.resize(at);
+      const std::string key = bad;
+      Bytes tail;
+      tail.raw({static_cast<int>(key.size()), 0x00}).text(key);
+      bytes.insert(bytes.end(), tail.v.begin(), tail.v.end());
+      const size_t length = bytes.size() - 24;
+      bytes[12] = static_cast<uint8_t>(length);  // payload_length, little-endian; below 256 here
+      bytes[13] = 0;
+      Decoded d;
+      std::vector<uint8_t> storage;
+      auto err = decode_message(bytes, kMaxMessage, d, storage);
+      ASSERT_TRUE(err);
+      EXPECT_EQ(err->code, ErrorCode::Malformed);
+      EXPECT_NE(err->field.find(".watch_key"), std::string::npos) << err->field;
+      EXPECT_NE(err->message.find("lowercase hex"), std::string::npos) << err->message;
+    }
+  }
+  // Empty is well-formed: an ATTACH without a key is the server's to refuse.
+  Decoded d;
+  std::vector<uint8_t> storage;
+  const auto empty = encode(Attach{1, ""}, 1, 0);
+  ASSERT_FALSE(decode_message(empty, kMaxMessage, d, storage));
+  EXPECT_EQ(std::get<Attach>(d.message).watch_key, std::optional<std::string>(""));
 }
 
 }  // namespace

@@ -183,7 +183,7 @@ TEST(Header, MaxPayloadBytesTable) {
   EXPECT_EQ(max_payload_bytes(MessageType::Session, big), 65536u);
   EXPECT_EQ(max_payload_bytes(MessageType::Frame, big), big - 24);
   EXPECT_EQ(max_payload_bytes(MessageType::Result, big), big - 24);
-  EXPECT_EQ(max_payload_bytes(MessageType::Attach, big), 8u);
+  EXPECT_EQ(max_payload_bytes(MessageType::Attach, big), 42u);  // 1.6: u64 + a 32-byte watch_key string
   EXPECT_EQ(max_payload_bytes(MessageType::Ping, big), 8u);
   EXPECT_EQ(max_payload_bytes(MessageType::Pong, big), 8u);
   EXPECT_EQ(max_payload_bytes(MessageType::CloseSession, big), 8u);

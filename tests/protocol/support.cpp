@@ -57,6 +57,14 @@ double random_double(std::mt19937& rng) {
   }
 }
 
+// Empty, or 32 lowercase hex digits: the two shapes a 1.6 watch key takes.
+std::string random_watch_key(std::mt19937& rng) {
+  if (uniform<int>(rng, 0, 3) == 0) return {};
+  std::string key;
+  for (size_t i = 0; i < kWatchKeyLength; ++i) key += "0123456789abcdef"[uniform<int>(rng, 0, 15)];
+  return key;
+}
+
 // Valid UTF-8 without NUL, at most max_bytes long.
 std::string random_string(std::mt19937& rng, size_t max_bytes) {
   static const char* pieces[] = {"a", "Z", "0", " ", "-", "_", ".", "\x7f", "\xc3\xa9" /* é */,
@@ -186,6 +194,7 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       m.device_bytes = random_u64(rng);
       m.read_only = uniform<int>(rng, 0, 1) == 1;
       m.channels = random_channels(rng);
+      m.watch_key = random_watch_key(rng);
       o.message = m;
       break;
     }
@@ -215,7 +224,7 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       o.message = m;
       break;
     }
-    case MessageType::Attach: o.message = Attach{random_u64(rng)}; break;
+    case MessageType::Attach: o.message = Attach{random_u64(rng), random_watch_key(rng)}; break;
     case MessageType::Ping: o.message = Ping{random_u64(rng)}; break;
     case MessageType::Pong: o.message = Pong{random_u64(rng)}; break;
     case MessageType::CloseSession: o.message = CloseSession{random_u64(rng)}; break;
@@ -336,6 +345,7 @@ struct Differ {
     eq("device_bytes", a.device_bytes, b.device_bytes);
     eq("read_only", a.read_only, b.read_only);
     channels(a.channels, b.channels);
+    eq("watch_key", a.watch_key, b.watch_key);
   }
   void operator()(const Frame& a, const Frame& b) {
     eq("session_id", a.info.session_id, b.info.session_id);
@@ -362,7 +372,10 @@ struct Differ {
     }
     planes(a.planes, b.planes);
   }
-  void operator()(const Attach& a, const Attach& b) { eq("session_id", a.session_id, b.session_id); }
+  void operator()(const Attach& a, const Attach& b) {
+    eq("session_id", a.session_id, b.session_id);
+    eq("watch_key", a.watch_key, b.watch_key);
+  }
   void operator()(const Ping& a, const Ping& b) { eq("payload", a.payload, b.payload); }
   void operator()(const Pong& a, const Pong& b) { eq("payload", a.payload, b.payload); }
   void operator()(const CloseSession& a, const CloseSession& b) { eq("session_id", a.session_id, b.session_id); }

@@ -41,6 +41,8 @@ class Connection {
   // (welcome().has_parameters) every pipeline's parameter table.
   const protocol::Welcome& welcome() const;
   const std::string& endpoint() const;  // canonical URL, as used in error messages
+  // min(the server's minor version, this library's): 6 or more means sessions have watch keys.
+  uint8_t protocol_minor() const;
   const protocol::PipelineInfo* find_pipeline(std::string_view name) const;  // from WELCOME; nullptr if absent
 
   // PING -> PONG round trip.
@@ -55,7 +57,12 @@ class Connection {
   // with the server's code and field.
   Session open_session(const SessionDesc& desc);
   // ATTACH -> SESSION (read_only), then RESULTs through the Watcher.
-  Watcher attach(uint64_t session_id);
+  // `watch_key` is the session's key, as its owner got it (Session::watch_key(),
+  // printed by `dn denoise` and `dnrender --server`): a server of protocol 1.6
+  // or later refuses an ATTACH without it (Server error UnknownSession, the
+  // same as for an id that does not exist). A key that is not 32 lowercase hex
+  // digits throws Usage without sending anything. An older server takes no key.
+  Watcher attach(uint64_t session_id, std::string_view watch_key);
 
   // Closes the socket. Sessions and Watchers of this connection throw
   // Transport errors afterwards. Also done by the destructor of the last owner.

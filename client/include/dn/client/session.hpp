@@ -93,6 +93,12 @@ class Session {
   uint32_t width() const { return info_.width; }
   uint32_t height() const { return info_.height; }
   const protocol::Session& info() const { return info_; }  // the server's SESSION reply
+  // The capability to watch this session (protocol 1.6): give it to whoever
+  // should ATTACH (Connection::attach, `dn watch --key`). Empty from an older server.
+  const std::string& watch_key() const;
+  // The `dn watch` command line that watches this session, ready to paste:
+  // "dn watch --server URL --session ID --key KEY" (no --key from an older server).
+  std::string watch_command() const;
   uint32_t max_in_flight() const { return max_in_flight_; }
   // Submitted and not yet returned by wait()/poll() (answered or not).
   size_t in_flight() const { return outstanding_.size() + ready_.size(); }

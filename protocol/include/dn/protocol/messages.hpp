@@ -1,4 +1,4 @@
-// Protocol v1 messages (minor version 1.1): plain structs, one per message type.
+// Protocol v1 messages (minor version 1.6): plain structs, one per message type.
 // docs/protocol.md is the normative description of every byte; this header
 // mirrors it. Nothing here knows about sockets or Vulkan.
 #pragma once
@@ -7,7 +7,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -17,7 +19,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 5;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics)
+inline constexpr uint8_t kVersionMinor = 6;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH)
 inline constexpr size_t kHeaderSize = 24;
 
 enum class MessageType : uint16_t {
@@ -76,6 +78,13 @@ enum class ErrorCode : uint32_t {
 
 const char* to_string(ErrorCode code);
 const char* to_string(MessageType type);
+
+// 1.6: a session's watch key, the capability to ATTACH to it (SESSION.watch_key,
+// ATTACH.watch_key): kWatchKeyLength lowercase hex digits, or empty for "none".
+inline constexpr uint8_t kWatchKeyMinor = 6;
+inline constexpr size_t kWatchKeyLength = 32;  // 128 random bits
+// Empty, or exactly kWatchKeyLength characters of 0-9a-f: what the decoder accepts.
+bool is_well_formed_watch_key(std::string_view key);
 
 struct Hello {
   uint32_t capabilities = 0;  // reserved, zero in v1
@@ -156,6 +165,10 @@ struct Session {
   uint64_t device_bytes = 0;  // persistent device memory this session holds
   bool read_only = false;     // true for an ATTACH acknowledgement
   std::vector<ChannelDecl> channels;
+  // 1.6, appended: on the wire exactly when set (decoded as set when the
+  // header's minor is >= kWatchKeyMinor). The key in the reply to
+  // OPEN_SESSION, empty in the reply to ATTACH.
+  std::optional<std::string> watch_key;
 };
 
 // Motion vectors: the protocol's canonical convention is pixels, current
@@ -210,6 +223,9 @@ struct Result {
 
 struct Attach {
   uint64_t session_id = 0;
+  // 1.6, appended: on the wire exactly when set, as in Session. The server
+  // refuses an ATTACH without the session's key.
+  std::optional<std::string> watch_key;
 };
 
 struct Ping {
