@@ -58,7 +58,7 @@ vec3 accumulate_pixel(uint p) {
   float prev_len = 0.0;
   ivec2 origin;
   vec4 weights;
-  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_is_finite(mv) &&
+  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 sum_colour = vec3(0.0);
     float sum_len = 0.0;

@@ -35,7 +35,7 @@ void main() {
     const bool fg = dn_is_foreground(z);
     const vec3 n = fg ? dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, here)) : vec3(0.0);
     pyramid.data[here] = vec4(n, fg ? z : 0.0);
-    valid.data[here] = DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, here) > 0.0 ? 1u : 0u;
+    valid.data[here] = dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, here)) ? 1u : 0u;
     return;
   }
   if (MODE == PULL) {

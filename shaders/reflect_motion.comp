@@ -53,7 +53,7 @@ const ivec2 SMALL[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0,
 
 // A start at the pixel nearest pos + mv, for a usable motion.
 void consider_start(ivec2 pos, vec2 mv) {
-  if (dn_is_finite(mv) && all(lessThan(abs(mv), vec2(1e6)))) consider(ivec2(floor(vec2(pos) + mv + 0.5)));
+  if (dn_motion_usable(mv)) consider(ivec2(floor(vec2(pos) + mv + 0.5)));
 }
 
 void diamond_search(ivec2 pos, vec2 mv, vec2 vmv) {

@@ -1,6 +1,7 @@
 #version 450
 // reflect_prepare (reflect, after svgf_fb_factor): classes each pixel by its
-// roughness (reflect.mirror_roughness, reflect.glossy_roughness; NaN or a
+// sanitized roughness (reflect.mirror_roughness, reflect.glossy_roughness;
+// a non-finite roughness counts as 1, sanitize.glsl; a
 // background pixel: none) and writes
 //  - the search features of this frame (reflect.glsl): a mirror whose chain
 //    hit is not finite, or a glossy pixel without a finite position or unit
@@ -74,8 +75,8 @@ vec2 glossy_virtual_motion(uint p, vec3 o, float t) {
 }
 
 float reflection_class(uint p, float z) {
-  float r = DN_LOAD1(roughness, ROUGHNESS_HALF, p);
-  if (!dn_is_foreground(z) || !dn_is_finite(r)) return DN_REFLECT_NONE;
+  float r = dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p));
+  if (!dn_is_foreground(z)) return DN_REFLECT_NONE;
   if (r < DN_PARAM_VALUE(reflect, mirror_roughness)) return DN_REFLECT_MIRROR;
   if (r < DN_PARAM_VALUE(reflect, glossy_roughness)) return DN_REFLECT_GLOSSY;
   return DN_REFLECT_NONE;

@@ -49,7 +49,7 @@ void main() {
   s.m2 = vec3(m2.data[3u * p], m2.data[3u * p + 1u], m2.data[3u * p + 2u]);
   s.m3 = vec3(m3.data[3u * p], m3.data[3u * p + 1u], m3.data[3u * p + 2u]);
   s.raw = vec3(0.0);  // not read here: stat_filter reads the raw means
-  if (!(dn_stat_is_finite(s) && s.n > 0.0)) {
+  if (!dn_stat_usable(s)) {
     theta.data[p] = vec4(0.0);
     variance.data[p] = vec4(0.0);
     if (DEMODULATED) demodulate(p, dn_stat_empty());

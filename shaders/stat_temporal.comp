@@ -43,7 +43,7 @@
 DnStat current_stat(uint q) {
   DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q),
                     dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q)));
-  return (dn_stat_is_finite(s) && s.n > 0.0) ? s : dn_stat_empty();
+  return dn_stat_usable(s) ? s : dn_stat_empty();
 }
 
 DnStat previous_stat(uint q) {
@@ -163,7 +163,7 @@ void main() {
   vec4 w;
   DnStat acc = c;
   bool suspect = false;
-  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_is_finite(mv) &&
+  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, w)) {
     float beta = mix(DN_PARAM_VALUE(stat_temporal, fading), 1.0, dn_stillness(mv));
     DnStat h = dn_stat_scale(reprojected(origin, w, z, n, grad), beta);

@@ -34,7 +34,8 @@ uint assign(ivec2 pos, vec3 n, float z, vec2 offset) {
     if (!foreground || !guide_foreground) {
       w = foreground == guide_foreground ? 1.0 : 0.0;
     } else {
-      float c = dot(n, DN_LOAD3(normal, NORMAL_HALF, gi));
+      // Sanitized (no normal: no match), so a huge normal cannot make pow() infinite.
+      float c = dot(dn_sanitize_normal(n), dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, gi)));
       w = exp(-abs(z - zg) / (DN_SAMPLE_DEPTH_SCALE * max(z, zg))) * pow(max(c, 0.0), DN_SAMPLE_NORMAL_POWER);
     }
     // Proximity: the sample's bilinear weight for this guide, so that among

@@ -204,7 +204,7 @@ void main() {
                                 : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
       if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask |= 1u << uint(k);
       dst.data[pi] = result;
-      if (FEEDBACK && (!MASKED || DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi) > 0.0) &&
+      if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
           (!AGE_GATED_LUMINANCE || temporal.data[pi].z >= min_age))
         colour_history.data[pi].rgb = result.rgb;
     }

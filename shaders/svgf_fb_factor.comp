@@ -6,8 +6,8 @@
 // cos theta_o = dot(n, -view ray) with the ray through the pixel centre from
 // FrameConstants.inverse_view_projection (unjittered: a sub-pixel shift
 // changes cos theta_o by far less than the table's resolution). Sanitized
-// inputs: a non-finite F0 component counts as 0, a non-finite roughness as 1,
-// both clamped to [0, 1]; a zero or non-finite normal, or a back-facing one,
+// inputs (sanitize.glsl): a non-finite F0 component counts as 0, a non-finite
+// roughness as 1, both clamped to [0, 1]; no normal, or a back-facing one,
 // reads cos theta_o = 0. Background pixels get 1 (nothing to demodulate).
 // The factor is guarded like albedo (svgf_guards.glsl) where it is used.
 //
@@ -20,8 +20,6 @@
 #include "passes/svgf_fb_factor.pass"
 
 #include "fb_lut.glsl"
-
-float unit_or(float v, float fallback) { return dn_is_finite(v) ? clamp(v, 0.0, 1.0) : fallback; }
 
 // Unit direction from the camera through the centre of pixel p (world space).
 vec3 view_ray(uint p) {
@@ -43,9 +41,8 @@ void main() {
     vec3 n = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
     float n2 = dot(n, n);
     float cos_o = n2 > 0.0 ? clamp(-dot(n, view_ray(p)) * inversesqrt(n2), 0.0, 1.0) : 0.0;
-    float alpha = unit_or(DN_LOAD1(roughness, ROUGHNESS_HALF, p), 1.0);
-    vec3 f0 = DN_LOAD3(specular_f0, F0_HALF, p);
-    f0 = vec3(unit_or(f0.x, 0.0), unit_or(f0.y, 0.0), unit_or(f0.z, 0.0));
+    float alpha = dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p));
+    vec3 f0 = dn_sanitize_f0(DN_LOAD3(specular_f0, F0_HALF, p));
     vec2 ab = dn_fb_lut(cos_o, alpha);
     f = f0 * ab.x + ab.y;
   }

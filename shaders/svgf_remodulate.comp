@@ -69,7 +69,7 @@ void taa_prepare(uint p, vec3 c) {
   float prev_lag = 0.0;
   bool valid = false;
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-  float weight = dn_is_finite(mv) ? taa_weight(mv) : 1.0;
+  float weight = dn_motion_usable(mv) ? taa_weight(mv) : 1.0;
   ivec2 origin;
   vec4 weights;
   if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&

@@ -20,8 +20,8 @@
 #include "clip.glsl"
 #include "reflect.glsl"
 
-// MASKED: whether pixel q has a sample this frame (a NaN count is none).
-bool sampled(uint q) { return DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, q) > 0.0; }
+// MASKED: whether pixel q has a sample this frame (sanitize.glsl's rule).
+bool sampled(uint q) { return dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, q)); }
 
 // An unsampled background pixel's fill sources: the background pixels
 // sampled this frame (background keeps no history).
@@ -106,10 +106,10 @@ bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma) {
   return agree >= DN_REJECT_NEIGHBOURS;
 }
 
-// Whether p's history is clipped: roughness below clip_roughness (NaN
-// counts as a mirror).
+// Whether p's history is clipped: sanitized roughness below clip_roughness
+// (a non-finite one counts as rough, 1: not clipped).
 bool clipped_here(uint p) {
-  return CLIP && !(DN_LOAD1(roughness, ROUGHNESS_HALF, p) >= DN_PARAM_VALUE(svgf, clip_roughness));
+  return CLIP && dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p)) < DN_PARAM_VALUE(svgf, clip_roughness);
 }
 
 // Whether the history's depth and normal tests apply at this pixel (off at
@@ -181,7 +181,7 @@ void main() {
   bool valid = false;
   ivec2 origin;
   vec4 weights;
-  if (history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_is_finite(mv) &&
+  if (history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 sc = vec3(0.0);
     vec2 sm = vec2(0.0);

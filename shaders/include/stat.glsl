@@ -82,4 +82,19 @@ bool dn_stat_is_finite(DnStat s) {
   return dn_is_finite(s.n) && dn_is_finite(s.mean) && dn_is_finite(s.m2) && dn_is_finite(s.m3) && dn_is_finite(s.raw);
 }
 
+// Bounds of a frame's statistics (docs/pipelines.md "Guide sanitization"):
+// at most 2^24 samples (exact in fp32; a larger count would outweigh every
+// later frame of stat-temporal's history), and moments no sample within the
+// radiance bound of the svgf family (1e12: y = 2 sqrt(x) - 2 <= DN_STAT_MAX_Y)
+// can give: |mean| <= Y, M2 <= n Y^2, |M3| <= n Y^3. Without them one frame
+// with M2 = 1e30 kept stat-temporal's output off a clean session's by 0.37
+// of its brightest value, not decaying (guide_hard_cases_test.cpp).
+const float DN_STAT_MAX_COUNT = 16777216.0;
+const float DN_STAT_MAX_Y = 1999998.0;
+bool dn_stat_usable(DnStat s) {
+  const float y = DN_STAT_MAX_Y;
+  return dn_stat_is_finite(s) && s.n > 0.0 && s.n <= DN_STAT_MAX_COUNT && all(lessThanEqual(abs(s.mean), vec3(y))) &&
+         all(lessThanEqual(s.m2, vec3(s.n * y * y))) && all(lessThanEqual(abs(s.m3), vec3(s.n * y * y * y)));
+}
+
 #endif

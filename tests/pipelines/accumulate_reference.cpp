@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dn::test {
 
@@ -24,7 +25,8 @@ std::vector<double> AccumulateReference::step(const ReferenceFrame& f) {
         c[k] = (std::isfinite(v) && v > 0.0) ? v : 0.0;
       }
       const double z = f.depth[i];
-      const bool foreground = std::isfinite(z) && z > 0.0;
+      // Foreground within [FLT_MIN, 1e18] (docs/pipelines.md "Sanitize rule").
+      const bool foreground = std::isfinite(z) && z >= std::numeric_limits<float>::min() && z <= 1e18;
       if (!foreground) {
         for (int k = 0; k < 3; ++k) out[3 * i + k] = colour[4 * i + k] = c[k];
         colour[4 * i + 3] = 0.0;
@@ -32,14 +34,19 @@ std::vector<double> AccumulateReference::step(const ReferenceFrame& f) {
         continue;
       }
       double nrm[3];
-      const bool normal_ok =
-          std::isfinite(f.normal[3 * i]) && std::isfinite(f.normal[3 * i + 1]) && std::isfinite(f.normal[3 * i + 2]);
+      // A normal whose fp32 |n|^2 would overflow counts as none, like a non-finite one.
+      const double n2 = f.normal[3 * i] * f.normal[3 * i] + f.normal[3 * i + 1] * f.normal[3 * i + 1] +
+                        f.normal[3 * i + 2] * f.normal[3 * i + 2];
+      const bool normal_ok = std::isfinite(f.normal[3 * i]) && std::isfinite(f.normal[3 * i + 1]) &&
+                             std::isfinite(f.normal[3 * i + 2]) && n2 <= std::numeric_limits<float>::max();
       for (int k = 0; k < 3; ++k) nrm[k] = normal_ok ? f.normal[3 * i + k] : 0.0;
       const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
 
       double prev[3] = {0, 0, 0};
       double prev_len = 0.0;
-      if (!reset && std::isfinite(mvx) && std::isfinite(mvy)) {
+      // Motion beyond 2^20 px is none.
+      if (!reset && std::isfinite(mvx) && std::isfinite(mvy) && std::fabs(mvx) <= 1048576.0 &&
+          std::fabs(mvy) <= 1048576.0) {
         // Position in the previous frame, in pixel units with centres at +0.5.
         const double px = x + 0.5 + mvx - 0.5;
         const double py = y + 0.5 + mvy - 0.5;

@@ -69,9 +69,9 @@ IntegerMatch diamond(const Distance& distance, int px, int py, const std::array<
   s.best.x = px, s.best.y = py;
   s.consider(px, py);  // start 1: the same pixel
   // Starts 2 and 3: the pixels nearest p + the primary motion and p + the
-  // virtual point's motion, where the motion is usable.
+  // virtual point's motion, where the motion is usable (finite, within 2^20 px).
   for (const auto& m : {motion, options.virtual_motion})
-    if (std::isfinite(m[0]) && std::isfinite(m[1]) && std::fabs(m[0]) < 1e6 && std::fabs(m[1]) < 1e6)
+    if (std::isfinite(m[0]) && std::isfinite(m[1]) && std::fabs(m[0]) <= 1048576.0 && std::fabs(m[1]) <= 1048576.0)
       s.consider(int(std::floor(px + m[0] + 0.5)), int(std::floor(py + m[1] + 0.5)));
   static constexpr int axes[4][2] = {{2, 0}, {-2, 0}, {0, 2}, {0, -2}};
   static constexpr int diagonals[4][2] = {{1, 1}, {-1, 1}, {1, -1}, {-1, -1}};

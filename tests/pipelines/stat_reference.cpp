@@ -2,23 +2,38 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dn::test {
 namespace {
 
 bool finite(float x) { return std::isfinite(x); }
 float sanitize(float x) { return finite(x) ? std::max(x, 0.0f) : 0.0f; }
-// A normal with any non-finite component is the zero vector (sanitize.glsl).
+// A normal with any non-finite component, or whose fp32 |n|^2 overflows, is
+// the zero vector (docs/pipelines.md "Sanitize rule").
 double normal_component(const std::vector<float>& n, int i, int c) {
-  const bool ok = finite(n[3 * i]) && finite(n[3 * i + 1]) && finite(n[3 * i + 2]);
+  const double x = n[3 * i], y = n[3 * i + 1], z = n[3 * i + 2];
+  const bool ok = finite(n[3 * i]) && finite(n[3 * i + 1]) && finite(n[3 * i + 2]) &&
+                  x * x + y * y + z * z <= std::numeric_limits<float>::max();
   return ok ? static_cast<double>(n[3 * i + c]) : 0.0;
 }
 
-double finite_or_zero(float x) { return finite(x) ? static_cast<double>(x) : 0.0; }
+// An albedo guiding the filter: non-finite -> 0, then clamped to [0, 1e3].
+double guide_albedo(float x) { return finite(x) ? std::clamp(static_cast<double>(x), 0.0, 1e3) : 0.0; }
 
 }  // namespace
 
-double guarded_albedo(float a) { return std::isfinite(a) && a >= 1e-3f ? a : 1.0; }
+bool statistics_usable(float count, const float* mean, const float* m2, const float* m3) {
+  const double n = count, y = 1999998.0;  // 2 sqrt(1e12) - 2
+  if (!std::isfinite(count) || !(n > 0.0) || n > 16777216.0) return false;
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isfinite(mean[c]) || !std::isfinite(m2[c]) || !std::isfinite(m3[c])) return false;
+    if (std::fabs(mean[c]) > y || m2[c] > n * y * y || std::fabs(m3[c]) > n * y * y * y) return false;
+  }
+  return true;
+}
+
+double guarded_albedo(float a) { return std::isfinite(a) && a >= 1e-3f && a <= 1e3f ? a : 1.0; }
 
 double raw_from_moments(double n, double mean, double m2) {
   return (mean / 2.0 + 1.0) * (mean / 2.0 + 1.0) + std::max(m2, 0.0) / (4.0 * n);
@@ -36,15 +51,10 @@ StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
   constexpr float kFltEpsilon = 1.1920929e-7f;
   for (int i = 0; i < n_px; ++i) {
     const float n = f.count[i];
-    bool usable = finite(n) && n >= 2.0f;
-    for (int c = 0; c < 3; ++c)
-      usable = usable && finite(f.mean[3 * i + c]) && finite(f.m2[3 * i + c]) && finite(f.m3[3 * i + c]);
-    if (!usable) {
+    const bool sampled = statistics_usable(n, &f.mean[3 * i], &f.m2[3 * i], &f.m3[3 * i]);
+    if (!sampled || n < 2.0f) {
       // A sample but no variance: the mean, for the single-sample test.
-      bool sampled = finite(n) && n > 0.0f;
-      for (int c = 0; c < 3; ++c)
-        sampled = sampled && finite(f.mean[3 * i + c]) && finite(f.m2[3 * i + c]) && finite(f.m3[3 * i + c]);
-      if (!sampled) continue;  // n = 0: no data
+      if (!sampled) continue;  // n = 0 or out of bounds: no data
       for (int c = 0; c < 3; ++c) r.theta[4 * i + c] = f.mean[3 * i + c];
       r.theta[4 * i + 3] = n;
       continue;
@@ -120,7 +130,7 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             double da2 = 0.0, dn2 = 0.0;
             for (int c = 0; c < 3; ++c) {
               // A non-finite albedo component guides as 0 (sanitize.glsl).
-              const double da = finite_or_zero(f.albedo[3 * i + c]) - finite_or_zero(f.albedo[3 * q + c]);
+              const double da = guide_albedo(f.albedo[3 * i + c]) - guide_albedo(f.albedo[3 * q + c]);
               const double nn_p = normal_component(f.normal, i, c), nn_q = normal_component(f.normal, q, c);
               da2 += da * da;
               dn2 += (nn_p - nn_q) * (nn_p - nn_q);

@@ -48,6 +48,10 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
                        const std::vector<float>& t_squared);
 // An albedo component as demodulation uses it: below 1e-3 (fp32) or not
 // finite, 1 (docs/protocol.md §7.7).
+// Whether a pixel's statistics (count, and 3 means, M2, M3) are data: finite,
+// 0 < n <= 2^24, |mean| <= Y, M2 <= n Y^2, |M3| <= n Y^3 with Y = 2 sqrt(1e12) - 2
+// (docs/pipelines.md "Guide sanitization").
+bool statistics_usable(float count, const float* mean, const float* m2, const float* m3);
 double guarded_albedo(float a);
 // The mean of the samples from their Box-Cox moments, (mean / 2 + 1)^2 + M2 / (4 n).
 double raw_from_moments(double n, double mean, double m2);

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dn::test {
 namespace {
 
 bool finite(double x) { return std::isfinite(x); }
-bool foreground(float z) { return std::isfinite(z) && z > 0.0f; }
+// The guide rules of docs/pipelines.md "Sanitize rule".
+bool foreground(float z) { return std::isfinite(z) && z >= std::numeric_limits<float>::min() && z <= 1e18f; }
 
 struct Vec3 {
   double x = 0, y = 0, z = 0;
@@ -16,8 +18,9 @@ double distance(const Vec3& a, const Vec3& b) {
   return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
 }
 Vec3 normal_at(const std::vector<float>& n, int i) {
-  if (!finite(n[3 * i]) || !finite(n[3 * i + 1]) || !finite(n[3 * i + 2])) return {};
-  return {n[3 * i], n[3 * i + 1], n[3 * i + 2]};
+  const double x = n[3 * i], y = n[3 * i + 1], z = n[3 * i + 2];
+  if (!finite(x) || !finite(y) || !finite(z) || x * x + y * y + z * z > std::numeric_limits<float>::max()) return {};
+  return {x, y, z};
 }
 
 // Falcor's test: the same surface within 10 depth gradients and 16 normal gradients.
@@ -28,14 +31,13 @@ bool same_surface(double z, const Vec3& n, double grad_z, double grad_n, double 
 StatAccumulator frame_statistics(const StatFrame& f, int q) {
   StatAccumulator s;
   s.n = f.count[q];
-  bool ok = finite(s.n) && s.n > 0.0;
+  const bool ok = statistics_usable(f.count[q], &f.mean[3 * q], &f.m2[3 * q], &f.m3[3 * q]);
   for (int c = 0; c < 3; ++c) {
     s.mean[c] = f.mean[3 * q + c];
     s.m2[c] = f.m2[3 * q + c];
     s.m3[c] = f.m3[3 * q + c];
     const float r = f.radiance[3 * q + c];
     s.raw[c] = std::isfinite(r) ? std::max(r, 0.0f) : 0.0f;
-    ok = ok && finite(s.mean[c]) && finite(s.m2[c]) && finite(s.m3[c]);
   }
   return ok ? s : StatAccumulator{};
 }
@@ -117,7 +119,8 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
         }
       }
       const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
-      if (!has_history || !finite(mvx) || !finite(mvy)) continue;
+      if (!has_history || !finite(mvx) || !finite(mvy) || std::abs(mvx) > 1048576.0 || std::abs(mvy) > 1048576.0)
+        continue;
       auto previous_on_surface = [&](int qx, int qy) {
         if (!inside(qx, qy)) return false;
         const int q = qy * w + qx;

@@ -2,13 +2,28 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace dn::test {
 namespace {
 
 double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
-bool foreground(double z) { return std::isfinite(z) && z > 0.0; }
+// The guide rules of docs/pipelines.md "Sanitize rule" (the device's fp32
+// bounds): depth within [FLT_MIN, 1e18], albedo-like modulators within
+// [1e-3, 1e3] (else 1), a normal whose fp32 |n|^2 would overflow is none,
+// motion beyond 2^20 px is none, a non-finite roughness is 1.
+bool foreground(double z) { return std::isfinite(z) && z >= std::numeric_limits<float>::min() && z <= 1e18; }
+double guarded(double a) { return std::isfinite(a) && a >= static_cast<double>(1e-3f) && a <= 1e3 ? a : 1.0; }
+bool usable_normal(const double* n) {
+  const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  return std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2]) && n2 <= std::numeric_limits<float>::max();
+}
+bool usable_motion(double mx, double my) {
+  return std::isfinite(mx) && std::isfinite(my) && std::fabs(mx) <= 1048576.0 && std::fabs(my) <= 1048576.0;
+}
+bool sampled(double count) { return std::isfinite(count) && count > 0.0; }
+double sanitized_roughness(double r) { return std::isfinite(r) ? std::clamp(r, 0.0, 1.0) : 1.0; }
 
 // Stored history normal: octahedral map quantized to two snorm16 and back.
 void quantize_normal(const double* in, double* out) {
@@ -91,12 +106,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   std::vector<bool> fg(n);
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
-      const double al = f.albedo[3 * i + k];
-      a[3 * i + k] = (std::isfinite(al) && al >= static_cast<double>(1e-3f)) ? al : 1.0;
+      a[3 * i + k] = guarded(f.albedo[3 * i + k]);
     }
     z[i] = f.depth[i];
     fg[i] = foreground(z[i]);
-    if (std::isfinite(f.normal[3 * i]) && std::isfinite(f.normal[3 * i + 1]) && std::isfinite(f.normal[3 * i + 2]))
+    if (usable_normal(&f.normal[3 * i]))
       for (int k = 0; k < 3; ++k) nrm[3 * i + k] = f.normal[3 * i + k];
   }
   // Gradients: per axis min over the inside foreground neighbours of |dz| and
@@ -217,7 +231,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   auto has_normal_at = [&](int q) {
     return nrm[3 * q] * nrm[3 * q] + nrm[3 * q + 1] * nrm[3 * q + 1] + nrm[3 * q + 2] * nrm[3 * q + 2] > 0.0;
   };
-  auto clipped_here = [&](int i) { return !(f.roughness[i] >= p_.clip_roughness); };
+  auto clipped_here = [&](int i) { return sanitized_roughness(f.roughness[i]) < p_.clip_roughness; };
 
   auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod, bool clip) {
   const std::vector<double>& colour_ = ch.colour;
@@ -239,10 +253,10 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         double bg[3] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
         // Below one sample per pixel an unsampled background pixel shows the
         // mean of the nearest ring of sampled background pixels.
-        if (masked && !(f.sample_count[i] > 0.0))
+        if (masked && !sampled(f.sample_count[i]))
           ring_fill(x, y, [&](int q, double* v) {
             for (int k = 0; k < 3; ++k) v[k] = d[3 * q + k];
-            return f.sample_count[q] > 0.0 && !fg[q];
+            return sampled(f.sample_count[q]) && !fg[q];
           }, bg);
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = bg[k];
         len[i] = 0.0;
@@ -256,7 +270,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       double pc[3] = {0, 0, 0}, pm1 = 0, pm2 = 0, plen = 0;
       bool valid = false;
       const double px = x + 0.5 + mvx, py = y + 0.5 + mvy;  // previous position, centres at +0.5
-      if (!reset && has_normal && std::isfinite(mvx) && std::isfinite(mvy) && px - 0.5 > -1.0 && py - 0.5 > -1.0 &&
+      if (!reset && has_normal && usable_motion(mvx, mvy) && px - 0.5 > -1.0 && py - 0.5 > -1.0 &&
           px - 0.5 < w && py - 0.5 < h) {
         double sc[3] = {0, 0, 0}, sm1 = 0, sm2 = 0, sl = 0, sw = 0;
         auto add = [&](int qx, int qy, double wt) {
@@ -369,7 +383,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         }
       }
       // Not sampled this frame: the history as reprojected (no data without one).
-      if (masked && !(f.sample_count[i] > 0.0)) {
+      if (masked && !sampled(f.sample_count[i])) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = pc[k];
         len[i] = valid ? plen : 0.0;
         m1[i] = pm1;
@@ -564,7 +578,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     // luminance weight (a younger one keeps its unfiltered accumulation).
     if (it == tap)
       for (int i = 0; i < n; ++i)
-        if ((!masked || f.sample_count[i] > 0.0) && !(p_.luminance_min_age > 0.0 && len[i] < p_.luminance_min_age))
+        if ((!masked || sampled(f.sample_count[i])) && !(p_.luminance_min_age > 0.0 && len[i] < p_.luminance_min_age))
           for (int k = 0; k < 3; ++k) hist_colour[3 * i + k] = cur[4 * i + k];
   }
 
@@ -581,8 +595,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   std::vector<double> sf(3 * n, 1.0);
   if (!f.specular_factor.empty())
     for (int i = 0; i < 3 * n; ++i) {
-      const double v = f.specular_factor[i];
-      sf[i] = (std::isfinite(v) && v >= static_cast<double>(1e-3f)) ? v : 1.0;
+      sf[i] = guarded(f.specular_factor[i]);
     }
   std::vector<double> cur, spec;
   if (split) {
@@ -625,7 +638,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         const bool young = p_.display_lag && chains_[0].length[i] < p_.luminance_min_age;
         if (young) lag[i] = -1.0;
         const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
-        if (reset || !fg[i] || !std::isfinite(mvx) || !std::isfinite(mvy)) continue;
+        if (reset || !fg[i] || !usable_motion(mvx, mvy)) continue;
         const double fx = x + mvx, fy = y + mvy;  // previous position - 0.5
         if (!(fx > -1.0 && fy > -1.0 && fx < w && fy < h)) continue;
         const double bx = std::floor(fx), by = std::floor(fy), tx = fx - bx, ty = fy - by;
