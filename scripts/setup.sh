@@ -22,6 +22,8 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y --no-install-recommends "${missing[@]}"
 fi
 
+# DN_SKIP_BUILD=1: packages only (scripts/sanitize.sh builds a tree of its own).
+[ "${DN_SKIP_BUILD:-0}" = 1 ] && exit 0
 if [ ! -f build/build.ninja ]; then
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo
 fi

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstddef>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
@@ -63,7 +64,11 @@ bool header_matches(const std::vector<uint8_t>& data, const VkPhysicalDeviceProp
     return false;
   }
   std::memcpy(&h, data.data(), sizeof h);
-  if (h.headerSize < sizeof h || h.headerVersion != VK_PIPELINE_CACHE_HEADER_VERSION_ONE || h.vendorID != p.vendorID ||
+  // The version as the file's 32 bits: any value may be there, and an enum
+  // holding one it does not name is undefined behaviour (UBSan, scripts/sanitize.sh).
+  uint32_t version = 0;
+  std::memcpy(&version, data.data() + offsetof(VkPipelineCacheHeaderVersionOne, headerVersion), sizeof version);
+  if (h.headerSize < sizeof h || version != VK_PIPELINE_CACHE_HEADER_VERSION_ONE || h.vendorID != p.vendorID ||
       h.deviceID != p.deviceID || std::memcmp(h.pipelineCacheUUID, p.pipelineCacheUUID, VK_UUID_SIZE) != 0) {
     note = "cache file was written by another device or driver";
     return false;

@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -84,6 +85,8 @@ TEST(HostilePeer, HeadersAloneDoNotBuyMemory) {
   std::this_thread::sleep_for(1s);
   const uint64_t after = resident_bytes(server.pid());
   ASSERT_GT(before, 0u);
+  std::printf("[ info     ] resident %.1f MB before, %.1f MB after 4 headers declaring %.1f MB\n", before / 1e6,
+              after / 1e6, 4.0 * declared / 1e6);
   EXPECT_LT(after, before + (48u << 20)) << "RSS " << before / 1e6 << " MB -> " << after / 1e6
                                          << " MB after 4 headers declaring " << 4.0 * declared / 1e6 << " MB";
 }

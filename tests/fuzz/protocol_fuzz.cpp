@@ -12,7 +12,11 @@
 //     input bytes (the encoding is canonical), and encode() never throws for it;
 //   - the re-encoding of anything that decodes is read back, as the version the
 //     input was written in (a 1.0 WELCOME re-encodes as the 1.0 payload a 1.1
-//     server sends to a 1.0 client), and is a fixed point of decode + encode.
+//     server sends to a 1.0 client), and is a fixed point of decode + encode;
+//   - under a smaller size limit and a receive-budget admission (both chosen
+//     from the input, as a server lowers them per connection), the reader
+//     delivers a prefix of the same messages, refused ones empty and in step,
+//     and stops only with MessageTooLarge or the unlimited run's own error.
 //
 // Built as `protocol_fuzz` (clang, -fsanitize=fuzzer) when DN_BUILD_FUZZ=ON, and
 // always as `protocol_fuzz_replay`, whose main() runs files or directories of
@@ -70,11 +74,16 @@ void check_payload(const Header& h, std::span<const uint8_t> payload) {
 struct Got {
   uint8_t header[kHeaderSize];
   std::vector<uint8_t> payload;
+  bool refused = false;
 };
 
+// The reader over `data`: limit `max_message`, payloads above `refuse_above`
+// refused by its admission (UINT64_MAX: no admission).
 std::vector<Got> feed(std::span<const uint8_t> data, bool small_chunks, MessageReader::Status& final_status,
-                      DecodeError& final_error) {
-  MessageReader reader(kMaxMessage);
+                      DecodeError& final_error, uint64_t max_message = kMaxMessage, uint64_t refuse_above = UINT64_MAX) {
+  MessageReader reader(max_message);
+  if (refuse_above != UINT64_MAX)
+    reader.set_admission([refuse_above](const Header& h) { return h.payload_length <= refuse_above; });
   std::vector<Got> got;
   size_t pos = 0, chunk = 0;
   while (pos < data.size()) {
@@ -91,8 +100,10 @@ std::vector<Got> feed(std::span<const uint8_t> data, bool small_chunks, MessageR
       // Keep the raw header by re-deriving it from the consumed bytes.
       const size_t start = pos - (kHeaderSize + h.payload_length);
       std::memcpy(g.header, data.data() + start, kHeaderSize);
+      g.refused = reader.refused();
       g.payload = reader.take_payload();
-      if (g.payload.size() != h.payload_length) violated("payload size differs from payload_length");
+      if (g.refused ? !g.payload.empty() : g.payload.size() != h.payload_length)
+        violated("payload size differs from payload_length (or a refused payload is not empty)");
       got.push_back(std::move(g));
     }
   }
@@ -118,6 +129,27 @@ void fuzz_stream(std::span<const uint8_t> data) {
     Header h;
     if (auto err = decode_header(whole[i].header, kMaxMessage, h)) violated("reader delivered a bad header");
     check_payload(h, whole[i].payload);
+  }
+  // A lower limit and an admission, as a server sets them per connection.
+  constexpr uint64_t kLimits[] = {kHeaderSize, 64, 4096, 65536};
+  constexpr uint64_t kRefuseAbove[] = {0, 16, 1024, UINT64_MAX};
+  const uint64_t limit = kLimits[data.size() % 4], refuse_above = kRefuseAbove[data.back() % 4];
+  MessageReader::Status s3;
+  DecodeError e3;
+  const auto limited = feed(data, (data.size() & 4) != 0, s3, e3, limit, refuse_above);
+  if (limited.size() > whole.size()) violated("a lower limit delivered more messages");
+  for (size_t i = 0; i < limited.size(); ++i) {
+    if (std::memcmp(limited[i].header, whole[i].header, kHeaderSize) != 0) violated("a lower limit changed a header");
+    Header h;
+    decode_header(whole[i].header, kMaxMessage, h);
+    const bool refuse = h.payload_length > 0 && h.payload_length > refuse_above;
+    if (limited[i].refused != refuse) violated("admission refused the wrong payload");
+    if (!refuse && limited[i].payload != whole[i].payload) violated("a lower limit changed a payload");
+  }
+  if (limited.size() < whole.size() || s3 != s1) {
+    if (s3 != MessageReader::Status::Failed) violated("a lower limit stopped without an error");
+    if (e3.code != ErrorCode::MessageTooLarge && !(s1 == MessageReader::Status::Failed && e3.code == e1.code))
+      violated("a lower limit stopped with an error other than MessageTooLarge");
   }
 }
 
