@@ -19,12 +19,17 @@ if [ ! -f "$dir/build.ninja" ]; then
 fi
 cmake --build "$dir" -j "$(nproc)"
 supp="$PWD/scripts/sanitize/lsan.supp"
-# The Vulkan loader unloads the driver at vkDestroyInstance; a leak it left
-# then shows as "<unknown module>", which no suppression can name. Preloaded,
-# lavapipe stays mapped and its leak is attributed (and suppressed) by name;
-# ASan then does not come first in the library list, hence verify_asan_link_order=0.
-lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -n 1 || true)
-[ -z "$lvp" ] || export LD_PRELOAD="$lvp"
+# The Vulkan loader unloads the driver and the layers (the GPU tests enable
+# the validation layer) at vkDestroyInstance; a leak they left then shows as
+# "<unknown module>", which no suppression can name. Preloaded, they stay
+# mapped and their leaks are attributed (and suppressed) by name; ASan then
+# does not come first in the library list, hence verify_asan_link_order=0.
+preload=""
+for lib in libvulkan_lvp.so libVkLayer_khronos_validation.so libVkLayer_MESA_device_select.so; do
+  path=$(ls /usr/lib/*/"$lib" 2>/dev/null | head -n 1 || true)
+  [ -z "$path" ] || preload="${preload:+$preload:}$path"
+done
+[ -z "$preload" ] || export LD_PRELOAD="$preload"
 export ASAN_OPTIONS="detect_leaks=1:verify_asan_link_order=0:strict_string_checks=1:detect_stack_use_after_return=1"
 export LSAN_OPTIONS="suppressions=$supp:print_suppressions=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"

@@ -126,7 +126,8 @@ const std::vector<SharedResourceTiming>& prepare_shared_resources(gpu::Context& 
 BindingSize largest_binding(const SessionConfig& config) {
   const PipelineDefinition* def = find_definition(config.pipeline);
   if (!def) return {};
-  const BufferSpec* b = build_graph(*def, config)->largest_binding();
+  const auto graph = build_graph(*def, config);  // b points into it: keep it alive (ASan found the dangling read)
+  const BufferSpec* b = graph->largest_binding();
   return b ? BindingSize{b->name, b->bytes} : BindingSize{};
 }
 
