@@ -4,6 +4,7 @@
 #include <netinet/in.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -21,7 +22,7 @@ std::string proc_address(const sockaddr_storage& a) {
     auto* v6 = reinterpret_cast<const sockaddr_in6*>(&a);
     uint32_t w[4];
     static_assert(sizeof w == sizeof v6->sin6_addr);
-    __builtin_memcpy(w, &v6->sin6_addr, sizeof w);
+    std::memcpy(w, &v6->sin6_addr, sizeof w);
     std::snprintf(out, sizeof out, "%08X%08X%08X%08X:%04X", w[0], w[1], w[2], w[3], ntohs(v6->sin6_port));
   }
   return out;

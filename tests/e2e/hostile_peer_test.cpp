@@ -45,17 +45,6 @@ std::vector<uint8_t> frame_header(uint64_t request_id, uint32_t payload_length) 
   return bytes;
 }
 
-std::optional<double> stats_value(RawClient& c, const std::string& name) {
-  c.send(protocol::StatsRequest{}, 99);
-  auto r = c.receive();
-  if (!r) return std::nullopt;
-  auto* s = std::get_if<protocol::Stats>(&r->message);
-  if (!s) return std::nullopt;
-  for (const auto& v : s->values)
-    if (v.name == name) return v.value;
-  return std::nullopt;
-}
-
 bool wait_for_log(ServerProcess& server, const std::string& needle, double timeout_s) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   while (std::chrono::steady_clock::now() < end) {
@@ -182,8 +171,9 @@ TEST(HostilePeer, AClientThatNeverReadsIsClosedAndItsSessionFreed) {
   sender.join();
   RawClient observer(server.tcp_url());
   observer.hello();
-  EXPECT_EQ(stats_value(observer, "sessions"), 0.0);
-  EXPECT_EQ(stats_value(observer, "connections"), 1.0);
+  auto figures = stats(observer);
+  EXPECT_EQ(figures.at("sessions"), 0.0);
+  EXPECT_EQ(figures.at("connections"), 1.0);
 }
 
 // Issue 15.7: a second server on a live Unix socket path must refuse to

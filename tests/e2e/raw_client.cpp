@@ -175,6 +175,27 @@ SyntheticFrame make_frame(uint64_t session_id, uint64_t frame_index, uint32_t wi
   return f;
 }
 
+std::vector<protocol::StatValue> stats_values(RawClient& c) {
+  c.send(protocol::StatsRequest{}, 900);
+  for (;;) {  // RESULTs of frames in flight may come first
+    auto r = c.receive();
+    if (!r) throw std::runtime_error("no STATS reply");
+    if (auto* st = std::get_if<protocol::Stats>(&r->message)) return st->values;
+  }
+}
+
+std::map<std::string, double> stats(RawClient& c) {
+  std::map<std::string, double> out;
+  for (const auto& v : stats_values(c)) out[v.name] = v.value;
+  return out;
+}
+
+float first_output_value(const protocol::Result& result) {
+  float v;
+  std::memcpy(&v, result.planes.at(0).bytes.data(), 4);
+  return v;
+}
+
 protocol::OpenSession passthrough_session(uint32_t width, uint32_t height) {
   protocol::OpenSession o;
   o.width = width;

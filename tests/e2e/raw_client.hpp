@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,6 +58,14 @@ struct SyntheticFrame {
 };
 SyntheticFrame make_frame(uint64_t session_id, uint64_t frame_index, uint32_t width, uint32_t height,
                           const std::vector<protocol::ChannelDecl>& channels, float radiance_value);
+
+// STATS_REQUEST -> the STATS values (messages before the STATS are skipped;
+// throws when none comes), and the same by name.
+std::vector<protocol::StatValue> stats_values(RawClient& c);
+std::map<std::string, double> stats(RawClient& c);
+
+// The first float of a RESULT's first plane (fp32 output).
+float first_output_value(const protocol::Result& result);
 
 // The expected passthrough output of a radiance plane value: identical RGB everywhere.
 protocol::OpenSession passthrough_session(uint32_t width, uint32_t height);

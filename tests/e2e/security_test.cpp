@@ -30,13 +30,6 @@ std::string write_token_file(const std::string& token) {
   return path;
 }
 
-std::vector<protocol::StatValue> stats(RawClient& c) {
-  c.send(protocol::StatsRequest{}, 900);
-  auto r = c.receive();
-  if (!r || !std::get_if<protocol::Stats>(&r->message)) throw std::runtime_error("no STATS reply");
-  return std::get<protocol::Stats>(r->message).values;
-}
-
 // STATS names that identify a session: any per-session entry, or one that
 // carries the id itself.
 std::vector<std::string> session_names(const std::vector<protocol::StatValue>& values, uint64_t id) {
@@ -73,12 +66,6 @@ std::string without_id(std::string message, uint64_t id) {
 std::string other_key(std::string key) {
   key[0] = key[0] == '0' ? '1' : '0';
   return key;
-}
-
-float first_output_value(const protocol::Result& result) {
-  float v;
-  std::memcpy(&v, result.planes.at(0).bytes.data(), 4);
-  return v;
 }
 
 TEST(Security, EverySessionGetsItsOwnRandomWatchKey) {
@@ -194,9 +181,9 @@ TEST(Security, StatsNameASessionOnlyToItsOwner) {
   RawClient other(server.tcp_url());
   other.hello();
 
-  const auto mine = stats(owner);
+  const auto mine = stats_values(owner);
   EXPECT_EQ(value_of(mine, "session." + std::to_string(sid) + ".frames"), 0.0);
-  const auto theirs = stats(other);
+  const auto theirs = stats_values(other);
   EXPECT_EQ(session_names(theirs, sid), std::vector<std::string>{});
   EXPECT_EQ(value_of(theirs, "sessions"), 1.0) << "the aggregate count stays visible";
 }
@@ -209,7 +196,7 @@ TEST(Security, AdministratorWithTheTokenSeesEverySession) {
   const uint64_t sid = owner.open(passthrough_session(16, 8));
   RawClient admin(server.unix_url());
   admin.hello("admin-token");
-  EXPECT_EQ(value_of(stats(admin), "session." + std::to_string(sid) + ".frames"), 0.0);
+  EXPECT_EQ(value_of(stats_values(admin), "session." + std::to_string(sid) + ".frames"), 0.0);
   ::unlink(file.c_str());
 }
 
@@ -251,7 +238,7 @@ std::string watch_as_other_user(const std::string& url, uid_t uid, uint64_t sid,
   try {
     RawClient c(url);
     c.hello();
-    const auto values = stats(c);
+    const auto values = stats_values(c);
     report << "session_names=" << session_names(values, sid).size() << "\n";
     report << "sessions=" << value_of(values, "sessions") << "\n";
     const protocol::Error no_key = attach_refusal(c, sid, "", 2);

@@ -19,19 +19,6 @@ namespace fs = std::filesystem;
 using protocol::ChannelId;
 using protocol::Format;
 
-std::map<std::string, double> stats(RawClient& c) {
-  c.send(protocol::StatsRequest{}, 900);
-  for (;;) {
-    auto r = c.receive();
-    if (!r) throw std::runtime_error("no STATS reply");
-    if (auto* st = std::get_if<protocol::Stats>(&r->message)) {
-      std::map<std::string, double> out;
-      for (const auto& v : st->values) out[v.name] = v.value;
-      return out;
-    }
-  }
-}
-
 // A fresh private directory under the test's temporary directory.
 fs::path temp_dir(const std::string& name) {
   fs::path dir = fs::temp_directory_path() / ("dn-" + name + "-" + std::to_string(::getpid()));

@@ -15,21 +15,6 @@ namespace {
 
 using protocol::ErrorCode;
 
-std::map<std::string, double> stats(RawClient& c) {
-  c.send(protocol::StatsRequest{}, 900);
-  auto r = c.receive();
-  if (!r || !std::get_if<protocol::Stats>(&r->message)) throw std::runtime_error("no STATS reply");
-  std::map<std::string, double> out;
-  for (const auto& v : std::get<protocol::Stats>(r->message).values) out[v.name] = v.value;
-  return out;
-}
-
-float first_output_value(const protocol::Result& result) {
-  float v;
-  std::memcpy(&v, result.planes.at(0).bytes.data(), 4);
-  return v;
-}
-
 TEST(Session, WelcomeDescribesServer) {
   ServerProcess server;
   RawClient c(server.tcp_url());

@@ -74,6 +74,13 @@ std::vector<float> grey(const std::vector<double>& v) {
   return out;
 }
 
+// A noise-free step in luminance, 0.2 left of the middle column and 1 right of it.
+std::vector<double> luminance_step(int w, int h) {
+  std::vector<double> step(static_cast<size_t>(w) * h);
+  for (size_t i = 0; i < step.size(); ++i) step[i] = static_cast<int>(i % w) < w / 2 ? 0.2 : 1.0;
+  return step;
+}
+
 // Paper 004 §4.2: r = max(a, 1/age), a = 0.1: for the first 1/a = 10 frames
 // the output is the arithmetic mean of the frames so far, then each frame
 // moves it by 0.1 toward the new one.
@@ -163,8 +170,7 @@ TEST_F(ProgressiveTest, ConstantInputIsReturnedExactly) {
 TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminanceWeight) {
   const int w = 48, h = 16, n = w * h;
   FlatFrames scene{w, h};
-  std::vector<double> step(n);
-  for (int i = 0; i < n; ++i) step[i] = (i % w) < w / 2 ? 0.2 : 1.0;
+  const std::vector<double> step = luminance_step(w, h);
   auto edge_error = [&](std::vector<protocol::Parameter> params) {
     params.push_back({"taa_alpha", 0});
     params.push_back({"taa_static_alpha", 0});
@@ -191,8 +197,7 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
 TEST_F(ProgressiveTest, TheDisplayFollowsTheHistorySwitchContinuously) {
   const int w = 48, h = 16, n = w * h;
   FlatFrames scene{w, h};
-  std::vector<double> step(n);
-  for (int i = 0; i < n; ++i) step[i] = (i % w) < w / 2 ? 0.2 : 1.0;
+  const std::vector<double> step = luminance_step(w, h);
   auto frames = [&](std::vector<protocol::Parameter> params) {
     auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params)));
     std::vector<std::vector<float>> out;
