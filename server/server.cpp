@@ -51,7 +51,7 @@ double seconds_since(Clock::time_point t, Clock::time_point now) {
 
 }  // namespace
 
-Server::Server(ServerOptions options, gpu::Context& device, std::string device_name)
+Server::Server(ServerOptions options, gpu::Context& device, std::string device_name, PipelineFactory factory)
     : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
   receive_budget_.limit = options_.receive_budget_bytes;
 
@@ -93,7 +93,7 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
       built_.push_back(std::move(built));
     }
     loop_.wake();
-  });
+  }, std::move(factory));
   if (options_.warm_up) {
     builder_->warm_up([this](const WarmUpReport& report) {
       {
@@ -155,9 +155,7 @@ void Server::run(bool handle_signals) {
   }
   log::info("ready", {{"device", device_name_}, {"workers", options_.workers}});
   for (;;) {
-    loop_.run_once(kTimerTickMs);
-    if (stop_requested_ && !shutting_down_) begin_shutdown();
-    check_timers();
+    run_once(kTimerTickMs);
     if (shutting_down_ && shutdown_complete()) break;
   }
   for (auto it = connections_.begin(); it != connections_.end();) close_connection((it++)->first, "shutdown");
@@ -165,6 +163,19 @@ void Server::run(bool handle_signals) {
   scheduler_->stop();
   save_pipeline_cache();
   log::info("stopped", {{"frames", counters_.frames_processed}});
+}
+
+void Server::run_once(int timeout_ms) {
+  loop_.run_once(timeout_ms);
+  if (stop_requested_ && !shutting_down_) begin_shutdown();
+  check_timers();
+}
+
+bool Server::quiescent() const {
+  if (sessions_being_built_ > 0 || sessions_.frames_in_flight() > 0) return false;
+  for (const auto& [id, c] : connections_)
+    if (c->has_pending_output()) return false;
+  return true;
 }
 
 void Server::begin_shutdown() {
@@ -182,10 +193,7 @@ bool Server::shutdown_complete() const {
     log::warn("shutdown.deadline", {{"grace_s", options_.shutdown_grace_s}});
     return true;
   }
-  if (sessions_being_built_ > 0 || sessions_.frames_in_flight() > 0) return false;
-  for (const auto& [id, c] : connections_)
-    if (c->has_pending_output()) return false;
-  return true;
+  return quiescent();
 }
 
 void Server::accept_from(net::Listener& listener) {
@@ -199,48 +207,60 @@ void Server::accept_from(net::Listener& listener) {
       if (errno != EAGAIN && errno != EWOULDBLOCK) log::warn("accept.failed", {{"error", std::strerror(errno)}});
       return;
     }
-    uint64_t id = next_connection_id_++;
-    ++counters_.connections_accepted;
-    // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
-    auto conn = std::make_unique<net::Connection>(fd, id, is_unix, net::peer_name(addr, is_unix), kControlMessageBytes,
-                                                  &receive_budget_);
-    net::tune_socket(fd, is_unix, options_.dead_peer_s);
-    net::Connection& c = *conn;
-    c.peer_identity = net::peer_identity(fd, addr, is_unix);
-    connections_[id] = std::move(conn);
-    count_connection(c, +1);
-    ++unauthenticated_;
-    loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
-    log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}});
+    admit(fd, addr, is_unix);
+  }
+}
 
-    // Limits, global then per peer: a flood from one peer is refused before
-    // it can take the slots every other peer needs.
-    std::string refusal;
-    // Both default to half of --max-connections: a flood from one peer, or of
-    // connections that never say HELLO, leaves the other half to everyone else.
-    const uint32_t half = std::max(1u, options_.max_connections / 2);
-    const uint32_t per_peer = options_.max_connections_per_peer ? options_.max_connections_per_peer : half;
-    const uint32_t unauthenticated = options_.max_unauthenticated ? options_.max_unauthenticated : half;
-    if (connections_.size() > options_.max_connections)
-      refusal = "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)";
-    else if (peer_connections_[c.peer_identity] > per_peer)
-      refusal = "peer " + c.peer_identity + " already has " + std::to_string(per_peer) +
-                " connections (--max-connections-per-peer)";
-    else if (unauthenticated_ > unauthenticated)
-      refusal = "server already has " + std::to_string(unauthenticated) +
-                " connections without HELLO (--max-unauthenticated)";
-    if (!refusal.empty()) {
-      log::warn("connection.refused", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}, {"reason", refusal}});
-      send_error(c, 0, ErrorCode::LimitExceeded, "connections", refusal, true);
-      continue;
-    }
-    if (is_unix) {
-      uint32_t uid = 0;
-      if (!net::unix_peer_allowed(fd, options_.allowed_uids, uid)) {
-        log::warn("auth.refused", {{"conn", id}, {"peer_uid", uid}});
-        send_error(c, 0, ErrorCode::Unauthenticated, "peer_credentials",
-                   "Unix-socket peer uid " + std::to_string(uid) + " is not allowed (--allow-uid)", true);
-      }
+uint64_t Server::adopt(int fd) {
+  sockaddr_storage addr{};
+  addr.ss_family = AF_UNIX;
+  const uint64_t id = next_connection_id_;
+  admit(fd, addr, /*is_unix=*/true);
+  return id;
+}
+
+void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix) {
+  uint64_t id = next_connection_id_++;
+  ++counters_.connections_accepted;
+  // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
+  auto conn = std::make_unique<net::Connection>(fd, id, is_unix, net::peer_name(addr, is_unix), kControlMessageBytes,
+                                                &receive_budget_);
+  net::tune_socket(fd, is_unix, options_.dead_peer_s);
+  net::Connection& c = *conn;
+  c.peer_identity = net::peer_identity(fd, addr, is_unix);
+  connections_[id] = std::move(conn);
+  count_connection(c, +1);
+  ++unauthenticated_;
+  loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
+  log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}});
+
+  // Limits, global then per peer: a flood from one peer is refused before
+  // it can take the slots every other peer needs.
+  std::string refusal;
+  // Both default to half of --max-connections: a flood from one peer, or of
+  // connections that never say HELLO, leaves the other half to everyone else.
+  const uint32_t half = std::max(1u, options_.max_connections / 2);
+  const uint32_t per_peer = options_.max_connections_per_peer ? options_.max_connections_per_peer : half;
+  const uint32_t unauthenticated = options_.max_unauthenticated ? options_.max_unauthenticated : half;
+  if (connections_.size() > options_.max_connections)
+    refusal = "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)";
+  else if (peer_connections_[c.peer_identity] > per_peer)
+    refusal = "peer " + c.peer_identity + " already has " + std::to_string(per_peer) +
+              " connections (--max-connections-per-peer)";
+  else if (unauthenticated_ > unauthenticated)
+    refusal = "server already has " + std::to_string(unauthenticated) +
+              " connections without HELLO (--max-unauthenticated)";
+  if (!refusal.empty()) {
+    log::warn("connection.refused", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}, {"reason", refusal}});
+    send_error(c, 0, ErrorCode::LimitExceeded, "connections", refusal, true);
+    return;
+  }
+  if (is_unix) {
+    uint32_t uid = 0;
+    if (!net::unix_peer_allowed(fd, options_.allowed_uids, uid)) {
+      log::warn("auth.refused", {{"conn", id}, {"peer_uid", uid}});
+      send_error(c, 0, ErrorCode::Unauthenticated, "peer_credentials",
+                 "Unix-socket peer uid " + std::to_string(uid) + " is not allowed (--allow-uid)", true);
     }
   }
 }
@@ -394,9 +414,16 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
   --unauthenticated_;
   c.administrator = !options_.token.empty();  // the token was checked above
   c.negotiated_minor = std::min(h.version_minor, protocol::kVersionMinor);
-  protocol::Welcome w = make_welcome(options_, device_name_, h.version_minor);
   log::info("connection.hello", {{"conn", c.id()}, {"peer", c.peer()}, {"client", m.client_name}});
-  send(c, w, h.request_id);
+  // WELCOME depends only on the client's minor: encoded once per minor (it
+  // carries every pipeline's parameter table), not for every HELLO.
+  Bytes& welcome = welcome_by_minor_[c.negotiated_minor];
+  if (!welcome) welcome = std::make_shared<const std::vector<uint8_t>>(
+                    protocol::encode(make_welcome(options_, device_name_, c.negotiated_minor)));
+  auto reply = std::make_shared<std::vector<uint8_t>>(*welcome);
+  protocol::set_request_id(*reply, h.request_id);
+  c.queue(std::move(reply));
+  if (!c.flush()) c.close_after_flush = true;
 }
 
 void Server::close_connection(uint64_t id, const char* reason) {

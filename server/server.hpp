@@ -2,6 +2,8 @@
 // owns the sessions and hands frames to the device workers.
 #pragma once
 
+#include <sys/socket.h>
+
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -31,7 +33,8 @@ namespace dn::server {
 class Server {
  public:
   // Opens the listeners; throws std::runtime_error with a reason on bad options.
-  Server(ServerOptions options, gpu::Context& device, std::string device_name);
+  // `factory` makes sessions' pipelines (default: on `device`).
+  Server(ServerOptions options, gpu::Context& device, std::string device_name, PipelineFactory factory = {});
   ~Server();
 
   // Runs the event loop until request_stop() (or SIGTERM when handle_signals) and
@@ -43,10 +46,23 @@ class Server {
   // Actual listening addresses (a port of 0 resolved), for tests and logs.
   std::vector<std::string> listening_urls() const;
 
+  // For in-process drivers (the state-machine fuzz target, tests/fuzz/server_fuzz.cpp),
+  // which run the loop themselves instead of run():
+  // serves an already connected stream socket as if a Unix listener had accepted it
+  // (same limits and checks); returns its connection id.
+  uint64_t adopt(int fd);
+  // One turn of the event loop and the timers, as run() takes them.
+  void run_once(int timeout_ms);
+  // Nothing is being built, run on the device or waiting to be written.
+  bool quiescent() const;
+  size_t connection_count() const { return connections_.size(); }
+  size_t session_count() const { return sessions_.size(); }
+
  private:
   using Bytes = net::Bytes;
 
   void accept_from(net::Listener& listener);
+  void admit(int fd, const sockaddr_storage& addr, bool is_unix);
   void on_connection_event(uint64_t connection_id, uint32_t events);
   void handle_message(net::Connection& c, const protocol::Header& header, std::vector<uint8_t>&& payload);
 
@@ -102,6 +118,7 @@ class Server {
   std::chrono::steady_clock::time_point shutdown_deadline_{};
   int signal_fd_ = -1;
 
+  std::map<uint8_t, Bytes> welcome_by_minor_;  // encoded WELCOME (request id 0) per negotiated minor
   ServerCounters counters_;
   std::vector<pipelines::SharedResourceTiming> shared_resources_;
 };

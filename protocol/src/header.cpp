@@ -1,5 +1,7 @@
 // The fixed 24-byte header: payload limits per type and validation.
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 #include "wire.hpp"
 
@@ -41,6 +43,13 @@ void store_header(uint8_t* p, const Header& h) {
 }
 
 }  // namespace wire
+
+void set_request_id(std::span<uint8_t> message, uint64_t request_id) {
+  if (message.size() < kHeaderSize)
+    throw std::invalid_argument("dn::protocol::set_request_id: " + std::to_string(message.size()) +
+                                " bytes are not a header");
+  wire::store_u64(message.data() + 16, request_id);
+}
 
 namespace {
 std::string hex32(uint32_t v) {

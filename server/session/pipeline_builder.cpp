@@ -41,8 +41,9 @@ void run_one_frame(pipelines::Pipeline& pipeline, const pipelines::SessionConfig
 
 }  // namespace
 
-PipelineBuilder::PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built)
-    : context_(context), on_built_(std::move(on_built)), thread_([this] { loop(); }) {}
+PipelineBuilder::PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built,
+                                 PipelineFactory factory)
+    : context_(context), on_built_(std::move(on_built)), factory_(std::move(factory)), thread_([this] { loop(); }) {}
 
 PipelineBuilder::~PipelineBuilder() { stop(); }
 
@@ -91,7 +92,7 @@ void PipelineBuilder::submit(BuildRequest&& request) {
     const auto start = Clock::now();
     const double compiled_before = gpu::KernelCache::compile_ms_of_this_thread();
     try {
-      out.pipeline = pipelines::create(context_, out.request.prepared);
+      out.pipeline = factory_ ? factory_(out.request.prepared) : pipelines::create(context_, out.request.prepared);
     } catch (const std::exception& e) {
       out.error = e.what();
     }

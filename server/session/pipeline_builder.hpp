@@ -50,9 +50,14 @@ struct WarmUpReport {
   std::string error;            // the first failure, if any
 };
 
+// Makes a session's pipeline from its validated configuration; throws with a
+// reason when it cannot. The default (empty) builds it on the device with
+// pipelines::create; the server's state-machine fuzz target gives a host-only one.
+using PipelineFactory = std::function<std::unique_ptr<pipelines::Pipeline>(const pipelines::PreparedPipeline&)>;
+
 class PipelineBuilder {
  public:
-  PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built);
+  PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built, PipelineFactory factory = {});
   ~PipelineBuilder();
 
   // Starts the warm-up (once); on_done runs on the warm-up thread when it finishes.
@@ -72,6 +77,7 @@ class PipelineBuilder {
 
   gpu::Context& context_;
   std::function<void(BuiltPipeline&&)> on_built_;
+  PipelineFactory factory_;
   std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<std::function<void()>> jobs_;

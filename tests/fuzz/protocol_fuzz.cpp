@@ -19,8 +19,8 @@
 //     and stops only with MessageTooLarge or the unlimited run's own error.
 //
 // Built as `protocol_fuzz` (clang, -fsanitize=fuzzer) when DN_BUILD_FUZZ=ON, and
-// always as `protocol_fuzz_replay`, whose main() runs files or directories of
-// inputs given on the command line (e.g. tests/fuzz/corpus).
+// always as `protocol_fuzz_replay` (with replay_main.cpp), which runs files or
+// directories of inputs given on the command line (e.g. tests/fuzz/corpus).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -173,35 +173,3 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz_stream(input);
   return 0;
 }
-
-#ifdef DN_FUZZ_REPLAY_MAIN
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-
-int main(int argc, char** argv) {
-  namespace fs = std::filesystem;
-  size_t runs = 0;
-  auto run_file = [&](const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    if (!in) {
-      std::fprintf(stderr, "cannot read %s\n", p.c_str());
-      std::exit(2);
-    }
-    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    LLVMFuzzerTestOneInput(bytes.data(), bytes.size());
-    ++runs;
-  };
-  for (int i = 1; i < argc; ++i) {
-    const fs::path p(argv[i]);
-    if (fs::is_directory(p)) {
-      for (const auto& e : fs::directory_iterator(p))
-        if (e.is_regular_file()) run_file(e.path());
-    } else {
-      run_file(p);
-    }
-  }
-  std::printf("protocol_fuzz_replay: %zu inputs, no property violated\n", runs);
-  return 0;
-}
-#endif

@@ -10,6 +10,10 @@
 // difference from the clean session per frame is printed: svgf-family
 // histories keep up to ~0.3 of the brightest value for several frames (a
 // dropped or differently weighted history, not a bad value).
+// The same again with every plane fp16 (statistics stay fp32, as the protocol
+// requires) for the values whose half encoding differs: NaN, +Inf (what any
+// value above 65504 becomes) and 65504, the largest finite half (a valid
+// emitter in the emission channel, which the bound then allows for).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -49,6 +53,9 @@ const BadValue kBadValues[] = {{"NaN", std::numeric_limits<float>::quiet_NaN()},
                                {"Max3p4e38", 3.4e38f},
                                {"MinusOne", -1.0f},
                                {"Denormal", 1e-40f}};
+const BadValue kBadHalfValues[] = {{"NaN", std::numeric_limits<float>::quiet_NaN()},
+                                   {"PlusInf", std::numeric_limits<float>::infinity()},
+                                   {"Max65504", 65504.0f}};
 
 // A pipeline as a session opens it: its declared channels and the ones
 // tested here (every declared channel that is not the filtered light).
@@ -161,9 +168,16 @@ std::vector<float> clean_plane(ChannelId id, int x, int y) {
   }
 }
 
+// A plane's format in a session whose planes are `planes`: statistics are fp32 only.
+Format format_of(ChannelId id, Format planes) {
+  const bool statistics = id == ChannelId::StatCount || id == ChannelId::StatMean || id == ChannelId::StatM2 ||
+                          id == ChannelId::StatM3;
+  return statistics ? Format::F32 : planes;
+}
+
 // A frame of the still scene; with `bad`, channel `bad_id` holds `bad_value`
 // in every component inside the patch.
-test::HostFrame frame(const PipelineKind& kind, bool reset, bool bad, ChannelId bad_id, float bad_value) {
+test::HostFrame frame(const PipelineKind& kind, Format planes, bool reset, bool bad, ChannelId bad_id, float bad_value) {
   test::HostFrame f;
   f.info.flags = reset ? protocol::kFrameReset : 0u;
   f.info.view = f.info.prev_view = identity();
@@ -173,28 +187,34 @@ test::HostFrame frame(const PipelineKind& kind, bool reset, bool bad, ChannelId 
     for (int y = 0; y < kH; ++y)
       for (int x = 0; x < kW; ++x)
         for (float v : clean_plane(id, x, y)) plane.push_back(bad && id == bad_id && in_patch(x, y) ? bad_value : v);
-    f.add(id, Format::F32, plane);
+    f.add(id, format_of(id, planes), plane);
   }
   return f;
 }
 
-std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind) {
+std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind, Format planes) {
   std::vector<protocol::ChannelDecl> channels;
-  for (ChannelId id : kind.declared) channels.push_back({id, Format::F32});
+  for (ChannelId id : kind.declared) channels.push_back({id, format_of(id, planes)});
   return pipelines::create(test::context(), test::make_config(kind.pipeline, kW, kH, channels));
 }
 
 struct Case {
   size_t kind;
   ChannelId channel;
-  size_t value;
+  size_t value;  // into kBadValues, or kBadHalfValues when planes are fp16
+  Format planes = Format::F32;
+
+  const BadValue& bad() const { return planes == Format::F16 ? kBadHalfValues[value] : kBadValues[value]; }
 };
 
 std::vector<Case> all_cases() {
   std::vector<Case> cases;
   for (size_t k = 0; k < kinds().size(); ++k)
-    for (ChannelId id : kinds()[k].guides)
+    for (ChannelId id : kinds()[k].guides) {
       for (size_t v = 0; v < std::size(kBadValues); ++v) cases.push_back({k, id, v});
+      if (format_of(id, Format::F16) == Format::F16)
+        for (size_t v = 0; v < std::size(kBadHalfValues); ++v) cases.push_back({k, id, v, Format::F16});
+    }
   return cases;
 }
 
@@ -207,20 +227,21 @@ class GuideHardCases : public test::GpuTest, public ::testing::WithParamInterfac
     std::unique_ptr<pipelines::Pipeline> session;
     std::vector<std::vector<float>> clean;
   };
-  static Kind& kind_state(size_t kind) {
-    Kind& k = states()[kind];
+  static Kind& kind_state(size_t kind, Format planes) {
+    Kind& k = states()[{kind, planes}];
     if (!k.session) {
-      k.session = open(kinds()[kind]);
+      k.session = open(kinds()[kind], planes);
       for (int t = 0; t < kFrames; ++t)
-        k.clean.push_back(svgf_inputs::run(*k.session, frame(kinds()[kind], t == 0, false, ChannelId::Radiance, 0.0f)));
+        k.clean.push_back(
+            svgf_inputs::run(*k.session, frame(kinds()[kind], planes, t == 0, false, ChannelId::Radiance, 0.0f)));
     }
     return k;
   }
   static void TearDownTestSuite() { states().clear(); }
 
  private:
-  static std::map<size_t, Kind>& states() {
-    static std::map<size_t, Kind> s;
+  static std::map<std::pair<size_t, Format>, Kind>& states() {
+    static std::map<std::pair<size_t, Format>, Kind> s;
     return s;
   }
 };
@@ -233,21 +254,26 @@ constexpr double kBoundFactor = 4.0;
 TEST_P(GuideHardCases, OutputStaysFiniteAndBounded) {
   const Case c = GetParam();
   const PipelineKind& kind = kinds()[c.kind];
-  const float bad = kBadValues[c.value].value;
-  Kind& state = kind_state(c.kind);
+  const float bad = c.bad().value;
+  Kind& state = kind_state(c.kind, c.planes);
   double brightest = 0.0;
   for (const auto& out : state.clean)
     for (float v : out) brightest = std::max(brightest, double(v));
   ASSERT_GT(brightest, 0.0);
+  // A finite emission within the radiance rule's bound (65504 in fp16) is a
+  // bright emitter, not a bad value: it is added back unfiltered, so the
+  // output may hold it on top of the filtered light.
+  const bool valid_emitter = c.channel == ChannelId::Emission && std::isfinite(bad) && bad > 0.0f && bad <= 1e12f;
+  const double bound = kBoundFactor * brightest + (valid_emitter ? double(bad) : 0.0);
   std::vector<double> difference;  // largest |output - clean output| per frame
   for (int t = 0; t < kFrames; ++t) {
-    const auto out = svgf_inputs::run(*state.session, frame(kind, t == 0, t == kBadFrame, c.channel, bad));
+    const auto out = svgf_inputs::run(*state.session, frame(kind, c.planes, t == 0, t == kBadFrame, c.channel, bad));
     ASSERT_EQ(out.size(), size_t(3 * kN));
     double worst = 0.0;
     for (int i = 0; i < 3 * kN; ++i) {
-      ASSERT_TRUE(std::isfinite(out[i]) && out[i] >= 0.0f && out[i] <= kBoundFactor * brightest)
+      ASSERT_TRUE(std::isfinite(out[i]) && out[i] >= 0.0f && out[i] <= bound)
           << "frame " << t << " (bad frame " << kBadFrame << "), pixel (" << (i / 3) % kW << ", " << (i / 3) / kW
-          << ") component " << i % 3 << ": " << out[i] << " (clean brightest " << brightest << ")";
+          << ") component " << i % 3 << ": " << out[i] << " (clean brightest " << brightest << ", bound " << bound << ")";
       worst = std::max(worst, std::fabs(double(out[i]) - state.clean[size_t(t)][size_t(i)]));
     }
     difference.push_back(worst / brightest);
@@ -262,7 +288,7 @@ TEST_P(GuideHardCases, OutputStaysFiniteAndBounded) {
 
 std::string name_of(const Case& c) {
   return std::string(kinds()[c.kind].label) + "__" + std::string(protocol::find_channel(c.channel)->name) + "__" +
-         kBadValues[c.value].name;
+         c.bad().name + (c.planes == Format::F16 ? "__fp16" : "");
 }
 std::string case_name(const ::testing::TestParamInfo<Case>& info) { return name_of(info.param); }
 void PrintTo(const Case& c, std::ostream* os) { *os << name_of(c); }

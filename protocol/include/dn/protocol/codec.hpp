@@ -33,6 +33,10 @@ uint64_t max_payload_bytes(MessageType type, uint64_t max_message_bytes);
 // std::length_error; `out` is then left as it was.
 void encode(const Message& message, uint64_t request_id, uint32_t flags, std::vector<uint8_t>& out);
 std::vector<uint8_t> encode(const Message& message, uint64_t request_id = 0, uint32_t flags = 0);
+// Rewrites the request id in the header of an encoded message, so that a
+// reply encoded once can answer many requests (the server's WELCOME).
+// std::invalid_argument when `message` is shorter than a header.
+void set_request_id(std::span<uint8_t> message, uint64_t request_id);
 
 // The same bytes as encode(), without copying plane data: `segments` lists,
 // in order, pieces of `scratch` (header and fields) and the caller's plane
