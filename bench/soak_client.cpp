@@ -160,9 +160,14 @@ int main(int argc, char** argv) {
     auto sample = [&](double t) {
       const Totals now = totals(streams);
       const auto rss = rss_mb(args.server_pid);
-      const double device_mb = stat_value(monitor.stats(), "device_bytes") / 1e6;
+      // A server that went away still gets its row: the streams count what it lost.
+      std::optional<double> device_mb;
+      try {
+        if (monitor.is_open()) device_mb = stat_value(monitor.stats(), "device_bytes") / 1e6;
+      } catch (const dn::client::Error&) {
+      }
       const double fps = t > t_previous ? double(now.done - previous.done) / (t - t_previous) : 0.0;
-      std::printf("| %.0f | %s | %.1f | %llu | %.0f | %llu | %llu |\n", t, mb(rss).c_str(), device_mb,
+      std::printf("| %.0f | %s | %s | %llu | %.0f | %llu | %llu |\n", t, mb(rss).c_str(), mb(device_mb).c_str(),
                   (unsigned long long)now.done, fps, (unsigned long long)now.lost, (unsigned long long)now.reordered);
       std::fflush(stdout);
       if (rss) {
@@ -170,7 +175,7 @@ int main(int argc, char** argv) {
         rss_last = rss;
         rss_peak = std::max(rss_peak.value_or(0.0), *rss);
       }
-      device_mb_last = device_mb;
+      if (device_mb) device_mb_last = *device_mb;
       previous = now;
       t_previous = t;
     };
