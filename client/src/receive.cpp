@@ -21,15 +21,20 @@ void ConnectionState::read_available() {
     const ssize_t n = ::recv(fd_, buf.data(), buf.size(), MSG_DONTWAIT);
     if (n == 0) {
       const bool mid = reader_.bytes_buffered() > 0;
-      mark_failed(transport_error(mid ? "connection closed by server in the middle of a message"
-                                      : "connection closed by server",
+      mark_failed(transport_error(mid ? "connection lost: the server closed the connection in the middle of a message"
+                                      : "connection lost: the server closed the connection",
                                   protocol::ErrorCode::Internal));
       return;
     }
     if (n < 0) {
       if (errno == EINTR) continue;
       if (errno == EAGAIN || errno == EWOULDBLOCK) return;
-      mark_failed(transport_error(std::string("recv failed: ") + errno_text(errno), protocol::ErrorCode::Internal));
+      // A server that dies with our frames unread resets the connection instead of closing it.
+      const int err = errno;
+      mark_failed(transport_error(err == ECONNRESET ? "connection lost: the server reset the connection (recv: " +
+                                                          errno_text(err) + ")"
+                                                    : "connection lost: recv failed: " + errno_text(err),
+                                  protocol::ErrorCode::Internal));
       return;
     }
     const auto status = reader_.commit(size_t(n));

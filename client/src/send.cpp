@@ -77,8 +77,10 @@ void ConnectionState::send(const protocol::Message& message, uint64_t request_id
     // The server may have said why before hanging up: read it.
     read_available();
     if (!broken_)
-      mark_failed(transport_error(std::string("send failed: ") + errno_text(err) +
-                                      (err == EPIPE || err == ECONNRESET ? " (connection closed by server)" : ""),
+      mark_failed(transport_error(err == EPIPE || err == ECONNRESET
+                                      ? "connection lost while sending: the server closed the connection (send: " +
+                                            errno_text(err) + ")"
+                                      : "send failed: " + errno_text(err),
                                   protocol::ErrorCode::Internal));
     throw_send_failure(request_id, expect_reply);
   }

@@ -63,6 +63,9 @@ const char* const kUsage =
     "                     DIR/denoised_%04d.exr when --out is given\n"
     "  --pipeline P       server pipeline for --server (svgf, svgf-fb, ...)\n"
     "  --in-flight K      frames in flight to the server (default 2)\n"
+    "  --reconnect-for S  if the server connection is lost: report the frames in flight as lost,\n"
+    "                     keep reconnecting for up to S seconds, and go on in a new session\n"
+    "                     (history reset; default 30)\n"
     "  --send-split       send diffuse + specular instead of radiance when the pipeline takes both\n"
     "  --quiet            no per-frame lines\n"
     "  --help             this help\n"
@@ -133,6 +136,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--server") o.server = value();
     else if (a == "--pipeline") o.pipeline = value();
     else if (a == "--in-flight") o.in_flight = parse_int(a, value(), 1, 64);
+    else if (a == "--reconnect-for") o.reconnect_for_s = parse_int(a, value(), 1, 86400);
     else if (a == "--send-split") o.send_split = true;
     else if (a == "--png") o.png = true;
     else if (a == "--quiet" || a == "-q") o.quiet = true;
@@ -200,8 +204,15 @@ int run_cli(const CliOptions& o) {
   std::unique_ptr<FrameStreamer> streamer;
   RenderSettings settings = o.render;
   if (!o.server.empty()) {
-    StreamOptions so{o.server, o.pipeline, o.in_flight, o.send_split, o.out, o.quiet,
-                     o.render.channels.statistics_demodulated};
+    StreamOptions so;  // by name: positional initialisation once swapped quiet and statistics_demodulated
+    so.url = o.server;
+    so.pipeline = o.pipeline;
+    so.in_flight = o.in_flight;
+    so.send_split = o.send_split;
+    so.out_dir = o.out;
+    so.statistics_demodulated = o.render.channels.statistics_demodulated;
+    so.quiet = o.quiet;
+    so.reconnect_for_s = o.reconnect_for_s;
     streamer = std::make_unique<FrameStreamer>(so);
     // Without --out nothing but the session sees the frame: render only what the pipeline takes.
     // With it, the files get the asked-for channels, plus the reflection features and the sample

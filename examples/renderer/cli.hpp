@@ -26,6 +26,7 @@ struct CliOptions {
   std::string cache = "out/cache";
   std::string server, pipeline;
   int in_flight = 2;
+  double reconnect_for_s = 30.0;    // after a lost server connection, how long to keep reconnecting
   bool send_split = false;
   bool png = false;                 // also DIR/frame_%04d.png, tone-mapped radiance
   bool quiet = false;

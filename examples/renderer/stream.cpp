@@ -105,21 +105,44 @@ std::vector<ChannelId> stream_channels(uint64_t takes, const FrameBuffers& sampl
 }
 
 struct FrameStreamer::State {
-  client::Connection connection;
+  client::ConnectOptions connect;
+  std::optional<client::Connection> connection;  // until the session opens and takes it over
   protocol::PipelineInfo pipeline;
-  std::optional<client::Session> session;
+  std::optional<client::ReconnectingSession> session;
   std::vector<ChannelId> channels;
 };
 
+namespace {
+
+client::ConnectOptions connect_options() {
+  client::ConnectOptions o;
+  o.client_name = "dnrender";
+  return o;
+}
+
+// The one line a reconnection prints: the stream goes on, its history does not.
+void print_reconnected(const client::Reconnected& r) {
+  std::fprintf(stderr,
+               "dnrender: reconnected to %s after losing session %llu (%s): %llu frame%s in flight lost; new session "
+               "%llu from frame %llu, history reset (%u attempt%s, %.1f s)\n",
+               r.endpoint.c_str(), static_cast<unsigned long long>(r.old_session_id), r.cause.c_str(),
+               static_cast<unsigned long long>(r.frames_lost), r.frames_lost == 1 ? "" : "s",
+               static_cast<unsigned long long>(r.new_session_id), static_cast<unsigned long long>(r.first_frame_index),
+               r.attempts, r.attempts == 1 ? "" : "s", static_cast<double>(r.took.count()) / 1e3);
+}
+
+}  // namespace
+
 FrameStreamer::FrameStreamer(const StreamOptions& options) : options_(options) {
-  client::ConnectOptions copts;
-  copts.client_name = "dnrender";
-  state_ = std::make_unique<State>(State{client::Connection::connect(options.url, copts), {}, std::nullopt, {}});
-  const protocol::PipelineInfo* info = state_->connection.find_pipeline(options.pipeline);
+  state_ = std::make_unique<State>();
+  state_->connect = connect_options();
+  state_->connection.emplace(client::Connection::connect(options.url, state_->connect));
+  const client::Connection* connection = &*state_->connection;
+  const protocol::PipelineInfo* info = connection->find_pipeline(options.pipeline);
   if (!info) {
     std::string names;
-    for (const auto& p : state_->connection.welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
-    throw std::runtime_error("server " + state_->connection.endpoint() + " has no pipeline '" + options.pipeline +
+    for (const auto& p : connection->welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
+    throw std::runtime_error("server " + connection->endpoint() + " has no pipeline '" + options.pipeline +
                              "' (it offers: " + names + ")");
   }
   state_->pipeline = *info;
@@ -161,10 +184,19 @@ void FrameStreamer::open(const FrameBuffers& sample) {
     if (how == client::DemodulatedStatistics::ByParameter)
       desc.parameters.push_back({std::string(client::kDemodulatedParameter), 1.0});
   }
-  state_->session.emplace(state_->connection.open_session(desc));
+  // A lost server connection costs the frames in flight and the history, not
+  // the run: the session reconnects and reopens (docs/client.md, "Reconnecting
+  // after a lost server").
+  client::ReconnectOptions reconnect;
+  reconnect.give_up_after = std::chrono::milliseconds(static_cast<int64_t>(options.reconnect_for_s * 1e3));
+  reconnect.on_reconnect = print_reconnected;
+  client::Connection connection = std::move(*state_->connection);
+  state_->connection.reset();
+  state_->session.emplace(std::move(connection), desc, state_->connect, reconnect);
   if (!options.quiet)
     std::fprintf(stderr, "dnrender: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
-                 static_cast<unsigned long long>(state_->session->id()), state_->session->watch_command().c_str());
+                 static_cast<unsigned long long>(state_->session->session()->id()),
+                 state_->session->session()->watch_command().c_str());
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
 }
 
@@ -190,9 +222,18 @@ void FrameStreamer::submit(int frame, const FrameBuffers& fb, const Camera& came
 }
 
 void FrameStreamer::write_ready(bool block) {
-  client::Session& s = *state_->session;
+  client::ReconnectingSession& s = *state_->session;
   while (s.in_flight() > 0) {
-    std::optional<client::Result> r = block ? std::optional<client::Result>(s.wait()) : s.poll();
+    std::optional<client::Result> r;
+    try {
+      r = block ? std::optional<client::Result>(s.wait()) : s.poll();
+    } catch (const client::Error& e) {
+      // A frame lost with the connection: said, and the stream goes on (the
+      // next submit reconnects). Any other error ends the run.
+      if (e.kind() != client::ErrorKind::Transport) throw;
+      std::fprintf(stderr, "dnrender: %s\n", e.what());
+      continue;
+    }
     if (!r) return;
     if (!options_.quiet)
       std::fprintf(stderr, "dnrender: denoised frame %llu  e2e %.1f ms  server %.1f ms\n",

@@ -25,6 +25,8 @@ struct StreamOptions {
   // the session is opened with the pipeline's parameter demodulated = 1.
   bool statistics_demodulated = false;
   bool quiet = false;
+  // After a lost connection, how long to keep trying to reconnect (dnrender --reconnect-for).
+  double reconnect_for_s = 30.0;
 };
 
 // What to render for a pipeline that takes the channel mask `takes`

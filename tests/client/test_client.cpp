@@ -389,7 +389,7 @@ TEST(ClientSession, ServerDroppingConnectionWhileWaitingIsTransportError) {
     FAIL() << "expected a transport error";
   } catch (const client::Error& e) {
     EXPECT_EQ(e.kind(), client::ErrorKind::Transport);
-    EXPECT_NE(std::string(e.what()).find("connection closed by server"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("connection lost: the server closed the connection"), std::string::npos) << e.what();
   }
 }
 

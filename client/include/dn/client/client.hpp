@@ -13,6 +13,7 @@
 #include "dn/client/error.hpp"
 #include "dn/client/options.hpp"
 #include "dn/client/parameters.hpp"
+#include "dn/client/reconnecting_session.hpp"
 #include "dn/client/session.hpp"
 #include "dn/client/session_desc.hpp"
 #include "dn/client/watcher.hpp"
