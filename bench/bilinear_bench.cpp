@@ -247,7 +247,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
   dn::gpu::Buffer source(ctx, bytes, dn::gpu::BufferKind::StorageUpload, "source");
   source.write({reinterpret_cast<const uint8_t*>(rgba.data()), bytes});
   dn::gpu::Buffer result(ctx, bytes, dn::gpu::BufferKind::StorageDownload, "result");
-  dn::gpu::Buffer uniform(ctx, 256, dn::gpu::BufferKind::Uniform, "unused");
+  dn::gpu::Buffer uniform(ctx, 256, dn::gpu::BufferKind::Constants, "unused");
   dn::gpu::KernelDesc desc;
   desc.name = "bench_bilinear_buffer";
   desc.spirv = dn::shaders::get("bench_bilinear_buffer");

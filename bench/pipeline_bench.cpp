@@ -381,7 +381,7 @@ class CopyFloor {
       left -= size;
       c.src = dn::gpu::Buffer(context_, size, dn::gpu::BufferKind::Storage, "copy_src");
       c.dst = dn::gpu::Buffer(context_, size, dn::gpu::BufferKind::Storage, "copy_dst");
-      c.constants = dn::gpu::Buffer(context_, 16, dn::gpu::BufferKind::Uniform, "copy_constants");
+      c.constants = dn::gpu::Buffer(context_, 16, dn::gpu::BufferKind::Constants, "copy_constants");
       const uint32_t words[4] = {static_cast<uint32_t>(size / 4), 0, 0, 0};
       c.constants.write({reinterpret_cast<const uint8_t*>(words), sizeof words});
       const VkBuffer fwd[2] = {c.src.handle(), c.dst.handle()};

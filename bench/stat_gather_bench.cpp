@@ -84,7 +84,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int radius, int reps) {
   for (float& t : t2) t = t * t;
   buffers.emplace_back(ctx, t2.size() * 4, dn::gpu::BufferKind::StorageUpload, "t_squared");
   buffers.back().write({reinterpret_cast<const uint8_t*>(t2.data()), t2.size() * 4});
-  dn::gpu::Buffer uniform(ctx, 256, dn::gpu::BufferKind::Uniform, "unused");
+  dn::gpu::Buffer uniform(ctx, 256, dn::gpu::BufferKind::Constants, "unused");
 
   dn::gpu::GridPush grid;
   grid.size[0] = grid.source[0] = w;

@@ -27,7 +27,7 @@
 // at errors up to 1.3e-2 with 1024 samples near grazing; this one stays below
 // 1.3e-3: docs/pipelines.md.)
 //
-// Resources: passes/fb_lut.pass (no uniform block: binding 0 of the layout is unused).
+// Resources: passes/fb_lut.pass (no constants block: binding 0 of the layout is unused).
 #extension GL_GOOGLE_include_directive : require
 #define DN_FB_LUT_NO_LOOKUP
 #include "fb_lut.glsl"

@@ -11,7 +11,7 @@
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
-layout(std140, set = 0, binding = 0) uniform ProbeConstants { uvec4 size; } constants;
+layout(std140, set = 0, binding = 0) readonly buffer ProbeConstants { uvec4 size; } constants;
 
 void main() {
   uint p = gl_GlobalInvocationID.x;

@@ -73,8 +73,8 @@ Buffer::Buffer(Context& context, uint64_t size, BufferKind kind, std::string nam
       name_(std::move(name)) {
   if (size == 0) throw Error("buffer " + name_ + ": size 0");
   const VkBufferUsageFlags usage =
-      kind == BufferKind::Uniform
-          ? VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT
+      kind == BufferKind::Constants
+          ? VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
           : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   try {
     buffer_ = make_buffer(device_, size, usage);
@@ -84,7 +84,7 @@ Buffer::Buffer(Context& context, uint64_t size, BufferKind kind, std::string nam
       case BufferKind::Storage:
         allocate(buffer_, kDeviceLocal, 0, memory_, flags);
         break;
-      case BufferKind::Uniform:
+      case BufferKind::Constants:
         allocate(buffer_, kHostVisible, kDeviceLocal | kHostCoherent, memory_, flags);
         direct = true;
         break;
@@ -168,7 +168,7 @@ void Buffer::release() noexcept {
 }
 
 void Buffer::write(std::span<const uint8_t> bytes, uint64_t offset) {
-  if (kind_ != BufferKind::StorageUpload && kind_ != BufferKind::Uniform)
+  if (kind_ != BufferKind::StorageUpload && kind_ != BufferKind::Constants)
     throw Error("buffer " + name_ + " is not host-writable");
   if (offset > size_ || bytes.size() > size_ - offset) throw Error("write past the end of buffer " + name_);
   if (bytes.empty()) return;

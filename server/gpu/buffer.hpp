@@ -28,7 +28,8 @@ enum class BufferKind {
   Storage,          // device-only storage buffer
   StorageUpload,    // storage buffer the host writes (input planes)
   StorageDownload,  // storage buffer the host reads (output planes)
-  Uniform,          // per-frame constants, host-written
+  Constants,        // per-frame constants, host-written; a read-only storage buffer in the kernels
+                    // (not a uniform buffer: lavapipe inlines uniform values, see shaders/include/frame.glsl)
 };
 
 class Buffer {

@@ -44,7 +44,7 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
     std::vector<VkDescriptorSetLayoutBinding> bindings(desc.storage_buffers + 1);
     for (uint32_t i = 0; i < bindings.size(); ++i) {
       bindings[i].binding = i;
-      bindings[i].descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      bindings[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;  // 0 too: see BufferKind::Constants
       bindings[i].descriptorCount = 1;
       bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }
@@ -186,14 +186,12 @@ size_t KernelCache::size() const {
 
 DescriptorPool::DescriptorPool(Context& context, uint32_t sets, uint32_t storage_buffers_total)
     : device_(context.device()) {
-  VkDescriptorPoolSize sizes[2] = {
-      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, sets},
-      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, storage_buffers_total > 0 ? storage_buffers_total : 1},
-  };
+  // Every binding is a storage buffer: each set's constants (binding 0) and its storage buffers.
+  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, sets + storage_buffers_total};
   VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   info.maxSets = sets;
-  info.poolSizeCount = 2;
-  info.pPoolSizes = sizes;
+  info.poolSizeCount = 1;
+  info.pPoolSizes = &size;
   check(vkCreateDescriptorPool(device_, &info, nullptr, &pool_), "vkCreateDescriptorPool");
 }
 
@@ -201,7 +199,7 @@ DescriptorPool::~DescriptorPool() {
   if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);
 }
 
-VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage) {
+VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer constants, std::span<const VkBuffer> storage) {
   if (storage.size() != kernel.storage_buffers())
     throw Error("kernel " + kernel.name() + ": " + std::to_string(storage.size()) + " storage buffers given, " +
                 std::to_string(kernel.storage_buffers()) + " expected");
@@ -212,11 +210,11 @@ VkDescriptorSet DescriptorPool::allocate(const Kernel& kernel, VkBuffer uniform,
   alloc.pSetLayouts = &layout;
   VkDescriptorSet set = VK_NULL_HANDLE;
   check(vkAllocateDescriptorSets(device_, &alloc, &set), "vkAllocateDescriptorSets");
-  write(set, kernel, uniform, storage);
+  write(set, kernel, constants, storage);
   return set;
 }
 
-void DescriptorPool::write(VkDescriptorSet set, const Kernel& kernel, VkBuffer uniform,
+void DescriptorPool::write(VkDescriptorSet set, const Kernel& kernel, VkBuffer constants,
                            std::span<const VkBuffer> storage) {
   if (storage.size() != kernel.storage_buffers())
     throw Error("kernel " + kernel.name() + ": " + std::to_string(storage.size()) + " storage buffers given, " +
@@ -224,12 +222,12 @@ void DescriptorPool::write(VkDescriptorSet set, const Kernel& kernel, VkBuffer u
   std::vector<VkDescriptorBufferInfo> infos(storage.size() + 1);
   std::vector<VkWriteDescriptorSet> writes(storage.size() + 1);
   for (size_t i = 0; i < infos.size(); ++i) {
-    infos[i] = {i == 0 ? uniform : storage[i - 1], 0, VK_WHOLE_SIZE};
+    infos[i] = {i == 0 ? constants : storage[i - 1], 0, VK_WHOLE_SIZE};
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[i].dstSet = set;
     writes[i].dstBinding = static_cast<uint32_t>(i);
     writes[i].descriptorCount = 1;
-    writes[i].descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].pBufferInfo = &infos[i];
   }
   vkUpdateDescriptorSets(device_, static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);

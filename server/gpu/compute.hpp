@@ -1,6 +1,6 @@
 // Compute kernels: a SPIR-V module specialised into a VkPipeline, with its
-// descriptor-set layout (binding 0: uniform buffer, bindings 1..n: storage
-// buffers) and pipeline layout. Kernels are immutable and shared: the
+// descriptor-set layout (binding 0: the frame constants, bindings 1..n: the
+// pass's buffers; all storage buffers, see BufferKind::Constants) and pipeline layout. Kernels are immutable and shared: the
 // Context's KernelCache hands out one per (module, binding count,
 // specialization constants, workgroup shape, push-constant size), so
 // sessions with the same formats and shader compile it once.
@@ -8,7 +8,7 @@
 // 2-D kernels (shaders/include/grid2d.glsl) set KernelDesc::local_size_x/y
 // and push_constant_bytes: the workgroup's shape becomes specialization
 // constant 0 and each dispatch pushes its grid (GridPush), so a pass at a
-// reduced resolution knows its grid without a uniform of its own.
+// reduced resolution knows its grid without constants of its own.
 #pragma once
 
 #include <vulkan/vulkan.h>
@@ -144,12 +144,12 @@ class DescriptorPool {
   DescriptorPool(const DescriptorPool&) = delete;
   DescriptorPool& operator=(const DescriptorPool&) = delete;
 
-  // Allocates and writes a set: binding 0 = uniform, 1.. = storage (whole buffers).
-  VkDescriptorSet allocate(const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage);
+  // Allocates and writes a set: binding 0 = constants, 1.. = storage (whole buffers).
+  VkDescriptorSet allocate(const Kernel& kernel, VkBuffer constants, std::span<const VkBuffer> storage);
   // Rewrites a set allocated for `kernel` to other buffers (e.g. when the
   // transient buffers leased for a frame are not last frame's). The set must
   // not be in use by a pending submission.
-  void write(VkDescriptorSet set, const Kernel& kernel, VkBuffer uniform, std::span<const VkBuffer> storage);
+  void write(VkDescriptorSet set, const Kernel& kernel, VkBuffer constants, std::span<const VkBuffer> storage);
 
  private:
   VkDevice device_;

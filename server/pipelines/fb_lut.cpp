@@ -23,13 +23,13 @@ FbLut::FbLut(gpu::Context& ctx)
   pass.set("SAMPLES", kFbLutSamples);
   auto kernel = ctx.kernels().get(kernel_desc(pass.declaration(), pass.specialization(kWorkgroupSize)));
 
-  // Binding 0 of every kernel layout is a uniform buffer; fb_lut.comp reads none.
-  gpu::Buffer uniform(ctx, 16, gpu::BufferKind::Uniform, "fb_lut:constants");
+  // Binding 0 of every kernel layout is the constants buffer; fb_lut.comp reads none.
+  gpu::Buffer constants(ctx, 16, gpu::BufferKind::Constants, "fb_lut:constants");
   const uint32_t zeros[4] = {};
-  uniform.write({reinterpret_cast<const uint8_t*>(zeros), sizeof zeros});
+  constants.write({reinterpret_cast<const uint8_t*>(zeros), sizeof zeros});
   gpu::DescriptorPool pool(ctx, 1, 1);
   const VkBuffer storage[] = {table_.handle()};
-  VkDescriptorSet set = pool.allocate(*kernel, uniform.handle(), storage);
+  VkDescriptorSet set = pool.allocate(*kernel, constants.handle(), storage);
   gpu::CommandStream stream(ctx);
 
   const auto start = std::chrono::steady_clock::now();

@@ -1,4 +1,4 @@
-// What every pass sees besides its buffers: the per-frame uniform block
+// What every pass sees besides its buffers: the per-frame constants block
 // (binding 0, shaders/include/frame.glsl) and the dispatch conventions.
 // Depends on nothing else in pipelines/, so graph.cpp and fb_lut.cpp can both
 // use it without including each other.

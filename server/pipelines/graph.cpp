@@ -58,7 +58,7 @@ bool has_channel(const SessionConfig& config, protocol::ChannelId channel) {
 uint32_t is_half(protocol::Format format) { return format == protocol::Format::F16 ? 1u : 0u; }
 
 uint64_t GraphSpec::device_bytes() const {
-  uint64_t total = kUniformBytes;
+  uint64_t total = kConstantBytes;
   for (const auto& b : buffers) total += b.role == BufferRole::History ? 2 * b.bytes : b.bytes;
   return total;
 }
@@ -300,8 +300,8 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
         constants_staged_ = constants_staged_ || n.copies[0].staged();
       }
     }
-    uniform_ = gpu::Buffer(context, GraphSpec::kUniformBytes, gpu::BufferKind::Uniform, "frame_constants");
-    device_bytes_ += GraphSpec::kUniformBytes;
+    constants_ = gpu::Buffer(context, GraphSpec::kConstantBytes, gpu::BufferKind::Constants, "frame_constants");
+    device_bytes_ += GraphSpec::kConstantBytes;
 
     uint32_t storage_total = 0;
     for (const auto& p : spec_->passes) storage_total += static_cast<uint32_t>(p.bindings().size());
@@ -322,7 +322,7 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
       for (const auto& ref : ps.bindings())
         pass.binds_transient = pass.binds_transient || (ref.bound() && node(ref.buffer).transient >= 0);
       for (uint32_t parity = 0; parity < 2; ++parity)
-        pass.sets[parity] = descriptors_->allocate(*pass.kernel, uniform_.handle(), storage_of(pass, parity));
+        pass.sets[parity] = descriptors_->allocate(*pass.kernel, constants_.handle(), storage_of(pass, parity));
 
       if (ps.grid) continue;  // 2-D: Kernel::record_dispatch sizes it from the grid
       const uint64_t items =
@@ -358,7 +358,7 @@ void GraphPipeline::lease_scratch() {
   for (const Pass& pass : passes_)
     if (pass.binds_transient)
       for (uint32_t parity = 0; parity < 2; ++parity)
-        descriptors_->write(pass.sets[parity], *pass.kernel, uniform_.handle(), storage_of(pass, parity));
+        descriptors_->write(pass.sets[parity], *pass.kernel, constants_.handle(), storage_of(pass, parity));
   held_ids_ = scratch_.ids();
 }
 
@@ -433,7 +433,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   constants.params = spec_->parameters;
   std::memcpy(constants.previous_view_projection, view_projection_, sizeof view_projection_);
   view_projection(frame.info, view_projection_, constants.inverse_view_projection);
-  uniform_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
+  constants_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);
 
   const uint32_t parity = static_cast<uint32_t>(frames_ & 1);

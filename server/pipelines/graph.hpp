@@ -20,7 +20,7 @@
 //             host from the session's parameters (a table), uploaded once
 //             before the first frame
 // Every binding of a pass is a storage buffer, bound by the name its shader
-// declares (pass.hpp); binding 0 is the FrameConstants uniform buffer.
+// declares (pass.hpp); binding 0 is the FrameConstants buffer.
 #pragma once
 
 #include <cstdint>
@@ -73,10 +73,10 @@ struct GraphSpec {
   std::vector<PassSpec> passes;
   Parameters parameters;
 
-  static constexpr uint64_t kUniformBytes = sizeof(FrameConstants);
+  static constexpr uint64_t kConstantBytes = sizeof(FrameConstants);
 
   // Device bytes a session needs: every buffer (History twice) plus the
-  // uniform buffer; of which transient_bytes() are Scratch, leased per frame.
+  // constants buffer; of which transient_bytes() are Scratch, leased per frame.
   uint64_t device_bytes() const;
   uint64_t transient_bytes() const;
   // The largest single binding (what maxStorageBufferRange limits).
@@ -186,7 +186,7 @@ class GraphPipeline final : public Pipeline {
   std::shared_ptr<const GraphSpec> spec_;
   protocol::Format output_format_;
   std::vector<Node> nodes_;
-  gpu::Buffer uniform_;
+  gpu::Buffer constants_;
   std::unique_ptr<gpu::DescriptorPool> descriptors_;
   std::vector<Pass> passes_;
   std::unique_ptr<gpu::CommandStream> commands_;

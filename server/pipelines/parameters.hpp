@@ -1,6 +1,6 @@
 // The tunables of every pipeline, from the one table in
 // shaders/include/parameters.def (shared with the shaders, which read row
-// <group>, <name> as DN_PARAM_VALUE(group, name) from the uniform block's
+// <group>, <name> as DN_PARAM_VALUE(group, name) from the constants block's
 // parameter struct).
 #pragma once
 
@@ -13,7 +13,7 @@
 
 namespace dn::pipelines {
 
-// The uniform block's parameter struct (shaders/include/frame.glsl
+// The constants block's parameter struct (shaders/include/frame.glsl
 // DnParameters): one float per row of parameters.def, in row order. std140
 // lays consecutive floats out as C++ does; alignas(16) gives the struct the
 // size std140 rounds it to. The spirv.* tests compare the offsets.
@@ -26,7 +26,7 @@ struct alignas(16) Parameters {
 struct ParameterDef {
   std::string_view group;
   ParameterInfo info;
-  float Parameters::*member = nullptr;  // where the value goes in the uniform block
+  float Parameters::*member = nullptr;  // where the value goes in the constants block
 };
 
 // Every row of parameters.def, in file order.
@@ -46,7 +46,7 @@ using ParameterDefaults = std::vector<protocol::Parameter>;
 // outside its row's range (or is not integral where the row is).
 std::vector<ParameterInfo> parameters_of(ParameterGroups groups, const ParameterDefaults& defaults = {});
 
-// The uniform block's parameters for a session taking `groups`: defaults
+// The constants block's parameters for a session taking `groups`: defaults
 // (the pipeline's own where it has one), overridden by `values` (which passed
 // validate()); other groups' rows 0.
 Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values,

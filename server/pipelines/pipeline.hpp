@@ -83,7 +83,7 @@ class Pipeline {
  public:
   virtual ~Pipeline() = default;
   // Device memory this session needs to run a frame: what it holds for its
-  // lifetime (history, inputs, outputs, uniforms) plus transient_bytes().
+  // lifetime (history, inputs, outputs, frame constants) plus transient_bytes().
   virtual uint64_t device_bytes() const = 0;
   // Of device_bytes(), the scratch leased from the device's transient pool
   // for each frame and shared with other sessions in between.

@@ -1,4 +1,4 @@
-// Per-frame constants (uniform buffer, set 0 binding 0 in every pass) and the
+// Per-frame constants (set 0 binding 0 in every pass) and the
 // invocation index of the linear dispatch. Mirrors dn::pipelines::FrameConstants
 // in server/pipelines/frame_constants.hpp (std140; the spirv.* tests compare
 // the offsets).
@@ -15,7 +15,12 @@ struct DnParameters {
 
 const uint DN_FLAG_RESET = 1u;  // history must not be read this frame
 
-layout(std140, set = 0, binding = 0) uniform FrameConstants {
+// A read-only storage buffer, not a uniform block: lavapipe (Mesa 22.3)
+// inlines the values of small uniform blocks into the shader and keeps a
+// compiled variant per set of values, so constants that change every frame
+// recompiled every pass at each dispatch and grew the server by 0.3-3 MB a
+// frame (docs/results.md, "Soak: 64 sessions x 10 minutes").
+layout(std140, set = 0, binding = 0) readonly buffer FrameConstants {
   uvec4 size;       // x: width, y: height, z: pixel count, w: flags (DN_FLAG_*)
   vec4 motion;      // xy: scale that turns the client's motion vectors into pixels to the previous frame
   mat4 inverse_view_projection;  // (projection * view)^-1: clip space -> world (identity without a camera)

@@ -3,7 +3,7 @@
 // KernelDesc::local_size_x = local_size_y; square because the SPIR-V
 // reflection test admits no constant id but 0 outside a pass declaration),
 // and the grid itself in push constants (dn::gpu::GridPush, 32 bytes), so a
-// pass at a reduced resolution needs no uniform of its own.
+// pass at a reduced resolution needs no constants of its own.
 //
 // Include instead of frame.glsl's 1-D dispatch. Every invocation of a
 // workgroup must reach a barrier (tile.glsl): test dn_in_grid() after

@@ -249,7 +249,7 @@ TEST(SessionBuild, StatsSplitPersistentAndPooledScratch) {
   const double transient = st.at(prefix + "transient_bytes_per_pixel");
   EXPECT_GT(persistent, 0.0);
   EXPECT_GT(transient, 0.0);
-  // The two parts add up to what the session needs (device_bytes, uniform buffer included).
+  // The two parts add up to what the session needs (device_bytes, constants buffer included).
   EXPECT_NEAR((persistent + transient) * w * h, st.at("device_bytes"), 1.0);
   EXPECT_NEAR(persistent * w * h, st.at("persistent_bytes"), 1.0);
   EXPECT_GE(st.at("transient_pool_bytes"), transient * w * h);  // the frame leased it from the pool

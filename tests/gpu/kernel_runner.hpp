@@ -58,7 +58,7 @@ inline void run_grid_kernel(gpu::Context& ctx, const gpu::Kernel& kernel, const 
                             const std::vector<const gpu::Buffer*>& uploads,
                             const std::vector<const gpu::Buffer*>& outputs,
                             const std::function<void(VkCommandBuffer)>& before = {}) {
-  gpu::Buffer uniform(ctx, 256, gpu::BufferKind::Uniform, "unused_frame_constants");  // binding 0 of every kernel
+  gpu::Buffer uniform(ctx, 256, gpu::BufferKind::Constants, "unused_frame_constants");  // binding 0 of every kernel
   gpu::DescriptorPool pool(ctx, 1, static_cast<uint32_t>(bindings.size()));
   std::vector<VkBuffer> handles;
   for (const auto* b : bindings) handles.push_back(b->handle());

@@ -29,7 +29,7 @@ class PlaneIoTest : public test::GpuTest {
     desc.spec_constants = {{0, 64}, {1, half ? 1u : 0u}, {2, components}};
     auto kernel = ctx().kernels().get(desc);
 
-    gpu::Buffer uniform(ctx(), 96, gpu::BufferKind::Uniform, "frame");
+    gpu::Buffer uniform(ctx(), 96, gpu::BufferKind::Constants, "frame");
     uint32_t constants[24] = {pixels, 1, pixels, 0};
     uniform.write({reinterpret_cast<const uint8_t*>(constants), sizeof constants});
     gpu::Buffer in(ctx(), (bytes.size() + 3) & ~size_t{3}, gpu::BufferKind::StorageUpload, "plane");

@@ -250,7 +250,7 @@ TEST_F(TransientPoolTest, DescriptorSetsFollowTheLeasedBuffers) {
   const uint32_t w = 21, h = 13;
   const uint64_t plane = uint64_t{w} * h * 16;
   auto kernel = ctx().kernels().get(test::grid_kernel_desc("tile_probe", shaders::get("tile_probe"), 3, 8, {{1, 2}}));
-  gpu::Buffer uniform(ctx(), 256, gpu::BufferKind::Uniform, "unused");
+  gpu::Buffer uniform(ctx(), 256, gpu::BufferKind::Constants, "unused");
   gpu::DescriptorPool descriptors(ctx(), 1, 3);
   VkDescriptorSet set = VK_NULL_HANDLE;
   std::vector<uint64_t> held;

@@ -93,7 +93,7 @@ class FbLutTest : public test::GpuTest {
     desc.spec_constants = {{0, 64}};
     auto kernel = ctx().kernels().get(desc);
 
-    gpu::Buffer uniform(ctx(), 16, gpu::BufferKind::Uniform, "probe:constants");
+    gpu::Buffer uniform(ctx(), 16, gpu::BufferKind::Constants, "probe:constants");
     const uint32_t constants[4] = {count, 0, 0, 0};
     uniform.write({reinterpret_cast<const uint8_t*>(constants), sizeof constants});
     const uint64_t bytes = uint64_t{count} * 8;

@@ -1,5 +1,5 @@
 // The parameter table (shaders/include/parameters.def) without slot numbers:
-// groups, the uniform block's parameter struct, and the checks on groups.
+// groups, the constants block's parameter struct, and the checks on groups.
 #include <gtest/gtest.h>
 
 #include <stdexcept>

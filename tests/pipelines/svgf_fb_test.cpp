@@ -362,7 +362,7 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
 // context's.
 TEST_F(SvgfFbTest, DeviceBytesAreAsDocumented) {
   const auto config = fb_config(64, 48);
-  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 300 + pipelines::GraphSpec::kUniformBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 300 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::create(ctx(), config)->device_bytes(), pipelines::estimate_device_bytes(config));
 }
 

@@ -394,13 +394,13 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 12 (the TAA blend's, fp32 rgb), scratch 4*16
-  // (2 illumination, guide, temporal), output 12 = 168 B/px, + the uniform block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 168 + pipelines::GraphSpec::kUniformBytes);
+  // (2 illumination, guide, temporal), output 12 = 168 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 168 + pipelines::GraphSpec::kConstantBytes);
   // fp16 planes: 6+6+6+2+4 + 44 + 64 + 6 = 138 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 138 + pipelines::GraphSpec::kUniformBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 138 + pipelines::GraphSpec::kConstantBytes);
   // Without the TAA blend (taa_alpha and taa_static_alpha 0): 156 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
-            64u * 48 * 156 + pipelines::GraphSpec::kUniformBytes);
+            64u * 48 * 156 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, ChannelsAndParameters) {
@@ -523,11 +523,11 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
   // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 12 (TAA), scratch 5*16
-  // (3 illumination, guide, temporal), output 12 = 228 B/px, + the uniform block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 228 + pipelines::GraphSpec::kUniformBytes);
+  // (3 illumination, guide, temporal), output 12 = 228 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 228 + pipelines::GraphSpec::kConstantBytes);
   // fp16 planes: 6+6+6+6+2+4 + 76 + 80 + 6 = 192 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 192 + pipelines::GraphSpec::kUniformBytes);
+            64u * 48 * 192 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -668,9 +668,9 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
   }
   // 156 B/px without TAA + 12 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 168 + pipelines::GraphSpec::kUniformBytes);
+            64u * 48 * 168 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 138 + pipelines::GraphSpec::kUniformBytes);
+            64u * 48 * 138 + pipelines::GraphSpec::kConstantBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

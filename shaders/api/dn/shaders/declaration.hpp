@@ -20,7 +20,7 @@ enum class Need : uint8_t { required, optional };
 enum class SpecType : uint8_t { t_bool, t_int, t_uint, t_float };
 
 struct BindingDecl {
-  uint32_t binding = 0;      // set 0, binding 1.. in declaration order (0 is the uniform block)
+  uint32_t binding = 0;      // set 0, binding 1.. in declaration order (0 is the FrameConstants block)
   std::string_view name;     // the GLSL instance name (block name: <name>_block) and the host's name
   std::string_view element;  // GLSL type of the block's only member, data[]
   Access access = Access::read;
