@@ -12,7 +12,8 @@ Watcher::Watcher(Watcher&& o) noexcept
     : state_(std::move(o.state_)),
       info_(std::move(o.info_)),
       attach_request_id_(o.attach_request_id_),
-      dropped_(o.dropped_) {}
+      dropped_(o.dropped_),
+      closed_(std::move(o.closed_)) {}
 
 Watcher& Watcher::operator=(Watcher&& o) noexcept {
   if (this != &o) {
@@ -21,6 +22,7 @@ Watcher& Watcher::operator=(Watcher&& o) noexcept {
     info_ = std::move(o.info_);
     attach_request_id_ = o.attach_request_id_;
     dropped_ = o.dropped_;
+    closed_ = std::move(o.closed_);
   }
   return *this;
 }
@@ -45,6 +47,7 @@ std::optional<Result> Watcher::take_newest(bool throw_end) {
       if (newest || !throw_end) break;
       if (is_error) throw Error::server(std::get<protocol::Error>(front.message), state_->endpoint());
       const auto& c = std::get<protocol::SessionClosed>(front.message);
+      closed_ = c;
       throw Error::server({protocol::ErrorCode::UnknownSession, "ATTACH.session_id",
                            "session " + std::to_string(c.session_id) + " was closed after " +
                                std::to_string(c.frames_processed) + " frames"},

@@ -1,6 +1,8 @@
 #include "args.hpp"
 
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 namespace dn::cli {
@@ -20,8 +22,8 @@ double parse_double(const std::string& text, const std::string& what) {
   errno = 0;
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (errno != 0 || end != text.c_str() + text.size())
-    throw UsageError(what + ": expected a number, got '" + text + "'");
+  if (errno != 0 || end != text.c_str() + text.size() || !std::isfinite(v))
+    throw UsageError(what + ": expected a finite number, got '" + text + "'");
   return v;
 }
 
@@ -109,6 +111,16 @@ long long Args::get_int(const std::string& name, long long fallback, long long m
 double Args::get_double(const std::string& name, double fallback) const {
   auto v = get(name);
   return v ? parse_double(*v, "--" + name) : fallback;
+}
+
+double Args::get_double(const std::string& name, double fallback, double min, double max) const {
+  const double x = get_double(name, fallback);
+  if (has(name) && (x < min || x > max)) {
+    char range[96];
+    std::snprintf(range, sizeof range, "%g..%g", min, max);
+    throw UsageError("--" + name + " " + *get(name) + " is out of range " + range);
+  }
+  return x;
 }
 
 std::string Args::usage() const {

@@ -10,7 +10,7 @@
 
 namespace dn::cli {
 
-// Bad command line: printed as "dn <cmd>: <message>" and exit status 2.
+// Bad command line: printed as "dn <cmd>: <message>" and exit status 2 (kExitUsage).
 class UsageError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -40,6 +40,8 @@ class Args {
   std::vector<std::string> all(const std::string& name) const;
   long long get_int(const std::string& name, long long fallback, long long min, long long max) const;
   double get_double(const std::string& name, double fallback) const;
+  // UsageError unless min <= value <= max.
+  double get_double(const std::string& name, double fallback, double min, double max) const;
 
   std::string usage() const;  // option list
 
@@ -51,6 +53,7 @@ class Args {
 };
 
 long long parse_int(const std::string& text, const std::string& what);
+// A finite number; UsageError naming `what` otherwise (also for "nan", "inf").
 double parse_double(const std::string& text, const std::string& what);
 // "name=value" -> {name, value}; UsageError naming `what` otherwise.
 std::pair<std::string, std::string> split_assignment(const std::string& text, const std::string& what);

@@ -14,10 +14,12 @@
 #include "dn/client/client.hpp"
 #include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
-#include "dn/image/png.hpp"
+#include "frame_range.hpp"
 #include "frame_source.hpp"
+#include "output_image.hpp"
 #include "presets.hpp"
 #include "progress.hpp"
+#include "reference_threshold.hpp"
 #include "reflection_features.hpp"
 #include "sequence_metrics.hpp"
 #include "statistics_kind.hpp"
@@ -30,14 +32,18 @@ using protocol::Format;
 namespace {
 
 const std::vector<Args::Spec> kSpecs = {
-    {"server", "", true, false, "server address: tcp://HOST:PORT or unix:///path (default $DN_SERVER)", "URL"},
+    server_option(),
     {"pipeline", "", true, false, "denoising pipeline (svgf, svgf-fb, ...; see 'dn ping')", "NAME"},
     {"input", "", true, false, "input EXR path pattern, e.g. 'in/frame_%04d.exr' or 'in/####.exr'", "PATTERN"},
-    {"start", "", true, false, "first frame number (default 0)", "N"},
-    {"end", "", true, false, "last frame number, inclusive (default: --start)", "M"},
+    {"start", "", true, false, "first frame number (default: the lowest number of an existing input file)", "N"},
+    {"end", "", true, false,
+     "last frame number, inclusive (default: the end of the run of existing files from --start)", "M"},
     {"step", "", true, false, "frame number step (default 1)", "S"},
-    {"output", "-o", true, false, "output EXR path pattern (RGB, half unless --exr-float)", "PATTERN"},
-    {"png", "", true, false, "also write tone-mapped 8-bit PNGs to this pattern", "PATTERN"},
+    {"output", "-o", true, false,
+     "output path pattern; the format follows the extension: .exr (half unless --exr-float), .png (tone-mapped) "
+     "or .pfm (float)",
+     "PATTERN"},
+    {"png", "", true, false, "also write tone-mapped 8-bit PNGs to this pattern (.png)", "PATTERN"},
     {"preset", "", true, false, "channel layout of the input: dnrender | cycles | auto (default auto)", "NAME"},
     {"layer", "", true, false, "Cycles view layer name (default: detected from '<layer>.Combined.R')", "NAME"},
     {"channel", "", true, true, "map a protocol channel: NAME=LAYER | NAME=A+B | NAME=C1,C2,C3 [@cycles]", "MAP"},
@@ -46,6 +52,10 @@ const std::vector<Args::Spec> kSpecs = {
     {"output-format", "", true, false, "f32 | f16 output on the wire (default f16 with --fp16, else f32)", "FMT"},
     {"param", "", true, true, "pipeline parameter NAME=VALUE", "NAME=VALUE"},
     {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE and SSIM per frame", "PATTERN"},
+    {"fail", "", true, false,
+     "with -r: a frame fails when its --fail-metric is above X; too many failing frames make dn exit 3", "X"},
+    {"fail-metric", "", true, false, "relmse | rmse: the metric --fail bounds (default relmse)", "NAME"},
+    {"fail-percent", "", true, false, "percentage of frames allowed to fail --fail (default 0)", "P"},
     {"reference2", "", true, false,
      "second reference independent of -r: noise-corrected MSE and the references' noise floor", "PATTERN"},
     {"in-flight", "", true, false, "frames kept in flight (default 3)", "K"},
@@ -67,9 +77,15 @@ const std::vector<Args::Spec> kSpecs = {
 };
 
 constexpr const char* kUsage =
-    "usage: dn denoise --server URL --pipeline NAME --input PATTERN [--start N --end M] [--output PATTERN]\n"
+    "usage: dn denoise [--server URL] --pipeline NAME --input PATTERN [--start N] [--end M] [--output PATTERN]\n"
     "                  [--png PATTERN] [--preset dnrender|cycles|auto] [--channel NAME=LAYER ...] [--fp16]\n"
-    "                  [--param NAME=VALUE ...] [-r PATTERN] [--in-flight K] [--token-file FILE] [--camera FILE]\n";
+    "                  [--param NAME=VALUE ...] [-r PATTERN [--fail X]] [--in-flight K] [--token-file FILE]\n"
+    "                  [--camera FILE]\n"
+    "\n"
+    "Without --start/--end the frames are the run of consecutive existing input files from the\n"
+    "lowest number found. Every input and reference file is checked before anything is sent.\n"
+    "Exit status: 0 success; 1 error (server, connection, files); 2 bad command line; 3 the\n"
+    "output is farther from the -r reference than --fail allows.\n";
 
 protocol::Mat4 identity() {
   protocol::Mat4 m{};
@@ -81,6 +97,15 @@ std::string fmt(const char* f, double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, f, v);
   return buf;
+}
+
+// Called in open_session's handler: --param names and values are checked
+// against the server's table only after connecting, but a refused one is
+// still a bad command line (nothing was sent for the session).
+[[noreturn]] void rethrow_parameter_error_as_usage(const client::Error& e) {
+  if (e.kind() == client::ErrorKind::Usage && e.code() == protocol::ErrorCode::InvalidParameter)
+    throw UsageError(e.what());
+  throw;
 }
 
 void ensure_parent_dir(const std::string& path) {
@@ -121,6 +146,12 @@ int run_denoise(const std::vector<std::string>& argv) {
 
   // ---- options ---------------------------------------------------------------
   const std::string url = server_url(args.get_or("server", ""));
+  const std::string preset_name = args.get_or("preset", "auto");
+  try {
+    make_preset(preset_name, {}, args.get_or("layer", ""));  // the name alone, before any file is read
+  } catch (const ChannelMapError& e) {
+    throw UsageError(std::string("--preset: ") + e.what());
+  }
   const std::string pipeline_name = args.require("pipeline");
   const std::string input = args.require("input");
   const auto output = args.get("output");
@@ -128,14 +159,31 @@ int run_denoise(const std::vector<std::string>& argv) {
   const auto reference = args.get("reference");
   const auto reference2 = args.get("reference2");
   if (reference2 && !reference) throw UsageError("--reference2 needs -r/--reference");
+  const std::optional<ImageFormat> output_image =
+      output ? std::optional(image_format_for(*output, "--output")) : std::nullopt;
+  if (png && image_format_for(*png, "--png") != ImageFormat::Png)
+    throw UsageError("--png '" + *png + "' must end in .png (--output chooses other formats by extension)");
+  if (args.has("exr-float") && output_image != ImageFormat::Exr)
+    throw UsageError("--exr-float needs an --output ending in .exr");
+  std::optional<ThresholdCheck> threshold;
+  if (args.has("fail")) {
+    if (!reference) throw UsageError("--fail needs -r/--reference");
+    threshold.emplace(FailThreshold{parse_fail_metric(args.get_or("fail-metric", "relmse")),
+                                    args.get_double("fail", 0.0, 0.0, HUGE_VAL),
+                                    args.get_double("fail-percent", 0.0, 0.0, 100.0)});
+  } else if (args.has("fail-metric") || args.has("fail-percent")) {
+    throw UsageError(std::string(args.has("fail-metric") ? "--fail-metric" : "--fail-percent") + " needs --fail");
+  }
   const bool fp16 = args.has("fp16");
   const bool quiet = args.has("quiet");
   const bool exr_float = args.has("exr-float");
-  const long long start = args.get_int("start", 0, 0, INT64_MAX / 2);
-  const long long end = args.get_int("end", start, 0, INT64_MAX / 2);
+  const std::optional<long long> start_given =
+      args.has("start") ? std::optional(args.get_int("start", 0, 0, INT64_MAX / 2)) : std::nullopt;
+  const std::optional<long long> end_given =
+      args.has("end") ? std::optional(args.get_int("end", 0, 0, INT64_MAX / 2)) : std::nullopt;
   const long long step = args.get_int("step", 1, 1, 1 << 30);
   const long long in_flight = args.get_int("in-flight", 3, 1, 1024);
-  const double timeout_s = args.get_double("timeout", 120.0);
+  const double timeout_s = args.get_double("timeout", 120.0, kMinTimeoutSeconds, kMaxTimeoutSeconds);
   const long long warmup = args.get_int("warmup", 0, 0, INT64_MAX / 2);
   const float exposure = float(args.get_double("exposure", 1.0));
   image::Tonemap tonemap = image::Tonemap::Aces;
@@ -157,7 +205,8 @@ int run_denoise(const std::vector<std::string>& argv) {
     else if (*m == "uv") motion_override = protocol::MotionConvention::UvToPrevious;
     else throw UsageError("--motion-convention: expected to-previous, to-next or uv, got '" + *m + "'");
   }
-  if (end < start) throw UsageError("--end " + std::to_string(end) + " is before --start " + std::to_string(start));
+  if (start_given && end_given && *end_given < *start_given)
+    throw UsageError("--end " + std::to_string(*end_given) + " is before --start " + std::to_string(*start_given));
   std::vector<protocol::Parameter> params;
   for (const auto& p : args.all("param")) {
     auto [name, value] = split_assignment(p, "--param");
@@ -183,22 +232,28 @@ int run_denoise(const std::vector<std::string>& argv) {
   std::vector<long long> frames;
   const bool sequence = has_frame_placeholder(input);
   if (sequence) {
-    for (long long n = start; n <= end; n += step) frames.push_back(n);
+    const FrameRange range = resolve_frame_range(input, start_given, end_given, step);
+    if (!range.detected.empty() && !quiet) std::fprintf(stderr, "dn: %s\n", range.detected.c_str());
+    for (long long n = range.start; n <= range.end; n += step) frames.push_back(n);
   } else {
-    if (args.has("end") && end != start) throw UsageError("--input has no frame-number placeholder (%04d or ####)");
-    frames.push_back(start);
+    if (end_given && *end_given != start_given.value_or(0))
+      throw UsageError("--input has no frame-number placeholder (%04d or ####)");
+    frames.push_back(start_given.value_or(0));
   }
   for (const auto* opt : {&output, &png, &reference, &reference2})
     if (*opt && frames.size() > 1 && !has_frame_placeholder(**opt))
       throw UsageError("output/reference pattern '" + **opt + "' has no frame-number placeholder (%04d or ####)");
 
-  if (reference2) check_reference2_files(frames, [&](long long n) { return format_frame_path(*reference2, n); });
+  // Every file the run reads, before anything is sent.
+  require_frame_files(frames, input, "--input");
+  if (reference) require_frame_files(frames, *reference, "-r/--reference");
+  if (reference2) require_frame_files(frames, *reference2, "--reference2");
 
   // ---- first frame: size and channel layout ---------------------------------
   const std::string first_path = format_frame_path(input, frames.front());
   image::ExrReader first(first_path);
   const int width = first.width(), height = first.height();
-  Preset preset = make_preset(args.get_or("preset", "auto"), first.channels(), args.get_or("layer", ""));
+  Preset preset = make_preset(preset_name, first.channels(), args.get_or("layer", ""));
   // ---- connect and open the session -----------------------------------------
   client::ConnectOptions copts;
   copts.client_name = "dn-cli";
@@ -209,8 +264,8 @@ int run_denoise(const std::vector<std::string>& argv) {
   if (!pipeline && !conn.welcome().pipelines.empty()) {
     std::string names;
     for (const auto& p : conn.welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
-    throw std::runtime_error("server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
-                             "' (it offers: " + names + ")");
+    throw UsageError("--pipeline: server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
+                     "' (it offers: " + names + ")");
   }
   // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
   FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline));
@@ -241,7 +296,13 @@ int run_denoise(const std::vector<std::string>& argv) {
                    where.c_str());
     }
   }
-  client::Session session = conn.open_session(desc);
+  client::Session session = [&] {
+    try {
+      return conn.open_session(desc);
+    } catch (const client::Error& e) {
+      rethrow_parameter_error_as_usage(e);
+    }
+  }();
   if (!quiet)
     std::fprintf(stderr, "dn: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
                  static_cast<unsigned long long>(session.id()), session.watch_command().c_str());
@@ -266,18 +327,14 @@ int run_denoise(const std::vector<std::string>& argv) {
     if (r.has_output()) rgb = r.rgb();
     const long long position = handled++;
     const bool measured = position >= warmup;
-    if (output) {
-      const std::string path = format_frame_path(*output, number);
-      ensure_parent_dir(path);
-      image::write_exr_rgb(path, int(r.width), int(r.height), rgb.data(),
-                           exr_float ? image::ExrPixelType::Float : image::ExrPixelType::Half);
-    }
-    if (png) {
-      const std::string path = format_frame_path(*png, number);
-      ensure_parent_dir(path);
-      const auto bytes = image::to_srgb8(rgb.data(), size_t(r.width) * r.height, tonemap, exposure);
-      image::write_png_rgb8(path, int(r.width), int(r.height), bytes.data());
-    }
+    const ImageWriteOptions write_options{exr_float ? image::ExrPixelType::Float : image::ExrPixelType::Half, tonemap,
+                                          exposure};
+    if (output)
+      write_image(format_frame_path(*output, number), *output_image, int(r.width), int(r.height), rgb.data(),
+                  write_options);
+    if (png)
+      write_image(format_frame_path(*png, number), ImageFormat::Png, int(r.width), int(r.height), rgb.data(),
+                  write_options);
     std::optional<Metrics> m;
     std::optional<NoiseCorrected> nc;
     if (reference) {
@@ -294,6 +351,7 @@ int run_denoise(const std::vector<std::string>& argv) {
         nc = noise_corrected_metrics(rgb, ref, rw, rh, format_frame_path(*reference2, number));
         if (measured) nc_totals.add(*nc);
       }
+      if (measured && threshold) threshold->add(number, m->rmse, m->relmse);
       if (measured) {
         totals.with_ref++;
         totals.rmse += m->rmse;
@@ -397,6 +455,7 @@ int run_denoise(const std::vector<std::string>& argv) {
                 totals.rmse / n, totals.relmse / n, totals.ssim / n, totals.with_ref, image::to_string(tonemap));
     if (nc_totals.frames) std::printf("mean%s\n", noise_corrected_status(nc_totals.mean()).c_str());
   }
+  if (threshold) std::printf("%s\n", threshold->verdict().c_str());
   if (auto summary = args.get("summary")) {
     ensure_parent_dir(*summary);
     std::FILE* f = std::fopen(summary->c_str(), "w");
@@ -415,7 +474,7 @@ int run_denoise(const std::vector<std::string>& argv) {
                  noise_corrected_summary_values(nc_totals.mean()).c_str());
     std::fclose(f);
   }
-  return 0;
+  return threshold && threshold->failed() ? kExitThresholdExceeded : kExitOk;
 }
 
 }  // namespace dn::cli

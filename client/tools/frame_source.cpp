@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
 #include "args.hpp"
@@ -46,27 +47,36 @@ Placeholder find_placeholder(const std::string& p) {
   return found;
 }
 
+// Pattern text around the placeholder as it appears in file names: "%%" is '%'.
+std::string literal_text(const std::string& text) {
+  std::string out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    out += text[i];
+    if (text[i] == '%' && i + 1 < text.size() && text[i + 1] == '%') ++i;
+  }
+  return out;
+}
+
 }  // namespace
 
 bool has_frame_placeholder(const std::string& pattern) { return find_placeholder(pattern).len != 0; }
 
-std::string format_frame_path(const std::string& pattern, long long frame) {
+std::optional<FramePattern> split_frame_pattern(const std::string& pattern) {
   const Placeholder ph = find_placeholder(pattern);
-  std::string out;
-  for (size_t i = 0; i < pattern.size(); ++i) {
-    if (i == ph.pos) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%0*lld", ph.width, frame);
-      out += buf;
-      i += ph.len - 1;
-    } else if (pattern[i] == '%' && i + 1 < pattern.size() && pattern[i + 1] == '%') {
-      out += '%';
-      ++i;
-    } else {
-      out += pattern[i];
-    }
-  }
-  return out;
+  if (ph.len == 0) return std::nullopt;
+  return FramePattern{literal_text(pattern.substr(0, ph.pos)), literal_text(pattern.substr(ph.pos + ph.len)), ph.width};
+}
+
+std::string format_frame_number(int width, long long frame) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%0*lld", width, frame);
+  return buf;
+}
+
+std::string format_frame_path(const std::string& pattern, long long frame) {
+  const auto parts = split_frame_pattern(pattern);
+  if (!parts) return literal_text(pattern);
+  return parts->prefix + format_frame_number(parts->width, frame) + parts->suffix;
 }
 
 LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<ResolvedChannel>& requested, long long number,

@@ -2,6 +2,7 @@
 // and loading one EXR frame into protocol planes through a channel plan.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,14 @@ bool has_frame_placeholder(const std::string& pattern);
 // Substitutes the frame number; "%%" is a literal '%'. Throws UsageError for
 // other '%' conversions or more than one placeholder.
 std::string format_frame_path(const std::string& pattern, long long frame);
+// A pattern split at its placeholder, as file names show it ("%%" made '%'):
+// frame n's path is prefix + format_frame_number(width, n) + suffix.
+struct FramePattern {
+  std::string prefix, suffix;
+  int width = 0;  // zero-padded to this many digits (0: no padding)
+};
+std::optional<FramePattern> split_frame_pattern(const std::string& pattern);  // nullopt: no placeholder
+std::string format_frame_number(int width, long long frame);
 
 struct LoadedPlane {
   protocol::ChannelId id;

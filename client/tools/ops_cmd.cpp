@@ -6,24 +6,40 @@
 #include "commands.hpp"
 #include "dn/client/client.hpp"
 #include "server_info.hpp"
+#include "stats_format.hpp"
 
 namespace dn::cli {
 
 std::string server_url(const std::string& option_value) {
-  if (!option_value.empty()) return option_value;
-  if (const char* env = std::getenv("DN_SERVER"); env && *env) return env;
-  throw UsageError("missing --server URL (or set DN_SERVER), e.g. --server unix:///tmp/dnserver.sock");
+  std::string url = option_value;
+  if (url.empty())
+    if (const char* env = std::getenv("DN_SERVER"); env && *env) url = env;
+  if (url.empty()) url = client::kDefaultServerUrl;
+  // A malformed address is a bad command line (exit 2), found before any work.
+  try {
+    client::parse_endpoint(url);
+  } catch (const client::Error& e) {
+    throw UsageError(std::string(option_value.empty() ? "$DN_SERVER: " : "--server: ") + e.what());
+  }
+  return url;
+}
+
+Args::Spec server_option() {
+  return {"server", "", true, false,
+          std::string("server address: tcp://HOST:PORT or unix:///path (default $DN_SERVER, else ") +
+              client::kDefaultServerUrl + ")",
+          "URL"};
 }
 
 int run_ping(const std::vector<std::string>& argv) {
-  Args args("ping", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+  Args args("ping", {server_option(),
                      {"count", "-c", true, false, "number of pings (default 3)", "N"},
                      {"token-file", "", true, false, "file holding the auth token", "FILE"},
                      {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
                      {"help", "-h", false, false, "this help", ""}});
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn ping --server URL [--count N]\n\noptions:\n%s", args.usage().c_str());
+    std::printf("usage: dn ping [--server URL] [--count N]\n\noptions:\n%s", args.usage().c_str());
     return 0;
   }
   const long long count = args.get_int("count", 3, 1, 1000000);
@@ -50,32 +66,35 @@ int run_ping(const std::vector<std::string>& argv) {
 }
 
 int run_stats(const std::vector<std::string>& argv) {
-  Args args("stats", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+  Args args("stats", {server_option(),
+                      {"raw", "", false, false, "exact values (%.17g), no units: for scripts", ""},
                       {"token-file", "", true, false, "file holding the auth token", "FILE"},
                       {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
                       {"help", "-h", false, false, "this help", ""}});
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn stats --server URL\n\noptions:\n%s", args.usage().c_str());
+    std::printf("usage: dn stats [--server URL] [--raw]\n\n"
+                "Prints the server's statistics, one per line: 3 significant digits with units\n"
+                "(ms, s, min, h; B, kB, MB, GB; B/px), counts exact with thousands separators.\n\n"
+                "options:\n%s",
+                args.usage().c_str());
     return 0;
   }
   client::Connection conn = connect_for(args, "dn-stats");
   const protocol::Stats s = conn.stats();
-  size_t width = 0;
-  for (const auto& v : s.values) width = std::max(width, v.name.size());
-  for (const auto& v : s.values) std::printf("%-*s %.17g\n", int(width), v.name.c_str(), v.value);
+  std::fputs((args.has("raw") ? stats_report_raw(s.values) : stats_report(s.values)).c_str(), stdout);
   return 0;
 }
 
 int run_pipelines(const std::vector<std::string>& argv) {
-  Args args("pipelines", {{"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+  Args args("pipelines", {server_option(),
                           {"pipeline", "-p", true, false, "show only this pipeline", "NAME"},
                           {"token-file", "", true, false, "file holding the auth token", "FILE"},
                           {"timeout", "", true, false, "seconds (default 10)", "SECONDS"},
                           {"help", "-h", false, false, "this help", ""}});
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn pipelines --server URL [--pipeline NAME]\n\n"
+    std::printf("usage: dn pipelines [--server URL] [--pipeline NAME]\n\n"
                 "Lists the server's pipelines: required and optional channels, and each parameter's\n"
                 "name, default, range, whether it is an integer, and what it does.\n\noptions:\n%s",
                 args.usage().c_str());

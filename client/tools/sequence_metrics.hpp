@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,17 +19,6 @@ namespace dn::cli {
 struct NoiseCorrected {
   double nc_mse = NAN, nc_relmse = NAN, ref_noise_mse = NAN;
 };
-
-// Fails before any frame is sent when a second reference is missing, naming the
-// first missing file. `path_of(n)` formats frame n's path.
-template <class PathOf>
-void check_reference2_files(const std::vector<long long>& frames, PathOf&& path_of) {
-  for (long long n : frames) {
-    const std::string path = path_of(n);
-    if (!std::filesystem::exists(path))
-      throw std::runtime_error("--reference2: " + path + " (frame " + std::to_string(n) + ") does not exist");
-  }
-}
 
 // Reads the second reference of a frame and compares `rgb` (the output,
 // interleaved RGB) with both references. Throws naming the file when its size

@@ -41,7 +41,7 @@ client::Connection connect_for(const Args& args, const char* name) {
   client::ConnectOptions o;
   o.client_name = name;
   if (auto tf = args.get("token-file")) o.token_file = *tf;
-  const double t = args.get_double("timeout", 10.0);
+  const double t = args.get_double("timeout", 10.0, kMinTimeoutSeconds, kMaxTimeoutSeconds);
   o.connect_timeout = o.io_timeout = std::chrono::milliseconds(static_cast<long long>(t * 1000.0));
   return client::Connection::connect(server_url(args.get_or("server", "")), o);
 }

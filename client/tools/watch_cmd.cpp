@@ -2,15 +2,13 @@
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 
 #include "args.hpp"
 #include "commands.hpp"
 #include "dn/client/client.hpp"
-#include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
-#include "dn/image/png.hpp"
 #include "frame_source.hpp"
+#include "output_image.hpp"
 #include "progress.hpp"
 
 namespace dn::cli {
@@ -18,22 +16,19 @@ namespace dn::cli {
 namespace {
 
 const std::vector<Args::Spec> kSpecs = {
-    {"server", "", true, false, "server address (default $DN_SERVER)", "URL"},
+    server_option(),
     {"session", "", true, false, "id of the session to watch (printed by dn denoise and dnrender --server)", "ID"},
     {"key", "", true, false, "the session's watch key (default $DN_WATCH_KEY; printed with the id)", "KEY"},
-    {"output", "-o", true, false, "output pattern; .png (tone-mapped) or .exr by extension", "PATTERN"},
+    {"output", "-o", true, false,
+     "output pattern; the format follows the extension: .exr (half), .png (tone-mapped) or .pfm", "PATTERN"},
     {"count", "", true, false, "stop after N frames (default: until the session ends)", "N"},
     {"token-file", "", true, false, "file holding the auth token", "FILE"},
     {"tonemap", "", true, false, "PNG tone map: aces | reinhard | clamp (default aces)", "OP"},
     {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
-    {"timeout", "", true, false, "seconds to wait for the next frame (default 600)", "SECONDS"},
+    {"timeout", "", true, false, "seconds to wait for the next frame (default 600); longer is an error", "SECONDS"},
     {"quiet", "-q", false, false, "no per-frame output", ""},
     {"help", "-h", false, false, "this help", ""},
 };
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 }  // namespace
 
@@ -41,7 +36,9 @@ int run_watch(const std::vector<std::string>& argv) {
   Args args("watch", kSpecs);
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn watch --server URL --session ID --key KEY --output 'w/frame_%%04d.png' [--count N]\n\n"
+    std::printf("usage: dn watch [--server URL] --session ID --key KEY --output 'w/frame_%%04d.png' [--count N]\n\n"
+                "Exits 0 when it has written --count frames or when the session ends (its owner\n"
+                "closed it or went away), 1 when the connection fails or the server refuses.\n\n"
                 "options:\n%s",
                 args.usage().c_str());
     return 0;
@@ -71,15 +68,14 @@ int run_watch(const std::vector<std::string>& argv) {
   const long long count = args.get_int("count", 0, 0, INT64_MAX);
   const bool quiet = args.has("quiet");
   const float exposure = float(args.get_double("exposure", 1.0));
-  const double timeout_s = args.get_double("timeout", 600.0);
+  const double timeout_s = args.get_double("timeout", 600.0, kMinTimeoutSeconds, kMaxTimeoutSeconds);
   image::Tonemap tonemap = image::Tonemap::Aces;
   try {
     tonemap = image::parse_tonemap(args.get_or("tonemap", "aces"));
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--tonemap: ") + e.what());
   }
-  const bool as_png = ends_with(output, ".png");
-  if (!as_png && !ends_with(output, ".exr")) throw UsageError("--output must end in .png or .exr");
+  const ImageFormat format = image_format_for(output, "--output");
   if (count != 1 && !has_frame_placeholder(output))
     throw UsageError("--output '" + output + "' has no frame-number placeholder (%04d or ####)");
 
@@ -101,28 +97,20 @@ int run_watch(const std::vector<std::string>& argv) {
     client::Result r;
     try {
       r = watcher.next();
-    } catch (const client::Error& e) {
-      // The session ending is the normal end of an unbounded watch.
-      if (count == 0 && e.kind() == client::ErrorKind::Server && e.code() == protocol::ErrorCode::UnknownSession) {
-        progress.finish();
-        if (!quiet) std::fprintf(stderr, "dn: %s\n", e.what());
-        break;
-      }
-      throw;
+    } catch (const client::Error&) {
+      // SESSION_CLOSED is the normal end of a watch; an ERROR or a lost connection is not.
+      const auto& closed = watcher.closed();
+      if (!closed) throw;
+      progress.finish();
+      if (!quiet)
+        std::fprintf(stderr, "dn: session %llu ended normally after %llu frames\n",
+                     (unsigned long long)closed->session_id, (unsigned long long)closed->frames_processed);
+      break;
     }
     if (!r.has_output()) continue;
     const std::vector<float> rgb = r.rgb();
     const std::string path = format_frame_path(output, (long long)r.frame_index);
-    if (auto parent = std::filesystem::path(path).parent_path(); !parent.empty()) {
-      std::error_code ec;
-      std::filesystem::create_directories(parent, ec);
-    }
-    if (as_png) {
-      const auto bytes = image::to_srgb8(rgb.data(), size_t(r.width) * r.height, tonemap, exposure);
-      image::write_png_rgb8(path, int(r.width), int(r.height), bytes.data());
-    } else {
-      image::write_exr_rgb(path, int(r.width), int(r.height), rgb.data(), image::ExrPixelType::Half);
-    }
+    write_image(path, format, int(r.width), int(r.height), rgb.data(), {image::ExrPixelType::Half, tonemap, exposure});
     ++written;
     char line[256];
     std::snprintf(line, sizeof line, "frame %04llu -> %s (skipped %llu so far)", (unsigned long long)r.frame_index,
@@ -130,8 +118,10 @@ int run_watch(const std::vector<std::string>& argv) {
     progress.frame_done(line, "frame " + std::to_string(r.frame_index));
   }
   progress.finish();
-  if (!quiet) std::fprintf(stderr, "dn: wrote %lld frames\n", written);
-  return 0;
+  if (!quiet)
+    std::fprintf(stderr, "dn: wrote %lld frame%s%s\n", written, written == 1 ? "" : "s",
+                 count > 0 && written < count ? (" of the " + std::to_string(count) + " asked for").c_str() : "");
+  return kExitOk;
 }
 
 }  // namespace dn::cli

@@ -1,14 +1,21 @@
 // `dn denoise` end to end against the fake server: EXR sequence in, EXR/PNG
 // out, metrics against references, errors naming the frame.
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "args.hpp"
+#include "dn/client/endpoint.hpp"
 #include "commands.hpp"
 #include "dn/image/exr_io.hpp"
+#include "dn/image/pfm.hpp"
 #include "dn/protocol/codec.hpp"
 #include "fake_server.hpp"
 #include "frame_source.hpp"
@@ -94,6 +101,43 @@ void echo_server(Peer& peer, EchoLog& log, std::optional<uint64_t> fail_on = std
       peer.send(SessionClosed{c->session_id, log.frames.size()}, id);
     }
   }
+}
+
+// Connects to a FakeServer and hangs up, so that a server whose client never
+// came (dn failed before connecting) stops waiting for one.
+void poke(const std::string& url) {
+  const client::Endpoint e = client::parse_endpoint(url);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, e.path.c_str(), sizeof addr.sun_path - 1);
+  (void)::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr);
+  ::close(fd);
+}
+
+std::string file_head(const fs::path& p, size_t n) {
+  std::ifstream in(p, std::ios::binary);
+  std::string s(n, '\0');
+  in.read(s.data(), std::streamsize(n));
+  s.resize(size_t(in.gcount()));
+  return s;
+}
+
+// run_denoise with stdout (or stderr) captured; an exception is a test failure
+// reported after the capture ends, so that its message is seen.
+int denoise_capturing(const std::vector<std::string>& args, bool capture_stderr, std::string& captured) {
+  int rc = -1;
+  std::string error;
+  if (capture_stderr) testing::internal::CaptureStderr();
+  else testing::internal::CaptureStdout();
+  try {
+    rc = cli::run_denoise(args);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  captured = capture_stderr ? testing::internal::GetCapturedStderr() : testing::internal::GetCapturedStdout();
+  if (!error.empty()) ADD_FAILURE() << "dn denoise threw: " << error;
+  return rc;
 }
 
 float radiance_value(int frame, size_t i) { return 0.25f * float(frame) + 0.001f * float(i % 97); }
@@ -251,6 +295,137 @@ TEST_F(DnCli, UsageErrors) {
   EXPECT_THROW(cli::run_denoise({"--server", "unix:///x", "--pipeline", "svgf", "--input", "a.exr", "--param",
                                  "alpha"}),
                cli::UsageError);
+}
+
+// Without --start/--end: the run of existing files from the lowest number (1..4 here).
+TEST_F(DnCli, DetectsTheFrameRangeWhenStartAndEndAreOmitted) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  std::vector<std::string> args = {"--server", server.url(), "--pipeline", "svgf", "--input",
+                                   (dir / "in/frame_%04d.exr").string()};
+  std::string err;
+  EXPECT_EQ(denoise_capturing(args, true, err), 0);
+  server.join();
+  EXPECT_EQ(log.frames, (std::vector<uint64_t>{1, 2, 3, 4}));
+  EXPECT_NE(err.find("dn: frames 1..4 (4 files) found from"), std::string::npos) << err;
+}
+
+// A missing input in the middle of the range: named, and nothing reaches the server.
+TEST_F(DnCli, MissingInputFileIsNamedBeforeAnythingIsSent) {
+  fs::remove(dir / "in/frame_0003.exr");
+  std::atomic<bool> received{false};
+  FakeServer server([&](Peer& peer) { received = peer.recv(10000).has_value(); });
+  try {
+    cli::run_denoise(base_args(server.url()));
+    FAIL() << "frame 3 is missing";
+  } catch (const std::exception& e) {
+    EXPECT_EQ(std::string(e.what()), "--input: " + (dir / "in/frame_0003.exr").string() + " (frame 3) does not exist");
+  }
+  poke(server.url());
+  server.join();
+  EXPECT_FALSE(received) << "dn connected although an input was missing";
+}
+
+// -o: .pfm and .png (any case) by extension; an unknown extension is refused before connecting.
+TEST_F(DnCli, OutputFormatFollowsTheExtension) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  args.insert(args.end(), {"-o", (dir / "out/den_%04d.PFM").string()});
+  EXPECT_EQ(cli::run_denoise(args), 0);
+  server.join();
+  for (int frame = 1; frame <= 4; ++frame) {
+    int w = 0, h = 0;
+    const auto rgb = image::read_pfm_rgb(cli::format_frame_path((dir / "out/den_%04d.PFM").string(), frame), w, h);
+    ASSERT_EQ(w, W);
+    EXPECT_FLOAT_EQ(rgb[7], 2.0f * radiance_value(frame, 7));
+  }
+  EchoLog log_png;
+  FakeServer png_server([&](Peer& peer) { echo_server(peer, log_png); });
+  args = base_args(png_server.url());
+  args.insert(args.end(), {"--output", (dir / "png/den_####.png").string()});
+  EXPECT_EQ(cli::run_denoise(args), 0);
+  png_server.join();
+  EXPECT_EQ(file_head(dir / "png/den_0004.png", 4), "\x89PNG");
+
+  args = base_args("unix:///nonexistent/dn.sock");
+  args.insert(args.end(), {"--output", (dir / "out/den_%04d.jpg").string()});
+  try {
+    cli::run_denoise(args);
+    FAIL() << ".jpg is not an output format";
+  } catch (const cli::UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown extension '.jpg'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(".exr, .png or .pfm"), std::string::npos) << e.what();
+  }
+}
+
+// --fail: 0 within the threshold, kExitThresholdExceeded (3) above it, with the verdict on stdout.
+TEST_F(DnCli, FailThresholdDecidesTheExitStatus) {
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  args.insert(args.end(), {"-r", (dir / "ref/ref_%04d.exr").string(), "--fail", "0.001"});
+  std::string out;
+  EXPECT_EQ(denoise_capturing(args, false, out), cli::kExitOk);
+  server.join();
+  EXPECT_NE(out.find("PASS: 0 of 4 frames"), std::string::npos) << out;
+
+  // A reference 1.5 times the output: relMSE about 0.2 in every frame.
+  fs::create_directories(dir / "far");
+  for (int frame = 1; frame <= 4; ++frame) {
+    int w = 0, h = 0;
+    auto ref = image::read_exr_rgb(cli::format_frame_path((dir / "ref/ref_%04d.exr").string(), frame), w, h);
+    for (auto& v : ref) v *= 1.5f;
+    image::write_exr_rgb(cli::format_frame_path((dir / "far/ref_%04d.exr").string(), frame), w, h, ref.data(),
+                         image::ExrPixelType::Float);
+  }
+  EchoLog log_far;
+  FakeServer far_server([&](Peer& peer) { echo_server(peer, log_far); });
+  args = base_args(far_server.url());
+  args.insert(args.end(), {"-r", (dir / "far/ref_%04d.exr").string(), "--fail", "0.05"});
+  EXPECT_EQ(denoise_capturing(args, false, out), cli::kExitThresholdExceeded);
+  far_server.join();
+  EXPECT_NE(out.find("FAILURE: 4 of 4 frames (100 %) have relmse above 0.05"), std::string::npos) << out;
+  EXPECT_TRUE(log_far.closed) << "the whole run is denoised before the verdict";
+}
+
+// Each of these is a bad command line (exit status 2), found before any file is read or server reached.
+TEST_F(DnCli, BadCommandLinesAreUsageErrors) {
+  const std::vector<std::string> base = {"--server", "unix:///nonexistent/dn.sock", "--pipeline", "svgf", "--input",
+                                         (dir / "in/frame_%04d.exr").string(), "--start", "1", "--end", "4"};
+  const std::vector<std::vector<std::string>> extras = {
+      {"--timeout", "-1"},          {"--timeout", "soon"},        {"--exposure", "nan"},
+      {"--fail", "0.1"},            {"--fail-metric", "rmse"},     {"-r", "r_%04d.exr", "--fail", "x"},
+      {"-r", "r_%04d.exr", "--fail", "1", "--fail-metric", "ssim"},
+      {"-r", "r_%04d.exr", "--fail", "1", "--fail-percent", "101"},
+      {"--output", "o_%04d.png", "--exr-float"},
+      {"--png", "o_%04d.exr"},      {"--preset", "blender"},      {"--step", "0"},
+      {"--in-flight"},              {"--quiet=yes"},              {"--output", "o_%04d"},
+  };
+  for (const auto& extra : extras) {
+    auto args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::string joined;
+    for (const auto& a : extra) joined += a + " ";
+    EXPECT_THROW(cli::run_denoise(args), cli::UsageError) << joined;
+  }
+  EXPECT_THROW(cli::run_denoise({"--server", "http://host:80", "--pipeline", "svgf", "--input", "a.exr"}),
+               cli::UsageError);
+}
+
+// Neither --server nor $DN_SERVER: dnserver's default address.
+TEST(DnCliServer, DefaultsToTheServersDefaultAddress) {
+  const char* saved = std::getenv("DN_SERVER");
+  const std::string saved_value = saved ? saved : "";
+  ::unsetenv("DN_SERVER");
+  EXPECT_EQ(cli::server_url(""), "tcp://127.0.0.1:7878");
+  EXPECT_EQ(cli::server_url(""), client::kDefaultServerUrl);
+  ::setenv("DN_SERVER", "unix:///tmp/x.sock", 1);
+  EXPECT_EQ(cli::server_url(""), "unix:///tmp/x.sock");
+  EXPECT_EQ(cli::server_url("tcp://[::1]:9"), "tcp://[::1]:9");
+  EXPECT_THROW(cli::server_url("tcp://::1:9"), cli::UsageError);
+  if (saved) ::setenv("DN_SERVER", saved_value.c_str(), 1);
+  else ::unsetenv("DN_SERVER");
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "dn/image/exr_io.hpp"
+#include "dn/image/pfm.hpp"
 #include "raw_client.hpp"
 #include "server_process.hpp"
 
@@ -228,6 +229,129 @@ TEST_F(Cli, WatchWritesTheSessionsLatestFrames) {
   watcher.join();
   ASSERT_TRUE(fs::exists(out)) << log;
   EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 3) << log;
+}
+
+// Every command: a bad command line is exit status 2, found before connecting
+// (the address given is one where nothing listens, so a check that came too late would say 1).
+TEST_F(Cli, BadCommandLinesExitWithTwo) {
+  const std::string dn = std::string(DN_DN_PATH);
+  const std::string nowhere = " --server tcp://127.0.0.1:1";
+  const std::string key = " --key 00112233445566778899aabbccddeeff";
+  const std::string denoise =
+      dn + " denoise" + nowhere + " --pipeline passthrough --input '" + dir_.string() + "/in/frame_%04d.exr'";
+  const std::vector<std::string> commands = {
+      dn,
+      dn + " frobnicate",
+      dn + " ping --bogus",
+      dn + " ping" + nowhere + " --count",
+      dn + " ping" + nowhere + " --count x",
+      dn + " ping" + nowhere + " --timeout -1",
+      dn + " ping --server http://127.0.0.1:1",
+      dn + " stats" + nowhere + " --raw=1",
+      dn + " stats" + nowhere + " positional",
+      dn + " pipelines" + nowhere + " --timeout nan",
+      dn + " watch" + nowhere + " --session 0" + key + " --output 'w_%04d.png'",
+      dn + " watch" + nowhere + " --session 5" + key + " --output 'w_%04d.jpg'",
+      dn + " watch" + nowhere + " --session 5" + key + " --output 'w_%04d.png' --count -1",
+      denoise + " --output 'o_%04d.tif'",
+      denoise + " --output 'o_%04d'",
+      denoise + " --fail 0.1",
+      denoise + " -r '" + dir_.string() + "/in/ref_%04d.exr' --fail 0.1 --fail-metric ssim",
+      denoise + " --start 5 --end 1",
+      denoise + " --exr-float --output 'o_%04d.png'",
+      denoise + " --timeout abc",
+      denoise + " --preset blender",
+  };
+  for (const std::string& command : commands) {
+    std::string log;
+    EXPECT_EQ(shell(command, &log), 2) << command << "\n" << log;
+  }
+}
+
+// Neither --server nor $DN_SERVER: dnserver's default address, whether or not a server is there.
+TEST_F(Cli, DefaultServerAddressWhenNoneIsGiven) {
+  std::string log;
+  const int rc = shell("env -u DN_SERVER " + std::string(DN_DN_PATH) + " ping --count 1 --timeout 10", &log);
+  EXPECT_NE(rc, 2) << log;
+  // Nothing there: the transport error names the address; a server there: ping names it, or it
+  // answered (a token-protected one refuses with a server error that names no address).
+  EXPECT_TRUE(log.find("tcp://127.0.0.1:7878") != std::string::npos || log.find("server error") != std::string::npos)
+      << log;
+  ASSERT_EQ(shell(std::string(DN_DN_PATH) + " stats --help", &log), 0);
+  EXPECT_NE(log.find("else tcp://127.0.0.1:7878"), std::string::npos) << log;
+}
+
+// No --start/--end: the four frames on disk; --fail decides the exit status (0 within, 3 above).
+TEST_F(Cli, DenoiseDetectsTheRangeAndFailsAboveTheThreshold) {
+  const std::string small = dir_.string() + "/small";
+  ASSERT_EQ(shell(std::string(DN_DNSYNTH_PATH) + " --out " + small + " --frames 4 --width 64 --height 36"), 0);
+  ServerProcess server;
+  const std::string base = std::string(DN_DN_PATH) + " denoise --server " + server.tcp_url() +
+                           " --pipeline passthrough --preset dnrender --input '" + small + "/frame_%04d.exr' -r '" +
+                           small + "/ref_%04d.exr' --output '" + small + "/out/f_%04d.pfm'";
+  std::string log;
+  ASSERT_EQ(shell(base + " --fail 1e30", &log), 0) << log;
+  EXPECT_NE(log.find("dn: frames 0..3 (4 files) found from"), std::string::npos) << log;
+  EXPECT_NE(log.find("PASS: 0 of 4 frames"), std::string::npos) << log;
+  for (int i = 0; i < 4; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/out/f_%04d.pfm", i);
+    int w = 0, h = 0;
+    EXPECT_EQ(image::read_pfm_rgb(small + name, w, h).size(), size_t(64 * 36 * 3)) << name;
+  }
+  // The passthrough output is the noisy input: every frame's RMSE is far above 1e-6.
+  EXPECT_EQ(shell(base + " --fail 1e-6 --fail-metric rmse", &log), 3) << log;
+  EXPECT_NE(log.find("FAILURE: 4 of 4 frames (100 %) have rmse above 1e-06"), std::string::npos) << log;
+}
+
+// The owner closing its session ends a watch normally (exit 0), even before --count frames.
+TEST_F(Cli, WatchReportsTheSessionsEndAsNormal) {
+  ServerProcess server;
+  RawClient owner(server.tcp_url());
+  owner.hello();
+  auto request = passthrough_session(48, 32);
+  const protocol::Session opened = owner.open_session(request);
+  const uint64_t sid = opened.session_id;
+
+  const std::string out = dir_.string() + "/watch_end";
+  std::string log;
+  int rc = -1;
+  std::thread watcher([&] {
+    rc = shell(std::string(DN_DN_PATH) + " watch --server " + server.tcp_url() + " --session " + std::to_string(sid) +
+                   " --key " + opened.watch_key.value_or("") + " --output '" + out + "/w_%04d.png' --count 1000" +
+                   " --timeout 60",
+               &log);
+  });
+  // Frames until the watcher has written one (so it is attached), then close the session.
+  uint64_t index = 0;
+  for (int spins = 0; spins < 600; ++spins) {
+    auto f = make_frame(sid, index, 48, 32, request.channels, 0.5f);
+    owner.send(f.frame, ++index);
+    ASSERT_TRUE(owner.receive());
+    if (fs::exists(out) && !fs::is_empty(out)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  owner.send(protocol::CloseSession{sid}, ++index);
+  watcher.join();
+  EXPECT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("dn: session " + std::to_string(sid) + " ended normally after"), std::string::npos) << log;
+  EXPECT_EQ(log.find("error"), std::string::npos) << log;
+}
+
+// dn stats: units and rounded numbers in one column; --raw the exact values.
+TEST_F(Cli, StatsPrintsReadableNumbers) {
+  ServerProcess server;
+  std::string log;
+  ASSERT_EQ(shell(std::string(DN_DN_PATH) + " stats --server " + server.tcp_url(), &log), 0) << log;
+  EXPECT_TRUE(std::regex_search(log, std::regex("(^|\n)uptime_s +[0-9.,]+ (ms|s|min|h)\n"))) << log;
+  EXPECT_TRUE(std::regex_search(log, std::regex("(^|\n)device_bytes +[0-9.,]+ (B|kB|MB|GB)\n"))) << log;
+  EXPECT_TRUE(std::regex_search(log, std::regex("(^|\n)connections_accepted +[0-9,]+\n"))) << log;
+  // What bench/lib/bench_server.sh waits for.
+  EXPECT_TRUE(std::regex_search(log, std::regex("(^|\n)warm_up_done +[01]\n"))) << log;
+  std::regex long_number("[0-9]\\.[0-9]{4,}");
+  EXPECT_FALSE(std::regex_search(log, long_number)) << "more than 3 significant digits:\n" << log;
+  ASSERT_EQ(shell(std::string(DN_DN_PATH) + " stats --raw --server " + server.tcp_url(), &log), 0) << log;
+  EXPECT_TRUE(std::regex_search(log, std::regex("(^|\n)uptime_s +[0-9.e+-]+\n"))) << log;
 }
 
 }  // namespace

@@ -190,7 +190,7 @@ TEST(ParameterMetadata, DnDenoiseMisspeltParameterFailsBeforeTheSession) {
                            "/in/frame_%04d.exr' --start 0 --end 1",
                        out);
   fs::remove_all(dir);
-  EXPECT_EQ(rc, 1) << out;
+  EXPECT_EQ(rc, 2) << "a misspelt --param is a bad command line\n" << out;
   EXPECT_NE(out.find("client error InvalidParameter at OPEN_SESSION.parameters[0].name: pipeline 'accumulate' has "
                      "no parameter 'alpha'; valid names: alpha_min, max_history, depth_tolerance, normal_threshold"),
             std::string::npos)

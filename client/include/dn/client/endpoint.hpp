@@ -8,6 +8,10 @@
 
 namespace dn::client {
 
+// Where dnserver listens when started without --listen, and so where the dn
+// tool connects when given neither --server nor $DN_SERVER.
+inline constexpr const char* kDefaultServerUrl = "tcp://127.0.0.1:7878";
+
 struct Endpoint {
   enum class Kind { Tcp, Unix };
   Kind kind = Kind::Tcp;

@@ -34,6 +34,11 @@ class Watcher {
   // Frames the server sent that next() skipped because a newer one had arrived.
   uint64_t dropped() const { return dropped_; }
 
+  // The SESSION_CLOSED that ended the stream (its owner closed the session or
+  // went away), once next() has thrown for it; nullopt while the stream runs
+  // and when it ended otherwise (an ERROR, the connection failing).
+  const std::optional<protocol::SessionClosed>& closed() const { return closed_; }
+
  private:
   friend class Connection;
   Watcher(std::shared_ptr<detail::ConnectionState> state, protocol::Session info, uint64_t attach_request_id);
@@ -43,6 +48,7 @@ class Watcher {
   protocol::Session info_;
   uint64_t attach_request_id_ = 0;
   uint64_t dropped_ = 0;
+  std::optional<protocol::SessionClosed> closed_;
 };
 
 }  // namespace dn::client
