@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "dn/protocol/messages.hpp"
+
 namespace dn::server {
 namespace {
 
@@ -52,10 +54,10 @@ struct Flag {
 };
 
 const std::vector<Flag>& flags() {
+  static const std::string listen_help = std::string("listen on tcp://HOST:PORT or unix:///PATH; repeatable (default ") +
+                                         protocol::kDefaultServerUrl + "). A non-loopback TCP address requires a token.";
   static const std::vector<Flag> table = {
-      {"--listen", "URL",
-       "listen on tcp://HOST:PORT or unix:///PATH; repeatable (default tcp://127.0.0.1:7878). "
-       "A non-loopback TCP address requires a token.",
+      {"--listen", "URL", listen_help.c_str(),
        [](ServerOptions& o, std::string_view v) { o.listen.emplace_back(v); return true; }},
       {"--token-file", "PATH", "read the shared authentication token from PATH (else $DN_TOKEN)",
        [](ServerOptions& o, std::string_view v) { o.token_file = v; return true; }},
@@ -218,7 +220,7 @@ ParseOutcome parse_options(int argc, char** argv, ServerOptions& out) {
       return result;
     }
   }
-  if (out.listen.empty()) out.listen.push_back("tcp://127.0.0.1:7878");
+  if (out.listen.empty()) out.listen.push_back(protocol::kDefaultServerUrl);
 
   if (!out.token_file.empty()) {
     std::ifstream in(out.token_file);

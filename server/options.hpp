@@ -9,7 +9,7 @@
 namespace dn::server {
 
 struct ServerOptions {
-  std::vector<std::string> listen;       // tcp://HOST:PORT or unix:///PATH; default tcp://127.0.0.1:7878
+  std::vector<std::string> listen;       // tcp://HOST:PORT or unix:///PATH; default protocol::kDefaultServerUrl
   std::string token_file;                // shared secret; also DN_TOKEN in the environment
   std::string token;                     // resolved token (from file or environment)
   std::vector<uint32_t> allowed_uids;    // Unix-socket peers besides our own uid and root

@@ -6,11 +6,13 @@
 #include <string>
 #include <string_view>
 
+#include "dn/protocol/messages.hpp"
+
 namespace dn::client {
 
 // Where dnserver listens when started without --listen, and so where the dn
 // tool connects when given neither --server nor $DN_SERVER.
-inline constexpr const char* kDefaultServerUrl = "tcp://127.0.0.1:7878";
+inline constexpr const char* kDefaultServerUrl = protocol::kDefaultServerUrl;
 
 struct Endpoint {
   enum class Kind { Tcp, Unix };

@@ -22,6 +22,10 @@ inline constexpr uint8_t kVersionMajor = 1;
 inline constexpr uint8_t kVersionMinor = 6;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH)
 inline constexpr size_t kHeaderSize = 24;
 
+// Where dnserver listens when started without --listen, and so where clients
+// (the dn tool) connect when given no address.
+inline constexpr const char* kDefaultServerUrl = "tcp://127.0.0.1:7878";
+
 enum class MessageType : uint16_t {
   Hello = 1,
   Welcome = 2,
