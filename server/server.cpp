@@ -342,6 +342,10 @@ void Server::update_interest(net::Connection& c) {
 void Server::send(net::Connection& c, const protocol::Message& m, uint64_t request_id) {
   auto bytes = std::make_shared<std::vector<uint8_t>>();
   protocol::encode(m, request_id, 0, *bytes);
+  send_encoded(c, std::move(bytes));
+}
+
+void Server::send_encoded(net::Connection& c, Bytes bytes) {
   c.queue(std::move(bytes));
   if (!c.flush()) c.close_after_flush = true;  // nothing more can be written; close on the next turn
 }
@@ -422,8 +426,7 @@ void Server::on_hello(net::Connection& c, const protocol::Header& h, const proto
                     protocol::encode(make_welcome(options_, device_name_, c.negotiated_minor)));
   auto reply = std::make_shared<std::vector<uint8_t>>(*welcome);
   protocol::set_request_id(*reply, h.request_id);
-  c.queue(std::move(reply));
-  if (!c.flush()) c.close_after_flush = true;
+  send_encoded(c, std::move(reply));
 }
 
 void Server::close_connection(uint64_t id, const char* reason) {

@@ -74,6 +74,7 @@ class Server {
   void on_stats(net::Connection& c, const protocol::Header& h);
 
   void send(net::Connection& c, const protocol::Message& m, uint64_t request_id);
+  void send_encoded(net::Connection& c, Bytes bytes);
   void send_error(net::Connection& c, uint64_t request_id, protocol::ErrorCode code, std::string field,
                   std::string message, bool fatal);
   void update_interest(net::Connection& c);

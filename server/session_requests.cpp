@@ -212,8 +212,7 @@ void Server::on_frame_done(FrameDone&& done) {
     counters_.add_frame_timings(done.timings);
   }
   if (net::Connection* owner = find_connection(s->owner())) {
-    owner->queue(done.owner_message);
-    if (!owner->flush()) owner->close_after_flush = true;
+    send_encoded(*owner, done.owner_message);
     update_interest(*owner);
   }
   if (done.watcher_message) {
