@@ -9,6 +9,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools spirv-tools spirv-cross
   libopenexr-dev libglm-dev libembree-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
+  libcivetweb-dev chromium-headless-shell
 )
 missing=()
 for p in "${packages[@]}"; do

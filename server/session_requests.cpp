@@ -11,6 +11,16 @@ namespace dn::server {
 
 using protocol::ErrorCode;
 
+namespace {
+
+// Whether this watcher's RESULT copies carry the noisy radiance: the owner
+// shares it and the watcher's protocol knows the second plane (1.7).
+bool gets_input(const Session& s, const net::Connection& watcher) {
+  return s.share_input && watcher.negotiated_minor >= protocol::kShareInputMinor;
+}
+
+}  // namespace
+
 void Server::on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m) {
   if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
   if (m.width > options_.max_width || m.height > options_.max_height)
@@ -33,6 +43,19 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                             ") is defined from protocol 1." + std::to_string(int(info->since_minor)) +
                             "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)),
                         false);
+
+  const bool share_input = (h.flags & protocol::kFlagShareInput) != 0;
+  if (share_input && c.negotiated_minor < protocol::kShareInputMinor)
+    return send_error(c, h.request_id, ErrorCode::ReservedFlags, "header.flags",
+                      "flag SHARE_INPUT is defined from protocol 1." + std::to_string(int(protocol::kShareInputMinor)) +
+                          "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)),
+                      false);
+  if (share_input && std::none_of(m.channels.begin(), m.channels.end(), [](const protocol::ChannelDecl& d) {
+        return d.id == protocol::ChannelId::Radiance;
+      }))
+    return send_error(c, h.request_id, ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                      "flag SHARE_INPUT shares the 'radiance' plane with watchers, and this session declares none",
+                      false);
 
   // Validation builds the pass graph (pure data, no device work); the builder reuses it.
   auto prepared = pipelines::prepare({m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters});
@@ -58,7 +81,7 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
   // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
   ++c.sessions_being_built;
   ++sessions_being_built_;
-  builder_->submit(BuildRequest{c.id(), h.request_id, ready});
+  builder_->submit(BuildRequest{c.id(), h.request_id, ready, share_input});
 }
 
 void Server::on_pipeline_built(BuiltPipeline&& built) {
@@ -92,6 +115,7 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
                false);
     return update_interest(*c);
   }
+  session->share_input = built.request.share_input;
   const uint64_t id = session->id();
   c->owned_sessions.push_back(id);
   refresh_message_limit(*c);  // before the next header is read: this session's frames may follow at once
@@ -129,7 +153,13 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
   FrameJob job;
   job.request_id = h.request_id;
   job.owner_wants_output = (h.flags & protocol::kFlagNoOutput) == 0;
-  job.watchers_want_output = !s->watchers.empty();
+  for (uint64_t w : s->watchers)
+    if (const net::Connection* wc = find_connection(w)) {
+      if (gets_input(*s, *wc))
+        job.watchers_want_input = true;
+      else
+        job.watchers_want_output = true;
+    }
   job.frame = std::move(m);
   job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
   scheduler_->submit(s, std::move(job));
@@ -215,14 +245,15 @@ void Server::on_frame_done(FrameDone&& done) {
     send_encoded(*owner, done.owner_message);
     update_interest(*owner);
   }
-  if (done.watcher_message) {
-    for (uint64_t w : s->watchers) {
-      if (net::Connection* wc = find_connection(w)) {
-        wc->queue(done.watcher_message, s->id());
-        if (!wc->flush()) wc->close_after_flush = true;
-        update_interest(*wc);
-      }
-    }
+  for (uint64_t w : s->watchers) {
+    net::Connection* wc = find_connection(w);
+    if (!wc) continue;
+    // A watcher that attached after the frame was submitted has no copy encoded for it: it gets the next frame.
+    const auto& message = gets_input(*s, *wc) ? done.watcher_input_message : done.watcher_message;
+    if (!message) continue;
+    wc->queue(message, s->id());
+    if (!wc->flush()) wc->close_after_flush = true;
+    update_interest(*wc);
   }
   if (s->closing && s->in_flight == 0) finish_session(s, true);
 }

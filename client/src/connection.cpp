@@ -111,8 +111,13 @@ Session Connection::open_session(const SessionDesc& desc) {
   open.output_format = desc.output_format;
   open.parameters = desc.parameters;
   open.channels = desc.channels;
+  if (desc.share_input && state_->negotiated_minor() < protocol::kShareInputMinor)
+    throw Error::usage(protocol::ErrorCode::ReservedFlags, "header.flags",
+                       "share_input needs protocol 1." + std::to_string(int(protocol::kShareInputMinor)) +
+                           "; the server at " + state_->endpoint() + " speaks 1." +
+                           std::to_string(int(state_->negotiated_minor())));
   const uint64_t id = state_->next_request_id();
-  state_->send(open, id, 0, true);
+  state_->send(open, id, desc.share_input ? protocol::kFlagShareInput : 0, true);
   detail::Incoming in = state_->wait_reply(id);
   auto* s = std::get_if<protocol::Session>(&in.message);
   if (!s) unexpected(*state_, in, "SESSION");

@@ -59,27 +59,47 @@ std::optional<double> Result::timing_ms(std::string_view name) const {
   return std::nullopt;
 }
 
+namespace {
+
+// An RGB plane of `pixels` pixels in `format` as floats.
+std::vector<float> plane_to_float(std::span<const uint8_t> bytes, Format format, size_t pixels) {
+  const size_t n = pixels * 3;
+  std::vector<float> v(n);
+  if (format == Format::F32) {
+    std::memcpy(v.data(), bytes.data(), n * 4);
+  } else {
+    for (size_t i = 0; i < n; ++i) {
+      uint16_t h;
+      std::memcpy(&h, bytes.data() + 2 * i, 2);
+      v[i] = protocol::half_to_float(h);
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
 void Result::copy_rgb(std::span<float> dst) const {
   const size_t n = size_t(width) * size_t(height) * 3;
   if (output.empty()) throw Error::usage("result of frame " + std::to_string(frame_index) + " carries no output");
   if (dst.size() != n)
     throw Error::usage("copy_rgb: destination holds " + std::to_string(dst.size()) + " floats, result has " +
                        std::to_string(n));
-  if (format == Format::F32) {
-    std::memcpy(dst.data(), output.data(), n * 4);
-  } else {
-    for (size_t i = 0; i < n; ++i) {
-      uint16_t h;
-      std::memcpy(&h, output.data() + 2 * i, 2);
-      dst[i] = protocol::half_to_float(h);
-    }
-  }
+  const std::vector<float> v = plane_to_float(output, format, n / 3);
+  std::memcpy(dst.data(), v.data(), n * 4);
 }
 
 std::vector<float> Result::rgb() const {
   std::vector<float> v(size_t(width) * size_t(height) * 3);
   copy_rgb(v);
   return v;
+}
+
+std::vector<float> Result::input_rgb() const {
+  if (input.empty())
+    throw Error::usage("result of frame " + std::to_string(frame_index) +
+                       " carries no input (the owner did not share it, or this is not a watcher's copy)");
+  return plane_to_float(input, input_format, size_t(width) * size_t(height));
 }
 
 // ---- Session --------------------------------------------------------------

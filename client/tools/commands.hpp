@@ -11,6 +11,7 @@ namespace dn::cli {
 
 int run_denoise(const std::vector<std::string>& args);
 int run_watch(const std::vector<std::string>& args);
+int run_preview(const std::vector<std::string>& args);
 int run_stats(const std::vector<std::string>& args);
 int run_ping(const std::vector<std::string>& args);
 int run_pipelines(const std::vector<std::string>& args);

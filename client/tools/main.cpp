@@ -18,6 +18,7 @@ std::string help() {
              "commands:\n"
              "  denoise   denoise an EXR sequence through a server session\n"
              "  watch     attach to a running session and write its newest frames\n"
+             "  preview   attach to a running session and show it live in a browser\n"
              "  ping      handshake, server limits and pipelines, round-trip time\n"
              "  pipelines the server's pipelines: channels and parameter tables\n"
              "  stats     print the server's statistics\n"
@@ -54,10 +55,11 @@ int main(int argc, char** argv) {
   try {
     if (cmd == "denoise") return dn::cli::run_denoise(args);
     if (cmd == "watch") return dn::cli::run_watch(args);
+    if (cmd == "preview") return dn::cli::run_preview(args);
     if (cmd == "ping") return dn::cli::run_ping(args);
     if (cmd == "pipelines") return dn::cli::run_pipelines(args);
     if (cmd == "stats") return dn::cli::run_stats(args);
-    std::fprintf(stderr, "dn: unknown command '%s' (expected denoise, watch, ping, pipelines or stats)\n", cmd.c_str());
+    std::fprintf(stderr, "dn: unknown command '%s' (expected denoise, watch, preview, ping, pipelines or stats)\n", cmd.c_str());
     return dn::cli::kExitUsage;
   } catch (const dn::cli::UsageError& e) {
     std::fprintf(stderr, "dn %s: %s\n", cmd.c_str(), one_line(e.what()).c_str());

@@ -1,7 +1,5 @@
 // dn watch: attach to a running session read-only and write its newest frames.
-#include <charconv>
 #include <cstdio>
-#include <cstdlib>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -10,6 +8,7 @@
 #include "frame_source.hpp"
 #include "output_image.hpp"
 #include "progress.hpp"
+#include "watch_target.hpp"
 
 namespace dn::cli {
 
@@ -17,8 +16,8 @@ namespace {
 
 const std::vector<Args::Spec> kSpecs = {
     server_option(),
-    {"session", "", true, false, "id of the session to watch (printed by dn denoise and dnrender --server)", "ID"},
-    {"key", "", true, false, "the session's watch key (default $DN_WATCH_KEY; printed with the id)", "KEY"},
+    session_option(),
+    watch_key_option(),
     {"output", "-o", true, false,
      "output pattern; the format follows the extension: .exr (half), .png (tone-mapped) or .pfm", "PATTERN"},
     {"count", "", true, false, "stop after N frames (default: until the session ends)", "N"},
@@ -44,26 +43,7 @@ int run_watch(const std::vector<std::string>& argv) {
     return 0;
   }
   const std::string url = server_url(args.get_or("server", ""));
-  // Session ids are random 64-bit numbers: parse the full unsigned range.
-  const auto session_text = args.get("session");
-  if (!session_text) throw UsageError("missing required option --session");
-  uint64_t session_id = 0;
-  {
-    const char* b = session_text->data();
-    const char* e = b + session_text->size();
-    auto [ptr, ec] = std::from_chars(b, e, session_id);
-    if (ec != std::errc() || ptr != e || session_id == 0)
-      throw UsageError("--session: expected a session id (1 to 18446744073709551615), got '" + *session_text + "'");
-  }
-  // The key is the capability to watch (protocol 1.6); from the environment so
-  // that it need not appear in a process listing.
-  std::string key = args.get_or("key", "");
-  if (key.empty())
-    if (const char* env = std::getenv("DN_WATCH_KEY"); env) key = env;
-  if (key.empty()) throw UsageError("missing --key KEY (or set DN_WATCH_KEY): the session's watch key, printed with its id");
-  if (!protocol::is_well_formed_watch_key(key))
-    throw UsageError("--key: expected the session's watch key, " + std::to_string(protocol::kWatchKeyLength) +
-                     " lowercase hex digits, got '" + key + "' (" + std::to_string(key.size()) + " characters)");
+  const WatchTarget target = watch_target(args);
   const std::string output = args.require("output");
   const long long count = args.get_int("count", 0, 0, INT64_MAX);
   const bool quiet = args.has("quiet");
@@ -84,10 +64,10 @@ int run_watch(const std::vector<std::string>& argv) {
   if (auto tf = args.get("token-file")) copts.token_file = *tf;
   copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
   client::Connection conn = client::Connection::connect(url, copts);
-  client::Watcher watcher = conn.attach(uint64_t(session_id), key);
+  client::Watcher watcher = conn.attach(target.session_id, target.key);
   const auto& info = watcher.info();
   if (!quiet)
-    std::fprintf(stderr, "dn: watching session %llu on %s: %ux%u, pipeline %s\n", (unsigned long long)session_id,
+    std::fprintf(stderr, "dn: watching session %llu on %s: %ux%u, pipeline %s\n", (unsigned long long)target.session_id,
                  conn.endpoint().c_str(), info.width, info.height, info.pipeline.c_str());
 
   Progress progress(size_t(count), Progress::stderr_is_tty() && count > 0, quiet);

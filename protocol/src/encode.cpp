@@ -254,6 +254,10 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
   if ((flags & kFlagNoOutput) && type != MessageType::Frame)
     throw std::invalid_argument(std::string("dn::protocol::encode: header.flags NO_OUTPUT is only defined for FRAME, not ") +
                                 to_string(type));
+  if ((flags & kFlagShareInput) && type != MessageType::OpenSession)
+    throw std::invalid_argument(
+        std::string("dn::protocol::encode: header.flags SHARE_INPUT is only defined for OPEN_SESSION, not ") +
+        to_string(type));
 
   check_welcome_parameters(message);
 

@@ -93,6 +93,9 @@ std::optional<DecodeError> decode_header(std::span<const uint8_t> bytes, uint64_
   if ((h.flags & kFlagNoOutput) && h.type != MessageType::Frame)
     return DecodeError{ErrorCode::ReservedFlags, "header.flags",
                        std::string("flag NO_OUTPUT is only defined for FRAME, found on ") + to_string(h.type)};
+  if ((h.flags & kFlagShareInput) && h.type != MessageType::OpenSession)
+    return DecodeError{ErrorCode::ReservedFlags, "header.flags",
+                       std::string("flag SHARE_INPUT is only defined for OPEN_SESSION, found on ") + to_string(h.type)};
   const uint64_t limit = max_payload_bytes(h.type, max_message_bytes);
   if (h.payload_length > limit)
     return DecodeError{ErrorCode::MessageTooLarge, "header.payload_length",

@@ -32,6 +32,7 @@ struct BuildRequest {
   uint64_t connection_id = 0;
   uint64_t request_id = 0;
   pipelines::PreparedPipeline prepared;  // validated, its graph built (pipelines::prepare)
+  bool share_input = false;              // OPEN_SESSION's SHARE_INPUT flag (protocol 1.7)
 };
 
 struct BuiltPipeline {

@@ -90,7 +90,7 @@ FrameDone Session::run(FrameJob& job) {
   done.frame_index = job.frame.info.frame_index;
   std::vector<uint8_t> output;
   try {
-    const bool download = job.owner_wants_output || job.watchers_want_output;
+    const bool download = job.owner_wants_output || job.watchers_want_output || job.watchers_want_input;
     pipeline_->process(job.frame, download, output, done.timings);
   } catch (const std::exception& e) {
     done.failed = true;
@@ -106,6 +106,13 @@ FrameDone Session::run(FrameJob& job) {
   result.timings = done.timings;
   protocol::PlaneView plane{protocol::ChannelId::Output, config_.output_format,
                             std::span<const uint8_t>(output.data(), output.size())};
+  if (job.watchers_want_input) {
+    // The radiance plane as the owner sent it: a view into the FRAME's payload, alive until this returns.
+    result.planes = {plane};
+    for (const protocol::PlaneView& p : job.frame.planes)
+      if (p.id == protocol::ChannelId::Radiance) result.planes.push_back(p);
+    done.watcher_input_message = encode_shared(result, job.request_id);
+  }
   if (job.watchers_want_output) {
     result.planes = {plane};
     done.watcher_message = encode_shared(result, job.request_id);

@@ -20,7 +20,8 @@ namespace dn::server {
 struct FrameJob {
   uint64_t request_id = 0;
   bool owner_wants_output = true;
-  bool watchers_want_output = false;
+  bool watchers_want_output = false;  // watchers that get the output plane alone
+  bool watchers_want_input = false;   // watchers that also get the noisy radiance (SHARE_INPUT, 1.7)
   protocol::Frame frame;
   std::vector<uint8_t> payload;
 };
@@ -31,7 +32,8 @@ struct FrameDone {
   uint64_t request_id = 0;
   uint64_t frame_index = 0;
   std::shared_ptr<const std::vector<uint8_t>> owner_message;    // encoded RESULT or ERROR
-  std::shared_ptr<const std::vector<uint8_t>> watcher_message;  // encoded RESULT with planes, if wanted
+  std::shared_ptr<const std::vector<uint8_t>> watcher_message;        // encoded RESULT with the output, if wanted
+  std::shared_ptr<const std::vector<uint8_t>> watcher_input_message;  // ... and the noisy radiance, if wanted
   std::vector<protocol::PassTiming> timings;
   bool failed = false;
 };
@@ -71,6 +73,7 @@ class Session {
   bool closing = false;
   uint64_t close_request_id = 0;
   std::vector<uint64_t> watchers;  // connection ids
+  bool share_input = false;        // the owner's SHARE_INPUT: watchers at 1.7 also get the noisy radiance
 
   // Scheduler state (guarded by mutex).
   std::mutex mutex;

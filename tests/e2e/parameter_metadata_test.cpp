@@ -109,7 +109,7 @@ TEST(ParameterMetadata, OneZeroClientGetsTheOneZeroPayloadAndWorks) {
   protocol::Header h;
   ASSERT_FALSE(protocol::decode_header(header_bytes, 1u << 20, h));
   EXPECT_EQ(h.type, protocol::MessageType::Welcome);
-  EXPECT_EQ(h.version_minor, 6);  // the server's own version, 1.6
+  EXPECT_EQ(h.version_minor, protocol::kVersionMinor);  // the server's own version
   const std::vector<uint8_t> payload = read_exactly(c.fd(), h.payload_length);
   // Read as a 1.0 receiver does (minor 0: nothing may follow the 1.0 fields),
   // the payload ends exactly after `pipelines`: no tables were sent.

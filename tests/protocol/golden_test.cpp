@@ -11,7 +11,7 @@ namespace {
 std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, minor})             // version 1.0 ... 1.6
+      .raw({0x01, minor})             // version 1.0 ... 1.7
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -105,7 +105,7 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello(6));  // the sender's own version: 1.6
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(7));  // the sender's own version: 1.7
 }
 
 TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
@@ -173,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(6));
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(7));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session(6);
+  const auto bytes = golden_open_session(7);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;
@@ -244,7 +244,7 @@ Session golden_session_message(std::optional<std::string> key) {
 
 TEST(Golden, SessionWithTheWatchKeyBothWays) {
   const Session s = golden_session_message(kKey);
-  EXPECT_EQ(encode(s, 3, 0), golden_session(6));
+  EXPECT_EQ(encode(s, 3, 0), golden_session(7));
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_session(6);
@@ -262,15 +262,15 @@ TEST(Golden, SessionFromAnOlderServerHasNoKey) {
     ASSERT_FALSE(err) << minor << ": " << err->field << ": " << err->message;
     EXPECT_EQ(diff(golden_session_message(std::nullopt), d.message), "") << minor;
   }
-  // A 1.6 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
+  // A 1.7 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
   std::vector<uint8_t> expected = golden_session(5);
-  expected[5] = 6;
+  expected[5] = kVersionMinor;
   EXPECT_EQ(encode(golden_session_message(std::nullopt), 3, 0), expected);
 }
 
 TEST(Golden, AttachWithTheWatchKeyBothWays) {
   const Attach a{0x0102030405060708u, kKey};
-  EXPECT_EQ(encode(a, 9, 0), golden_attach(6));
+  EXPECT_EQ(encode(a, 9, 0), golden_attach(7));
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_attach(6);

@@ -129,6 +129,23 @@ TEST(Header, NoOutputOnlyOnFrame) {
   }
 }
 
+TEST(Header, ShareInputOnlyOnOpenSession) {
+  for (MessageType type : kAllTypes) {
+    RawHeader raw;
+    raw.type = static_cast<uint16_t>(type);
+    raw.length = 0;
+    raw.flags = kFlagShareInput;
+    auto err = check(raw);
+    if (type == MessageType::OpenSession) {
+      EXPECT_FALSE(err);
+    } else {
+      ASSERT_TRUE(err) << to_string(type);
+      EXPECT_EQ(err->code, ErrorCode::ReservedFlags);
+      EXPECT_NE(err->message.find("SHARE_INPUT"), std::string::npos) << err->message;
+    }
+  }
+}
+
 TEST(Header, OversizeHelloNamesValueAndLimit) {
   RawHeader raw;
   raw.type = 1;  // HELLO

@@ -73,7 +73,14 @@ struct Result {
   // wait for window space) to the arrival of this RESULT; zero for Watcher results.
   std::chrono::duration<double, std::milli> latency{0};
 
+  // A watcher's copy from a session whose owner shares its input (SessionDesc::
+  // share_input, protocol 1.7): the frame's noisy radiance as the owner sent it,
+  // RGB interleaved, rows top-first, in `input_format`. Empty otherwise.
+  protocol::Format input_format = protocol::Format::F32;
+  std::span<const uint8_t> input;
   bool has_output() const { return !output.empty(); }
+  bool has_input() const { return !input.empty(); }
+  std::vector<float> input_rgb() const;                       // input as float RGB (converted from fp16)
   double total_timing_ms() const;                             // sum of all timings
   std::optional<double> timing_ms(std::string_view name) const;  // one named timing
   std::vector<float> rgb() const;                             // output as float RGB (converted from fp16)

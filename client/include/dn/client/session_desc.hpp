@@ -21,6 +21,10 @@ struct SessionDesc {
   // WELCOME limits.max_frames_in_flight (3 when the server reports 0). Values
   // above the server's limit are clamped to it.
   uint32_t max_in_flight = 0;
+  // Share each frame's noisy radiance with the session's watchers (protocol
+  // 1.7, header flag SHARE_INPUT): their Results carry it as `input`, so
+  // `dn preview` can show it beside the denoised frame. Needs a radiance channel.
+  bool share_input = false;
 
   SessionDesc& channel(protocol::ChannelId id, protocol::Format format = protocol::Format::F32) {
     channels.push_back({id, format});

@@ -19,7 +19,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 6;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH)
+inline constexpr uint8_t kVersionMinor = 7;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag)
 inline constexpr size_t kHeaderSize = 24;
 
 // Where dnserver listens when started without --listen, and so where clients
@@ -45,7 +45,10 @@ enum class MessageType : uint16_t {
 
 // Header flags. Every bit not named here is reserved and must be zero.
 inline constexpr uint32_t kFlagNoOutput = 1u << 0;  // FRAME: process, but RESULT carries no planes
-inline constexpr uint32_t kDefinedHeaderFlags = kFlagNoOutput;
+// OPEN_SESSION (1.7): the owner shares each frame's noisy radiance with the
+// session's watchers; their RESULT copies carry it as a second plane.
+inline constexpr uint32_t kFlagShareInput = 1u << 1;
+inline constexpr uint32_t kDefinedHeaderFlags = kFlagNoOutput | kFlagShareInput;
 
 struct Header {
   uint32_t magic = kMagic;
@@ -86,6 +89,7 @@ const char* to_string(MessageType type);
 // 1.6: a session's watch key, the capability to ATTACH to it (SESSION.watch_key,
 // ATTACH.watch_key): kWatchKeyLength lowercase hex digits, or empty for "none".
 inline constexpr uint8_t kWatchKeyMinor = 6;
+inline constexpr uint8_t kShareInputMinor = 7;  // the header flag SHARE_INPUT
 inline constexpr size_t kWatchKeyLength = 32;  // 128 random bits
 // Empty, or exactly kWatchKeyLength characters of 0-9a-f: what the decoder accepts.
 bool is_well_formed_watch_key(std::string_view key);
