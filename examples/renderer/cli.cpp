@@ -67,6 +67,7 @@ const char* const kUsage =
     "                     keep reconnecting for up to S seconds, and go on in a new session\n"
     "                     (history reset; default 30)\n"
     "  --send-split       send diffuse + specular instead of radiance when the pipeline takes both\n"
+    "  --share-input      let the session's watchers (dn preview) see the noisy radiance too\n"
     "  --quiet            no per-frame lines\n"
     "  --help             this help\n"
     "Without --out, --server or --reference, frames are rendered and only timed (ms, Mrays/s).\n";
@@ -138,6 +139,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--in-flight") o.in_flight = parse_int(a, value(), 1, 64);
     else if (a == "--reconnect-for") o.reconnect_for_s = parse_int(a, value(), 1, 86400);
     else if (a == "--send-split") o.send_split = true;
+    else if (a == "--share-input") o.share_input = true;
     else if (a == "--png") o.png = true;
     else if (a == "--quiet" || a == "-q") o.quiet = true;
     else throw UsageError("unknown argument '" + a + "'");
@@ -148,6 +150,8 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     throw UsageError("--extra-samples needs --spp 1 (sample 0 is the guide ray through the pixel centre)");
   if (o.reference2 && !o.reference_spp) throw UsageError("--reference2 needs --reference");
   if (o.server.empty() && !o.pipeline.empty()) throw UsageError("--pipeline needs --server");
+  if (o.share_input && o.server.empty()) throw UsageError("--share-input needs --server");
+  if (o.share_input && o.send_split) throw UsageError("--share-input shares the radiance plane, which --send-split does not send");
   return o;
 }
 
@@ -209,6 +213,7 @@ int run_cli(const CliOptions& o) {
     so.pipeline = o.pipeline;
     so.in_flight = o.in_flight;
     so.send_split = o.send_split;
+    so.share_input = o.share_input;
     so.out_dir = o.out;
     so.statistics_demodulated = o.render.channels.statistics_demodulated;
     so.quiet = o.quiet;

@@ -28,6 +28,7 @@ struct CliOptions {
   int in_flight = 2;
   double reconnect_for_s = 30.0;    // after a lost server connection, how long to keep reconnecting
   bool send_split = false;
+  bool share_input = false;         // let watchers (dn preview) see the noisy radiance (protocol 1.7)
   bool png = false;                 // also DIR/frame_%04d.png, tone-mapped radiance
   bool quiet = false;
   bool help = false;

@@ -165,6 +165,7 @@ void FrameStreamer::open(const FrameBuffers& sample) {
   desc.height = static_cast<uint32_t>(sample.height);
   desc.pipeline = options.pipeline;
   desc.max_in_flight = static_cast<uint32_t>(options.in_flight);
+  desc.share_input = options.share_input;
   // Every plane is sent as fp32 (the sample statistics must be: docs/protocol.md §7.7).
   for (ChannelId id : stream_channels(takes, sample, options.send_split)) {
     desc.channel(id, protocol::Format::F32);

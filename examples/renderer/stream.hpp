@@ -20,6 +20,7 @@ struct StreamOptions {
   std::string pipeline;   // server pipeline name (svgf, svgf-fb, ...)
   int in_flight = 2;      // frames kept in flight
   bool send_split = false;  // send diffuse + specular instead of radiance when the pipeline takes both
+  bool share_input = false;  // SessionDesc::share_input: watchers also get the noisy radiance
   std::string out_dir;    // empty: results are received but not written
   // The frames' sample statistics are demodulated (dnrender --stats-demodulated):
   // the session is opened with the pipeline's parameter demodulated = 1.

@@ -45,6 +45,11 @@ TEST(RendererCli, ParsesEveryOption) {
   EXPECT_FALSE(o.help);
 }
 
+TEST(RendererCli, ShareInputGoesToTheSession) {
+  EXPECT_FALSE(parse_cli({"--server", "tcp://h:1", "--pipeline", "svgf"}).share_input);
+  EXPECT_TRUE(parse_cli({"--server", "tcp://h:1", "--pipeline", "svgf", "--share-input"}).share_input);
+}
+
 // --reference2 writes the second reference next to the first in --out.
 TEST(RendererCli, SecondReferenceIsCopiedToOut) {
   const auto dir = std::filesystem::temp_directory_path() / ("dn_renderer_cli_" + std::to_string(::getpid()));
@@ -71,7 +76,10 @@ TEST(RendererCli, RejectsBadArguments) {
                                              {"--png"},
                                              {"--height", "12abc"},
                                              {"--gbuffer-grid", "-1"},
-                                             {"--reference2"}})
+                                             {"--reference2"},
+                                             {"--share-input"},
+                                             {"--server", "tcp://h:1", "--pipeline", "svgf", "--share-input",
+                                              "--send-split"}})
     EXPECT_THROW(parse_cli(bad), UsageError) << bad[0];
   try {
     parse_cli({"--scene", "8"});
