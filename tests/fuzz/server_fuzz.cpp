@@ -25,7 +25,9 @@
 //   - while a connection's stream is well formed and open, every request that
 //     has a reply gets exactly one, and a FRAME's RESULT names its session and
 //     frame index and carries an Output plane of the session's size unless
-//     the frame asked for none;
+//     the frame asked for none; a watcher's copy carries that Output plane
+//     first and, only on a 1.7 connection, at most the session's radiance
+//     plane after it (SHARE_INPUT);
 //   - RESULTs of a session reach each connection in increasing frame order;
 //   - the server settles (nothing built, run or written) after every step;
 //   - once both clients have closed, no connection and no session remains.
@@ -214,6 +216,10 @@ void check_reply(Peer& p, const Header& h, const Message& m) {
     }
     if (!is_reply) {
       if (!p.watched.count(r->session_id)) violated("RESULT for a session neither owned by the frame's request nor watched");
+      if (r->planes.empty() || r->planes[0].id != ChannelId::Output) violated("watcher's RESULT without an Output plane first");
+      if (r->planes.size() > 2 || (r->planes.size() == 2 && (r->planes[1].id != ChannelId::Radiance ||
+                                                            p.minor.value_or(0) < kShareInputMinor)))
+        violated("watcher's RESULT with planes other than Output and, from 1.7, the shared radiance");
       return;
     }
     if (expected->wants_output) {
@@ -385,7 +391,7 @@ void open_session(Peer (&peers)[2], Peer& p, Input& in) {
     const auto& info = d->parameters[in.below(d->parameters.size())];
     m.parameters.push_back({info.name, edge_value(in, info)});
   }
-  send(peers, p, m, Pending{MessageType::OpenSession});
+  send(peers, p, m, Pending{MessageType::OpenSession}, in.flag() ? kFlagShareInput : 0);
 }
 
 // Fills a plane: zeros, ones, NaN, Inf, huge values or input bytes.
