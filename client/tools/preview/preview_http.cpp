@@ -32,8 +32,12 @@ bool same_secret(const std::string& a, const std::string& b) {
 
 PreviewHttpServer::PreviewHttpServer(const std::string& address, std::string token) : token_(std::move(token)) {
   init_civetweb_once();
-  const char* options[] = {"listening_ports", address.c_str(), "num_threads", "8", "enable_keep_alive", "yes",
-                           nullptr};
+  // civetweb gives each open page (WebSocket) a worker thread of its own:
+  // kMaxPages pages at once, one thread left for HTTP. A page that stops
+  // reading holds a send for at most the request timeout.
+  const std::string threads = std::to_string(kMaxPages + 1);
+  const char* options[] = {"listening_ports", address.c_str(), "num_threads", threads.c_str(),
+                           "request_timeout_ms", "10000", "enable_keep_alive", "yes", nullptr};
   mg_callbacks callbacks;
   std::memset(&callbacks, 0, sizeof callbacks);
   mg_init_data init{&callbacks, this, options};

@@ -17,6 +17,8 @@ namespace dn::cli {
 
 class PreviewHttpServer {
  public:
+  static constexpr int kMaxPages = 16;  // pages served at once; more wait for a free thread
+
   // `address` is HOST:PORT (PORT 0 picks a free one). A non-empty `token` must
   // be given as ?token=... by the page and its WebSocket. Throws
   // std::runtime_error naming the address when it cannot listen.
