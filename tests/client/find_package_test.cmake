@@ -21,6 +21,16 @@ function(run what)
   set(last_output "${out}" PARENT_SCOPE)
 endfunction()
 
+# Runs a consumer program, which must print `expected`.
+function(run_consumer what expected)
+  run("${what}" ${ARGN})
+  string(FIND "${last_output}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "${what} printed:\n${last_output}")
+  endif()
+  message(STATUS "${last_output}")
+endfunction()
+
 run("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --component dnclient --prefix ${prefix})
 
 foreach(f include/dn/client/client.hpp include/dn/client/session.hpp include/dn/protocol/messages.hpp
@@ -61,18 +71,8 @@ if(C_COMPILER)
 endif()
 run("consumer configure" ${CMAKE_COMMAND} ${cfg_args})
 run("consumer build" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
-run("consumer run" ${WORK_DIR}/build/dnclient_consumer)
-string(FIND "${last_output}" "dnclient consumer ok" at)
-if(at EQUAL -1)
-  message(FATAL_ERROR "consumer printed:\n${last_output}")
-endif()
-message(STATUS "${last_output}")
-run("C consumer run (dn::c)" ${WORK_DIR}/build/dnclient_c_consumer)
-string(FIND "${last_output}" "dn c consumer ok" at)
-if(at EQUAL -1)
-  message(FATAL_ERROR "C consumer (dn::c) printed:\n${last_output}")
-endif()
-message(STATUS "${last_output}")
+run_consumer("consumer run" "dnclient consumer ok" ${WORK_DIR}/build/dnclient_consumer)
+run_consumer("C consumer run (dn::c)" "dn c consumer ok" ${WORK_DIR}/build/dnclient_c_consumer)
 
 # pkg-config: the same C program, compiled and linked by hand with the
 # installed dn.pc; the rpath is libdn's directory from pkg-config itself.
@@ -95,9 +95,4 @@ if(NOT C_COMPILER)
 endif()
 run("cc c_consumer.c $(pkg-config --cflags --libs dn)" ${C_COMPILER} -std=c99 -Wall -Werror
     ${CONSUMER_DIR}/c_consumer.c ${pc_flag_list} -Wl,-rpath,${pc_libdir} -o ${WORK_DIR}/pkg_config_consumer)
-run("C consumer run (pkg-config)" ${WORK_DIR}/pkg_config_consumer)
-string(FIND "${last_output}" "dn c consumer ok" at)
-if(at EQUAL -1)
-  message(FATAL_ERROR "C consumer (pkg-config) printed:\n${last_output}")
-endif()
-message(STATUS "${last_output}")
+run_consumer("C consumer run (pkg-config)" "dn c consumer ok" ${WORK_DIR}/pkg_config_consumer)

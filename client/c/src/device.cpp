@@ -147,8 +147,10 @@ DN_API const char* dnGetDevice1s(DNDevice device, const char* name) {
 DN_API int dnGetDevice1i(DNDevice device, const char* name) {
   return guarded(device, "dnGetDevice1i", 0, [&]() -> int {
     const std::string key = required_name(name);
-    if (key == "version_major") return connected(*device, key), int(protocol::kVersionMajor);
-    if (key == "version_minor") return connected(*device, key).protocol_minor();
+    if (key == "version_major" || key == "version_minor") {
+      const client::Connection& c = connected(*device, key);
+      return key == "version_major" ? int(protocol::kVersionMajor) : int(c.protocol_minor());
+    }
     const protocol::Limits* limits = nullptr;
     if (key == "max_width" || key == "max_height" || key == "max_frames_in_flight")
       limits = &connected(*device, key).welcome().limits;

@@ -10,12 +10,18 @@
 namespace dn::capi {
 namespace {
 
-// The filter's session, provided nothing that needs a new one changed since
-// dnCommitFilter (pointers and strides may change freely).
-client::Session& committed_session(DNFilterImpl& f) {
+// The filter's session, opened by its last successful dnCommitFilter.
+client::Session& open_session(DNFilterImpl& f) {
   if (!f.session)
     throw CError{DN_ERROR_INVALID_OPERATION,
                  "the filter has no session: set its images, then call dnCommitFilter (and check its error)"};
+  return *f.session;
+}
+
+// The same, provided nothing that needs a new one changed since
+// dnCommitFilter (pointers and strides may change freely).
+client::Session& committed_session(DNFilterImpl& f) {
+  open_session(f);
   if (f.session_generation != f.device->generation)
     throw CError{DN_ERROR_INVALID_OPERATION,
                  "the device reconnected since dnCommitFilter and the session was lost with the old connection: "
@@ -139,18 +145,14 @@ DN_API void dnResetFilterHistory(DNFilter filter) {
 }
 
 DN_API uint64_t dnGetFilterSessionId(DNFilter filter) {
-  return guarded_filter(filter, "dnGetFilterSessionId", uint64_t{0}, [&](DNFilterImpl& f) -> uint64_t {
-    if (!f.session) throw CError{DN_ERROR_INVALID_OPERATION, "the filter has no session: call dnCommitFilter first"};
-    return f.session->id();
-  });
+  return guarded_filter(filter, "dnGetFilterSessionId", uint64_t{0},
+                        [&](DNFilterImpl& f) { return open_session(f).id(); });
 }
 
 DN_API const char* dnGetFilterWatchKey(DNFilter filter) {
   return guarded_filter(filter, "dnGetFilterWatchKey", static_cast<const char*>(nullptr),
                         [&](DNFilterImpl& f) -> const char* {
-                          if (!f.session)
-                            throw CError{DN_ERROR_INVALID_OPERATION,
-                                         "the filter has no session: call dnCommitFilter first"};
+                          open_session(f);
                           return f.watch_key.c_str();
                         });
 }
@@ -158,9 +160,7 @@ DN_API const char* dnGetFilterWatchKey(DNFilter filter) {
 DN_API const char* dnGetFilterWatchCommand(DNFilter filter) {
   return guarded_filter(filter, "dnGetFilterWatchCommand", static_cast<const char*>(nullptr),
                         [&](DNFilterImpl& f) -> const char* {
-                          if (!f.session)
-                            throw CError{DN_ERROR_INVALID_OPERATION,
-                                         "the filter has no session: call dnCommitFilter first"};
+                          open_session(f);
                           return f.watch_command.c_str();
                         });
 }
