@@ -1,7 +1,7 @@
 /* The C API (client/c/include/dn/dn.h) from C99, against a real dnserver
  * whose URL is argv[1] (tests/capi/capi_test.cpp starts the server).
  * Prints every failed check and exits 1 if there was one. */
-#define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
+#define _POSIX_C_SOURCE 200809L /* setenv, unsetenv, nanosleep */
 
 #include <dn/dn.h>
 
@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static const char* g_url;
 static int g_checks, g_failures;
@@ -445,12 +446,72 @@ static void test_lifetimes(void) {
   dnReleaseFilter(f); /* closes the session and the connection */
 }
 
+static void sleep_ms(long ms) {
+  struct timespec t;
+  t.tv_sec = ms / 1000;
+  t.tv_nsec = (ms % 1000) * 1000000L;
+  nanosleep(&t, NULL);
+}
+
+/* `c_api_test URL reconnect`: the server is killed and restarted on the same
+ * address by the caller after "serving" is printed. The lost connection is
+ * DN_ERROR_CONNECTION, dnCommitDevice connects again, the filter's next frame
+ * asks for dnCommitFilter, which opens a new session. */
+static void test_reconnect(void) {
+  printf("reconnect\n");
+  DNDevice dev = connected_device();
+  DNFilter f = dnNewFilter(dev, "passthrough");
+  static float color[W * H * 3], out[W * H * 3];
+  color[7] = 2.5f;
+  dnSetSharedFilterImage(f, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnSetSharedFilterImage(f, "output", out, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnCommitFilter(f);
+  dnExecuteFilter(f);
+  EXPECT_OK(dev, "before the server goes");
+  const uint64_t first_session = dnGetFilterSessionId(f);
+  printf("serving\n");
+  fflush(stdout);
+
+  const char* message = "";
+  DNError code = DN_ERROR_NONE;
+  for (int i = 0; i < 3000 && code == DN_ERROR_NONE; ++i) { /* frames until the server is gone (60 s at most) */
+    dnExecuteFilter(f);
+    code = dnGetDeviceError(dev, &message);
+    if (code == DN_ERROR_NONE) sleep_ms(20);
+  }
+  CHECK(code == DN_ERROR_CONNECTION, "the server's loss gave error %d: %s", (int)code, message);
+  printf("  lost: %s\n", message);
+
+  for (int i = 0; i < 600; ++i) { /* connect again once it is back (60 s at most) */
+    dnCommitDevice(dev);
+    code = dnGetDeviceError(dev, &message);
+    if (code == DN_ERROR_NONE) break;
+    sleep_ms(100);
+  }
+  CHECK(code == DN_ERROR_NONE, "no reconnection: %s", message);
+  dnExecuteFilter(f);
+  EXPECT_ERROR(dev, DN_ERROR_INVALID_OPERATION, "reconnected");
+  dnCommitFilter(f);
+  out[7] = 0.0f;
+  dnExecuteFilter(f);
+  EXPECT_OK(dev, "after dnCommitDevice and dnCommitFilter");
+  CHECK(out[7] == 2.5f, "output after the reconnection %g", out[7]);
+  CHECK(dnGetFilterSessionId(f) != first_session, "the same session id after a new server");
+  dnReleaseFilter(f);
+  dnReleaseDevice(dev);
+}
+
 int main(int argc, char** argv) {
   if (argc < 2) {
-    fprintf(stderr, "usage: %s SERVER_URL\n", argv[0]);
+    fprintf(stderr, "usage: %s SERVER_URL [reconnect]\n", argv[0]);
     return 2;
   }
   g_url = argv[1];
+  if (argc > 2 && strcmp(argv[2], "reconnect") == 0) {
+    test_reconnect();
+    printf("c_api_test: %d checks, %d failed\n", g_checks, g_failures);
+    return g_failures ? 1 : 0;
+  }
   test_passthrough_packed();
   test_passthrough_strided();
   test_accumulate(0);
