@@ -67,6 +67,15 @@ static float noise(unsigned* state) {
 
 enum { W = 24, H = 10 };
 
+/* A committed passthrough filter from `color` to `out`, packed W x H FLOAT3. */
+static DNFilter passthrough_filter(DNDevice dev, float* color, float* out) {
+  DNFilter f = dnNewFilter(dev, "passthrough");
+  dnSetSharedFilterImage(f, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnSetSharedFilterImage(f, "output", out, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnCommitFilter(f);
+  return f;
+}
+
 static void test_passthrough_packed(void) {
   printf("passthrough, packed FLOAT3\n");
   DNDevice dev = connected_device();
@@ -367,11 +376,8 @@ static void test_errors(void) {
   EXPECT_OK(dev, "after committing the change");
 
   /* The device stays usable after the filter's errors: another filter works. */
-  DNFilter p = dnNewFilter(dev, "passthrough");
   static float pout[W * H * 3];
-  dnSetSharedFilterImage(p, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnSetSharedFilterImage(p, "output", pout, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnCommitFilter(p);
+  DNFilter p = passthrough_filter(dev, color, pout);
   dnExecuteFilter(p);
   EXPECT_OK(dev, "a second filter on the device");
   CHECK(memcmp(pout, color, sizeof pout) == 0, "second filter's output");
@@ -431,14 +437,11 @@ static void test_default_address(void) {
 static void test_lifetimes(void) {
   printf("lifetimes\n");
   DNDevice dev = connected_device();
-  DNFilter f = dnNewFilter(dev, "passthrough");
-  dnRetainFilter(f);
-  dnReleaseDevice(dev);
   static float color[W * H * 3], out[W * H * 3];
   color[5] = 3.0f;
-  dnSetSharedFilterImage(f, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnSetSharedFilterImage(f, "output", out, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnCommitFilter(f);
+  DNFilter f = passthrough_filter(dev, color, out);
+  dnRetainFilter(f);
+  dnReleaseDevice(dev);
   dnExecuteFilterAsync(f);
   dnReleaseFilter(f); /* one reference left */
   dnSyncFilter(f);
@@ -460,12 +463,9 @@ static void sleep_ms(long ms) {
 static void test_reconnect(void) {
   printf("reconnect\n");
   DNDevice dev = connected_device();
-  DNFilter f = dnNewFilter(dev, "passthrough");
   static float color[W * H * 3], out[W * H * 3];
   color[7] = 2.5f;
-  dnSetSharedFilterImage(f, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnSetSharedFilterImage(f, "output", out, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
-  dnCommitFilter(f);
+  DNFilter f = passthrough_filter(dev, color, out);
   dnExecuteFilter(f);
   EXPECT_OK(dev, "before the server goes");
   const uint64_t first_session = dnGetFilterSessionId(f);
