@@ -105,7 +105,8 @@ DN_API void dnReleaseDevice(DNDevice device);
  * An unknown name is DN_ERROR_INVALID_ARGUMENT naming it. */
 DN_API void dnSetDevice1s(DNDevice device, const char* name, const char* value);
 DN_API void dnSetDevice1i(DNDevice device, const char* name, int value);
-/* Read-only, after dnCommitDevice (NULL/0 and an error otherwise):
+/* Read-only, after dnCommitDevice (NULL/0 and an error otherwise; "url" also
+ * before it, as set):
  *   1s "url" (canonical), "server_version", "device_name" (the server's GPU),
  *      "pipelines" (comma-separated names)
  *   1i "version_major", "version_minor" (the protocol version agreed on),
