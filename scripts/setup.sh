@@ -9,6 +9,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools spirv-tools spirv-cross
   libopenexr-dev libglm-dev libembree-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
 )
 missing=()
 for p in "${packages[@]}"; do
