@@ -244,6 +244,31 @@ def test_blocking_calls_release_the_gil(conn, server):
         s.close()
 
 
+def test_sessions_of_one_connection_from_three_threads(conn):
+    # The module serialises the calls of one connection's objects (docs/client.md, "Threads"):
+    # three threads streaming on three sessions of it each get their own frames back.
+    sessions = [conn.open_session(W, H, "passthrough", channels=["radiance"]) for _ in range(3)]
+    failures = []
+
+    def stream(k):
+        try:
+            for i in range(40):
+                frame = np.full((H, W, 3), 100.0 * k + i, np.float32)
+                if not np.array_equal(sessions[k].denoise({"radiance": frame}), frame):
+                    failures.append((k, i))
+        except Exception as e:  # noqa: BLE001 - reported below
+            failures.append((k, repr(e)))
+
+    threads = [threading.Thread(target=stream, args=(k,)) for k in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(120)
+    assert not failures
+    for s in sessions:
+        assert s.close() == 40
+
+
 # ---- errors naming the culprit ------------------------------------------------------------------
 
 
