@@ -10,6 +10,7 @@ packages=(
   libopenexr-dev libglm-dev libembree-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
   libcivetweb-dev chromium-headless-shell
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -34,6 +34,30 @@ def column_major(m):
     return [m[r][c] for c in range(4) for r in range(4)]
 
 
+def camera_matrices(scene, obj=None):
+    """(view, projection) of `obj` (default: scene.camera) at the current frame,
+    as mathutils matrices indexed [row][column]; see the module docstring.
+    Raises ValueError for a missing or non-perspective camera."""
+    obj = obj or scene.camera
+    if obj is None or obj.type != 'CAMERA':
+        raise ValueError("frame %d: no camera (give --camera NAME)" % scene.frame_current)
+    if obj.data.type != 'PERSP':
+        raise ValueError("camera %s is %s; only Perspective cameras describe a pinhole "
+                         "(Camera -> Lens -> Type)" % (obj.name, obj.data.type))
+    render = scene.render
+    width = round(render.resolution_x * render.resolution_percentage / 100)
+    height = round(render.resolution_y * render.resolution_percentage / 100)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = obj.evaluated_get(depsgraph)
+    loc, rot, _scale = evaluated.matrix_world.decompose()
+    world = rot.to_matrix().to_4x4()
+    world.translation = loc
+    view = world.inverted()
+    projection = evaluated.calc_matrix_camera(depsgraph, x=width, y=height,
+                                              scale_x=render.pixel_aspect_x, scale_y=render.pixel_aspect_y)
+    return view, projection
+
+
 def main(argv):
     parser = argparse.ArgumentParser(prog="export_camera.py")
     parser.add_argument("--out", required=True, help="camera file to write")
@@ -55,19 +79,10 @@ def main(argv):
     for frame in range(start, end + 1):
         scene.frame_set(frame)
         obj = bpy.data.objects[args.camera] if args.camera else scene.camera
-        if obj is None or obj.type != 'CAMERA':
-            sys.exit("export_camera.py: frame %d: no camera (give --camera NAME)" % frame)
-        if obj.data.type != 'PERSP':
-            sys.exit("export_camera.py: camera %s is %s; only Perspective cameras describe a pinhole "
-                     "(Camera -> Lens -> Type)" % (obj.name, obj.data.type))
-        depsgraph = bpy.context.evaluated_depsgraph_get()
-        evaluated = obj.evaluated_get(depsgraph)
-        loc, rot, _scale = evaluated.matrix_world.decompose()
-        world = rot.to_matrix().to_4x4()
-        world.translation = loc
-        view = world.inverted()
-        projection = evaluated.calc_matrix_camera(depsgraph, x=width, y=height,
-                                                  scale_x=render.pixel_aspect_x, scale_y=render.pixel_aspect_y)
+        try:
+            view, projection = camera_matrices(scene, obj)
+        except ValueError as e:
+            sys.exit("export_camera.py: %s" % e)
         numbers = lambda m: " ".join("%.9g" % v for v in column_major(m))
         lines.append("frame %d view %s projection %s" % (frame, numbers(view), numbers(projection)))
     with open(args.out, "w") as f:
