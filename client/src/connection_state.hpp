@@ -66,8 +66,9 @@ class ConnectionState {
   void add_watch(uint64_t attach_request_id, uint64_t session_id) { demux_.watches().add(attach_request_id, session_id); }
   void remove_watch(uint64_t attach_request_id) { demux_.watches().remove(attach_request_id); }
   WatchQueue* watch(uint64_t attach_request_id) { return demux_.watches().find(attach_request_id); }
-  // Reads what is available without blocking, or waits up to `timeout` for
-  // something to read (nullopt: io_timeout). Returns false on timeout.
+  // Reads what is available without blocking and returns true if that was a
+  // message; else waits up to `timeout` for something to read (nullopt:
+  // io_timeout) and reads it. Returns false on timeout.
   bool pump(std::optional<Milliseconds> timeout);
   void pump_nonblocking();
 
@@ -107,6 +108,7 @@ class ConnectionState {
   bool sending_ = false;              // a message is partly written: nothing else may be
 
   Demultiplexer demux_;
+  uint64_t messages_dispatched_ = 0;  // lets pump() see that a read brought something
 
   bool broken_ = false;
   std::optional<Error> failure_;

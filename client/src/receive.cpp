@@ -58,14 +58,18 @@ void ConnectionState::read_available() {
 }
 
 void ConnectionState::dispatch(Incoming&& in) {
+  ++messages_dispatched_;
   if (take_heartbeat(in)) return;
   demux_.route(std::move(in));
 }
 
 bool ConnectionState::pump(std::optional<Milliseconds> timeout) {
   check_usable();
+  const uint64_t before = messages_dispatched_;
   read_available();
   check_usable();
+  // Something was already waiting in the socket: the caller looks at it before anything waits.
+  if (messages_dispatched_ != before) return true;
   if (timeout && timeout->count() == 0) return true;
   bool has_deadline = false;
   const auto deadline = deadline_from(timeout, has_deadline);

@@ -91,6 +91,7 @@ struct PyResult {
   uint32_t width = 0, height = 0;
   std::string format;
   py::object image;  // (H, W, 3) float32, or None for a no_output frame
+  py::object input;  // a watcher's copy when the owner shares its input: the noisy radiance, else None
   py::dict timings;  // name -> ms
   double latency_ms = 0.0, total_timing_ms = 0.0;
 };

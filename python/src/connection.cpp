@@ -72,13 +72,14 @@ std::unique_ptr<PyConnection> connect(const std::optional<std::string>& url, con
 
 client::SessionDesc session_desc(uint32_t width, uint32_t height, const std::string& pipeline,
                                  const py::object& channels, const py::object& parameters,
-                                 const py::object& output_format, uint32_t max_in_flight) {
+                                 const py::object& output_format, uint32_t max_in_flight, bool share_input) {
   client::SessionDesc d;
   d.width = width;
   d.height = height;
   d.pipeline = pipeline;
   d.output_format = parse_format(output_format, "output_format");
   d.max_in_flight = max_in_flight;
+  d.share_input = share_input;
   if (py::isinstance<py::dict>(channels)) {
     for (auto item : py::reinterpret_borrow<py::dict>(channels)) {
       const std::string name = py::str(item.first);
@@ -306,10 +307,11 @@ void bind_connection(py::module_& m) {
       .def(
           "open_session",
           [](PyConnection& c, uint32_t width, uint32_t height, const std::string& pipeline, py::object channels,
-             py::object parameters, py::object output_format, uint32_t max_in_flight) {
+             py::object parameters, py::object output_format, uint32_t max_in_flight, bool share_input) {
             client::Connection& conn = c.get();
             const client::SessionDesc desc =
-                session_desc(width, height, pipeline, channels, parameters, output_format, max_in_flight);
+                session_desc(width, height, pipeline, channels, parameters, output_format, max_in_flight,
+                             share_input);
             auto s = std::make_unique<PySession>();
             s->lock = c.lock;
             s->session.emplace(blocking(c.lock, [&] { return conn.open_session(desc); }));
@@ -318,9 +320,11 @@ void bind_connection(py::module_& m) {
           py::arg("width"), py::arg("height"), py::arg("pipeline") = "svgf", py::kw_only(),
           py::arg("channels") = py::make_tuple("radiance", "albedo", "normal", "depth", "motion"),
           py::arg("parameters") = py::none(), py::arg("output_format") = "f32", py::arg("max_in_flight") = 0,
+          py::arg("share_input") = false,
           "OPEN_SESSION. channels: {name: 'f32' | 'f16'} (the wire format; arrays of the other type are converted) "
           "or a list of names (f32). parameters: {name: value}, checked against the server's table before "
-          "anything is sent. max_in_flight: 0 = the server's limit.")
+          "anything is sent. max_in_flight: 0 = the server's limit. share_input: watchers' results also carry the "
+          "noisy radiance (Result.input; protocol 1.7).")
       .def(
           "attach",
           [](PyConnection& c, uint64_t session_id, const std::string& watch_key) {

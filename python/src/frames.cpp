@@ -242,6 +242,14 @@ PyResult to_python(const client::Result& r) {
   } else {
     out.image = py::none();
   }
+  if (r.has_input()) {
+    const std::vector<float> rgb = r.input_rgb();
+    py::array_t<float> input({py::ssize_t(r.height), py::ssize_t(r.width), py::ssize_t(3)});
+    std::copy(rgb.begin(), rgb.end(), input.mutable_data());
+    out.input = std::move(input);
+  } else {
+    out.input = py::none();
+  }
   for (const auto& t : r.timings) out.timings[py::str(t.name)] = t.milliseconds;
   out.latency_ms = r.latency.count();
   out.total_timing_ms = r.total_timing_ms();
@@ -259,6 +267,9 @@ void bind_frames(py::module_& m) {
       .def_readonly("height", &PyResult::height)
       .def_readonly("format", &PyResult::format, "the output's wire format, 'f32' or 'f16' (image is float32 either way)")
       .def_readonly("image", &PyResult::image)
+      .def_readonly("input", &PyResult::input,
+                    "a watcher's copy from a session opened with share_input: the noisy radiance the owner sent, "
+                    "(height, width, 3) float32; else None")
       .def_readonly("timings", &PyResult::timings)
       .def_readonly("latency_ms", &PyResult::latency_ms)
       .def_readonly("total_timing_ms", &PyResult::total_timing_ms)

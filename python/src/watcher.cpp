@@ -20,14 +20,8 @@ client::Watcher& get(PyWatcher& w) {
   return *w.watcher;
 }
 
-// How long one wait for a RESULT lasts before the socket is looked at
-// again. Watcher::next_for reads what is already in the socket and then
-// waits for *more* data: a RESULT that is already there when it starts is
-// only returned when its timeout expires (client/src/receive.cpp,
-// ConnectionState::pump). try_next() hands such a RESULT out at once, so
-// waits are try_next() + next_for(a slice): a RESULT never waits more than
-// one slice.
-constexpr std::chrono::milliseconds kWaitSlice{20};
+// A wait without limit (io_timeout 0), in pieces next_for can take.
+constexpr std::chrono::milliseconds kForever = std::chrono::hours(24);
 
 // next() with the end of the stream told apart: nullopt when the session
 // ended normally (SESSION_CLOSED) or, with `timed_out` set, when nothing
@@ -36,22 +30,14 @@ constexpr std::chrono::milliseconds kWaitSlice{20};
 std::optional<client::Result> next_or_end(PyWatcher& w, std::optional<double> timeout_s, bool& timed_out) {
   client::Watcher& watcher = get(w);
   timed_out = false;
-  using Clock = std::chrono::steady_clock;
   std::optional<std::chrono::milliseconds> limit;
   if (timeout_s) limit = std::chrono::milliseconds(static_cast<long long>(std::max(0.0, *timeout_s) * 1000.0 + 0.5));
   else if (w.io_timeout.count() > 0) limit = w.io_timeout;
   try {
     std::optional<client::Result> r = blocking(w.lock, [&]() -> std::optional<client::Result> {
-      const auto start = Clock::now();
       for (;;) {
-        if (auto r = watcher.try_next()) return r;
-        auto slice = kWaitSlice;
-        if (limit) {
-          const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*limit - (Clock::now() - start));
-          if (left.count() <= 0) return std::nullopt;
-          slice = std::min(slice, left);
-        }
-        if (auto r = watcher.next_for(slice)) return r;
+        if (auto r = watcher.next_for(limit ? *limit : kForever)) return r;
+        if (limit) return std::nullopt;
       }
     });
     if (!r) {

@@ -130,7 +130,7 @@ TEST(ClientParameters, OneOneServerTablesReachTheClientAndHelloSaysOneTwo) {
   EXPECT_EQ(svgf->parameters[1].description, "Number of a-trous iterations.");
   conn.close();
   server.join();
-  EXPECT_EQ(hello_minor, 6);  // the client's own version, 1.6
+  EXPECT_EQ(hello_minor, 7);  // the client's own version, 1.7
 }
 
 TEST(ClientParameters, MisspeltParameterFailsLocallyWithOneOneServer) {

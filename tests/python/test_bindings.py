@@ -31,7 +31,7 @@ def still_scene(rng, w=W, h=H, dtype=np.float32):
 
 def test_connection_reports_the_servers_welcome(conn, server):
     assert conn.endpoint == server.url
-    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 6)
+    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 7)
     assert conn.is_open
     assert conn.limits["max_width"] >= W and conn.limits["max_frames_in_flight"] >= 1
     names = [p.name for p in conn.pipelines()]
@@ -195,6 +195,17 @@ def test_wait_without_frames_raises(conn):
 # ---- watching -------------------------------------------------------------------------------------
 
 
+def test_watcher_sees_the_shared_noisy_input(conn, server):
+    frame = still_scene(np.random.default_rng(9))
+    with dn.connect(server.url, client_name="watcher") as other:
+        with conn.open_session(W, H, "svgf", channels=SVGF, share_input=True) as s:
+            w = other.attach(s.id, s.watch_key)
+            image = s.denoise(frame, reset=True)
+            seen = w.next(timeout=30)
+            assert np.array_equal(seen.image, image)
+            assert np.array_equal(seen.input, frame["radiance"])  # exactly what the owner sent
+
+
 def test_watcher_sees_the_owners_pixels(conn, server):
     rng = np.random.default_rng(5)
     frames = [still_scene(rng) for _ in range(3)]
@@ -215,6 +226,7 @@ def test_watcher_sees_the_owners_pixels(conn, server):
         assert seen and seen[-1].frame_index == 2
         assert np.array_equal(seen[-1].image, owned[2])
         assert w.closed == 3 and w.next(timeout=1) is None
+        assert first.input is None  # the owner did not share its input
         # The key is the capability: a wrong one is refused by the server, a malformed one locally.
         s2 = conn.open_session(W, H, "passthrough", channels=["radiance"])
         with pytest.raises(dn.ServerError) as e:
