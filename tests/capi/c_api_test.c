@@ -108,6 +108,15 @@ static void test_passthrough_packed(void) {
   EXPECT_OK(dev, "second commit");
   CHECK(dnGetFilterSessionId(f) == id, "an unchanged commit opened a new session");
 
+  /* Sharing the input with watchers (protocol 1.7) describes another session. */
+  dnSetFilter1b(f, "share_input", true);
+  CHECK(dnGetFilter1i(f, "share_input") == 1, "share_input reads back as %d", dnGetFilter1i(f, "share_input"));
+  dnCommitFilter(f);
+  dnExecuteFilter(f);
+  EXPECT_OK(dev, "share_input");
+  CHECK(dnGetFilterSessionId(f) != id, "share_input kept the session opened without it");
+  CHECK(memcmp(color, out, sizeof color) == 0, "passthrough output differs with share_input");
+
   /* HALF3 in and out: the half bits come back. */
   static uint16_t hcolor[W * H * 3], hout[W * H * 3];
   for (int i = 0; i < W * H * 3; ++i) hcolor[i] = (uint16_t)(0x3c00 + (i * 37) % 0x0800); /* [1, 4) */

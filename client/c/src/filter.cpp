@@ -27,6 +27,8 @@ std::string size_text(const Image& i) { return std::to_string(i.width) + "x" + s
 // Settings of the C layer itself, taken by every pipeline.
 constexpr const char* kHdr = "hdr";
 constexpr const char* kMotionConvention = "motion_convention";
+constexpr const char* kShareInput = "share_input";
+constexpr const char* kSettingsNote = " (and the filter settings hdr, motion_convention, share_input)";
 
 // Sets a value of any of the dnSetFilter1* kinds.
 void set_value(DNFilterImpl& f, const std::string& name, double value) {
@@ -34,6 +36,10 @@ void set_value(DNFilterImpl& f, const std::string& name, double value) {
     if (value == 0)
       throw CError{DN_ERROR_INVALID_ARGUMENT,
                    "'hdr' must be true: the input is always linear scene-referred HDR radiance"};
+    return;
+  }
+  if (name == kShareInput) {
+    f.share_input = value != 0;
     return;
   }
   if (name == kMotionConvention) {
@@ -56,7 +62,7 @@ void set_value(DNFilterImpl& f, const std::string& name, double value) {
   } catch (const client::Error& e) {
     std::string message = e.server_message();
     if (client::find_parameters(welcome, f.pipeline) && message.find("has no parameter") != std::string::npos)
-      message += " (and the filter settings hdr, motion_convention)";
+      message += kSettingsNote;
     throw CError{DN_ERROR_INVALID_ARGUMENT, message};
   }
   for (auto& p : f.parameters)
@@ -70,6 +76,7 @@ void set_value(DNFilterImpl& f, const std::string& name, double value) {
 double get_value(const DNFilterImpl& f, const std::string& name) {
   if (name == kHdr) return 1;
   if (name == kMotionConvention) return double(f.motion);
+  if (name == kShareInput) return f.share_input ? 1 : 0;
   for (const auto& p : f.parameters)
     if (p.name == name) return p.value;
   const auto* table = client::find_parameters(f.device->connection->welcome(), f.pipeline);
@@ -82,7 +89,7 @@ double get_value(const DNFilterImpl& f, const std::string& name) {
   for (const auto& p : *table) names += (names.empty() ? "" : ", ") + p.name;
   throw CError{DN_ERROR_INVALID_ARGUMENT, "pipeline '" + f.pipeline + "' has no parameter '" + name +
                                               "'; valid names: " + (names.empty() ? "none" : names) +
-                                              " (and the filter settings hdr, motion_convention)"};
+                                              kSettingsNote};
 }
 
 void check_connected(const DNDeviceImpl& d) {
@@ -130,11 +137,13 @@ client::SessionDesc describe(const DNFilterImpl& f) {
                                                 "', which is not set (required: " + image_names(p.required_channels) +
                                                 "; not set: " + image_names(missing) + ")"};
   desc.parameters = f.parameters;
+  desc.share_input = f.share_input;
   return desc;
 }
 
 bool same_session(const client::SessionDesc& a, const client::SessionDesc& b) {
   if (a.width != b.width || a.height != b.height || a.pipeline != b.pipeline || a.output_format != b.output_format ||
+      a.share_input != b.share_input ||
       a.channels.size() != b.channels.size() || a.parameters.size() != b.parameters.size())
     return false;
   for (size_t i = 0; i < a.channels.size(); ++i)

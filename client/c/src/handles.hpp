@@ -72,6 +72,7 @@ struct DNFilterImpl {
   std::optional<dn::capi::Image> output;
   std::vector<dn::protocol::Parameter> parameters;  // in the order first set
   dn::protocol::MotionConvention motion = dn::protocol::MotionConvention::PixelsToPrevious;
+  bool share_input = false;  // SessionDesc::share_input: watchers also see the noisy colour
 
   // The open session and the description it was opened with.
   std::optional<dn::client::Session> session;

@@ -159,7 +159,8 @@ DN_API void dnUnsetFilterImage(DNFilter filter, const char* name);
  * docs/pipelines.md), checked against the server's table when set, plus
  *   1b "hdr"                true only (the input is always linear HDR)
  *   1i "motion_convention"  a DNMotionConvention
- * Pipeline parameters take effect at dnCommitFilter. */
+ *   1b "share_input"        the session's watchers (dn preview) also see the noisy colour
+ * Pipeline parameters and share_input take effect at dnCommitFilter. */
 DN_API void dnSetFilter1b(DNFilter filter, const char* name, bool value);
 DN_API void dnSetFilter1i(DNFilter filter, const char* name, int value);
 DN_API void dnSetFilter1f(DNFilter filter, const char* name, float value);
