@@ -286,10 +286,11 @@ class DnWatchTev : public ::testing::Test {
   fs::path dir_;
 };
 
-// 300x140 goes as 3x2 tiles of at most 128x128; five frames, each shown in tev
-// exactly as a plain watcher of the same session wrote it.
+// 200x144 goes as 2x2 tiles of at most 128x128 (the right and bottom ones
+// partial); five frames, each shown in tev exactly as a plain watcher of the
+// same session wrote it.
 TEST_F(DnWatchTev, TevIsShownTheFramesAPlainWatcherReceives) {
-  constexpr uint32_t W = 300, H = 140;
+  constexpr uint32_t W = 200, H = 144;
   constexpr int kFrames = 5;
   OwnedSession session(W, H);
   const uint64_t sid = session.id();
@@ -333,7 +334,7 @@ TEST_F(DnWatchTev, TevIsShownTheFramesAPlainWatcherReceives) {
   EXPECT_EQ(log.creates[0].height, int32_t(H));
   EXPECT_EQ(log.creates[0].channels, (std::vector<std::string>{"R", "G", "B"}));
   EXPECT_TRUE(log.create_focus[0]);
-  EXPECT_EQ(log.updates, size_t(kFrames) * 3 * 2) << "3 x 2 tiles per frame";
+  EXPECT_EQ(log.updates, size_t(kFrames) * 2 * 2) << "2 x 2 tiles per frame";
   EXPECT_LE(log.largest_packet, size_t(256 * 1024));
   ASSERT_EQ(log.frames.size(), size_t(kFrames));
   for (int i = 0; i < kFrames; ++i) {
