@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -145,6 +146,12 @@ Stream::Stream(const Address& address, double io_timeout_s) : address_(address) 
   const std::string port = std::to_string(address.port);
   if (int rc = ::getaddrinfo(address.host.c_str(), port.c_str(), &hints, &list); rc != 0)
     throw std::runtime_error("cannot reach tev at " + address.text + ": " + ::gai_strerror(rc));
+  // SO_SNDTIMEO bounds connect() as well as each send (a host that does not
+  // answer, a tev that stopped reading).
+  timeval tv{};
+  const double t = std::max(0.001, io_timeout_s);
+  tv.tv_sec = time_t(t);
+  tv.tv_usec = suseconds_t((t - std::floor(t)) * 1e6);
   std::string why = "no address";
   for (addrinfo* ai = list; ai; ai = ai->ai_next) {
     const int fd = ::socket(ai->ai_family, ai->ai_socktype | SOCK_CLOEXEC, ai->ai_protocol);
@@ -152,11 +159,18 @@ Stream::Stream(const Address& address, double io_timeout_s) : address_(address) 
       why = std::strerror(errno);
       continue;
     }
+    ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
     if (::connect(fd, ai->ai_addr, ai->ai_addrlen) == 0) {
       fd_ = fd;
       break;
     }
-    why = std::strerror(errno);
+    if (errno == EINPROGRESS || errno == EAGAIN) {
+      char text[64];
+      std::snprintf(text, sizeof text, "no answer within %g s (--timeout)", t);
+      why = text;
+    } else {
+      why = std::strerror(errno);
+    }
     ::close(fd);
   }
   ::freeaddrinfo(list);
@@ -166,11 +180,6 @@ Stream::Stream(const Address& address, double io_timeout_s) : address_(address) 
                              "` listens on that address; tev's default is " + kDefaultAddress + ")");
   const int one = 1;
   ::setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-  timeval tv{};
-  const double t = std::max(0.001, io_timeout_s);
-  tv.tv_sec = time_t(t);
-  tv.tv_usec = suseconds_t((t - std::floor(t)) * 1e6);
-  ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
 }
 
 Stream::~Stream() {
