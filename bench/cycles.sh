@@ -155,6 +155,7 @@ if "$dn" denoise --help 2>&1 | grep -q -- '--reference2'; then nc_args=(--refere
 results="$out/results.tsv"
 printf 'method\tstatus\trmse\trelmse\tssim\tnc_mse\tnc_relmse\tdevice_ms\tframe_ms\n' > "$results"
 panels=()
+panel_labels=()
 labels=""
 for row in "${rows[@]}"; do
   read -r label pipeline params <<< "$row"
@@ -188,6 +189,7 @@ for row in "${rows[@]}"; do
       "$nc_mse" "$nc_relmse" "$(column "$m" device_ms)" \
       "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" >> "$results"
     panels+=("$dir/frame_$lastf.exr")
+    panel_labels+=(--label "$label")
     labels+="$label | "
   else
     why=$(failure "$dir/dn.log" "$status")
@@ -199,7 +201,7 @@ done
 # Side by side: the last frame of every pipeline that ran, then reference 1;
 # crops: the mirror sphere (with the light's highlight) and the floor under the gold sphere.
 "$bin/bench/side_by_side" --out "$out/cycles.png" --crop 0.24,0.28,0.3,0.5 --crop 0.5,0.62,0.3,0.38 \
-  "${panels[@]}" "$out/render/ref/frame_$lastf.exr" || echo "cycles: side_by_side failed (the table is still written)" >&2
+  "${panel_labels[@]}" --label reference "${panels[@]}" "$out/render/ref/frame_$lastf.exr" || echo "cycles: side_by_side failed (the table is still written)" >&2
 
 {
   echo "| method | RMSE | relMSE | SSIM | nc MSE ($nc_kind) | nc relMSE ($nc_kind) | device ms/frame | end-to-end ms/frame |"

@@ -3,10 +3,16 @@
 // Below: for each crop rectangle, a row of the same crop from every input,
 // enlarged (nearest neighbour) to the panel width, so detail and noise show.
 //
-//   side_by_side --out cmp.png [--crop X,Y,W,H ...] [--exposure E] a.exr b.exr ...
+//   side_by_side --out cmp.png [--crop X,Y,W,H ...] [--exposure E] [--label NAME ...] a.exr b.exr ...
 //
 // Crop rectangles are fractions of the image (0..1). Panels are separated by
-// 4-pixel white gutters; the caption (which panel is which) goes in the docs.
+// 4-pixel white gutters. --label (once per input, in the same order) puts the
+// panel's name in the image: a dark strip of kLabelStrip pixels above each
+// column, the name in white in the bitmap font of bitmap_font.hpp at scale 2
+// with its top-left corner kLabelInset pixels right of the column's left edge
+// and kLabelInset below the top (scale 1, vertically centred, where the name
+// is too wide for the panel at 2; cut where it is too wide at 1), so it reads
+// on bright and dark renders alike.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +23,7 @@
 #include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
 #include "dn/image/png.hpp"
+#include "bitmap_font.hpp"
 
 namespace {
 
@@ -30,6 +37,23 @@ struct Image {
 };
 
 constexpr int kGutter = 4;
+constexpr int kLabelInset = 4;
+constexpr int kLabelStrip = 2 * dn::font::kGlyphHeight + 2 * kLabelInset;  // 26
+constexpr uint8_t kLabelBackground[3] = {24, 24, 24};
+constexpr uint8_t kLabelText[3] = {255, 255, 255};
+
+// The name in the strip above the column at x0, pw pixels wide.
+void draw_label(Image& sheet, int x0, int pw, std::string name) {
+  for (int y = 0; y < kLabelStrip; ++y)
+    for (int x = x0; x < x0 + pw; ++x)
+      for (int k = 0; k < 3; ++k) sheet.rgb[3 * (size_t(y) * sheet.width + x) + k] = kLabelBackground[k];
+  const int room = pw - 2 * kLabelInset;
+  int scale = dn::font::text_width(name, 2) <= room ? 2 : 1;
+  while (!name.empty() && dn::font::text_width(name, scale) > room) name.pop_back();
+  const int y = scale == 2 ? kLabelInset : (kLabelStrip - dn::font::kGlyphHeight) / 2;
+  // Cut to fit: the name stays inside its column.
+  dn::font::draw_text(sheet.rgb.data(), sheet.width, sheet.height, x0 + kLabelInset, y, name, scale, kLabelText);
+}
 
 Crop parse_crop(const std::string& s) {
   Crop c{};
@@ -54,7 +78,7 @@ void blit(const Image& src, int sx, int sy, int sw, int sh, Image& dst, int dx, 
 int run(int argc, char** argv) {
   std::string out;
   std::vector<Crop> crops;
-  std::vector<std::string> inputs;
+  std::vector<std::string> inputs, labels;
   float exposure = 1.0f;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -65,10 +89,15 @@ int run(int argc, char** argv) {
     if (a == "--out") out = value();
     else if (a == "--crop") crops.push_back(parse_crop(value()));
     else if (a == "--exposure") exposure = std::stof(value());
+    else if (a == "--label") labels.push_back(value());
     else if (!a.empty() && a[0] == '-') throw std::invalid_argument("unknown option " + a);
     else inputs.push_back(a);
   }
-  if (out.empty() || inputs.empty()) throw std::invalid_argument("usage: side_by_side --out OUT.png [--crop X,Y,W,H] a.exr ...");
+  if (out.empty() || inputs.empty())
+    throw std::invalid_argument("usage: side_by_side --out OUT.png [--crop X,Y,W,H] [--label NAME ...] a.exr ...");
+  if (!labels.empty() && labels.size() != inputs.size())
+    throw std::invalid_argument(std::to_string(labels.size()) + " --label for " + std::to_string(inputs.size()) +
+                                " inputs: give one per input, in the same order");
 
   std::vector<Image> panels;
   for (const auto& path : inputs) {
@@ -85,13 +114,15 @@ int run(int argc, char** argv) {
   for (const Crop& c : crops) crop_h.push_back(std::max(1, int(pw * (c.h * ph) / (c.w * pw))));
   Image sheet;
   sheet.width = n * pw + (n - 1) * kGutter;
-  sheet.height = ph;
+  const int top = labels.empty() ? 0 : kLabelStrip;
+  sheet.height = top + ph;
   for (int h : crop_h) sheet.height += kGutter + h;
   sheet.rgb.assign(size_t(sheet.width) * sheet.height * 3, 255);
   for (int p = 0; p < n; ++p) {
     const int x0 = p * (pw + kGutter);
-    blit(panels[p], 0, 0, pw, ph, sheet, x0, 0, pw, ph);
-    int y0 = ph;
+    if (!labels.empty()) draw_label(sheet, x0, pw, labels[p]);
+    blit(panels[p], 0, 0, pw, ph, sheet, x0, top, pw, ph);
+    int y0 = top + ph;
     for (size_t c = 0; c < crops.size(); ++c) {
       y0 += kGutter;
       const int sx = int(crops[c].x * pw), sy = int(crops[c].y * ph);

@@ -113,6 +113,7 @@ for s in $scenes; do
   "$dnrender" --scene "$s" --frames "$still" --hold-camera 0 --width "$width" --height "$height" \
     --out "$dir/still" --reflection --stats --seed 3 --quiet
   panels=()
+  panel_labels=()
   for row in "${rows[@]}"; do
     read -r label pipeline params <<< "$row"
     param_args=()
@@ -139,6 +140,7 @@ for s in $scenes; do
       "$(column "$m" device_bytes_per_pixel)" "$(column "$m" nc_mse)" "$(column "$m" nc_relmse)" \
       "$(column "$m" ref_noise_mse)" >> "$results"
     panels+=("$dir/$label/frame_$last.exr")
+    panel_labels+=(--label "$label")
     region_args=(--region glossy,highlights,disocclusion)
     [ -z "$(region_roughness "$s")" ] ||
       region_args=(--roughness "$(region_roughness "$s")" --region roughness-mapped,glossy,highlights,disocclusion)
@@ -155,7 +157,8 @@ for s in $scenes; do
     4) crops=(--crop 0.35,0.55,0.3,0.3 --crop 0.6,0.3,0.25,0.25) ;;
     *) crops=(--crop 0.3,0.2,0.25,0.3 --crop 0.35,0.7,0.3,0.3) ;;
   esac
-  "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panels[@]}" "$dir/refs/ref_$last.exr"
+  "$bin/bench/side_by_side" --out "$out/scene$s.png" "${crops[@]}" "${panel_labels[@]}" --label reference \
+    "${panels[@]}" "$dir/refs/ref_$last.exr"
 done
 
 # The table, grouped by scene.
@@ -167,16 +170,48 @@ for row in "${rows[@]}"; do labels+="${row%% *} "; done
   awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $10, $11, $12, $6, $7, $8, $9 }' "$results"
 } > "$out/results.md"
 
-# The plot: relMSE against device time, one colour per scene, points labelled.
+# The plot: relMSE against device time, one colour per scene, each point
+# labelled with its method. Methods of similar speed and error sit close
+# together, so the labels are placed (bench/lib/place_labels.awk) where they
+# overlap neither each other nor a point, farther out with a leader line where
+# the nearer places are taken; that needs the plot area in pixels: fixed
+# margins and axis ranges.
 plot_files=""
 for s in $scenes; do
   awk -F'\t' -v s="$s" 'NR > 1 && $1 == s { print $2, ($7 > 0.01 ? $7 : 0.01), $4 }' "$results" > "$out/plot_scene$s.dat"
   plot_files+="$s "
 done
+for s in $scenes; do awk -v s="$s" '{ print s, $1, $2, $3 }' "$out/plot_scene$s.dat"; done > "$out/plot_points.dat"
+# The data's range, a fifth of a decade wider on each side.
+read -r xmin xmax ymin ymax < <(awk '
+  $3 > 0 && (x0 == "" || $3 < x0) { x0 = $3 } $3 > 0 && (x1 == "" || $3 > x1) { x1 = $3 }
+  $4 > 0 && (y0 == "" || $4 < y0) { y0 = $4 } $4 > 0 && (y1 == "" || $4 > y1) { y1 = $4 }
+  END {
+    if (x0 == "") { x0 = 0.1; x1 = 1 }
+    if (y0 == "") { y0 = 0.1; y1 = 1 }
+    f = 10 ^ 0.2
+    printf "%.6g %.6g %.6g %.6g\n", x0 / f, x1 * f, y0 / f, y1 * f
+  }' "$out/plot_points.dat")
+plot_w=960 plot_h=600
+[ "$(wc -l < "$out/plot_points.dat")" -le 20 ] || { plot_w=1280 plot_h=800; }
+lm=0.09 rm=0.84 bm=0.11 tm=0.92
+awk -v W=$plot_w -v H=$plot_h -v lm=$lm -v rm=$rm -v bm=$bm -v tm=$tm -v xmin="$xmin" -v xmax="$xmax" \
+  -v ymin="$ymin" -v ymax="$ymax" -v cw=6.5 -v ch=13 -f bench/lib/place_labels.awk "$out/plot_points.dat" \
+  > "$out/plot_labels.dat"
+leaders=""
+if awk '$5 != "-" { found = 1 } END { exit !found }' "$out/plot_labels.dat"; then
+  leaders=", '$out/plot_labels.dat' using 5:6:(\$7-\$5):(\$8-\$6) with vectors nohead lc rgb 'gray40' notitle"
+fi
 gnuplot <<EOF
-set terminal png size 960,600 font ",11"
+set terminal png size $plot_w,$plot_h font ",11"
 set output '$out/speed_error.png'
+set lmargin at screen $lm
+set rmargin at screen $rm
+set bmargin at screen $bm
+set tmargin at screen $tm
 set logscale xy
+set xrange [$xmin:$xmax]
+set yrange [$ymin:$ymax]
 set grid
 set key outside right top title 'scene'
 set xlabel 'device time per frame, ms (${width}x${height}, $device)'
@@ -184,7 +219,7 @@ set ylabel 'relMSE against the ${ref_spp}-spp reference (mean over $frames frame
 set title 'Speed against error'
 files = '$plot_files'
 plot for [s in files] '$out/plot_scene'.s.'.dat' using 2:3 with points pt 7 ps 1.5 title s, \
-     for [s in files] '$out/plot_scene'.s.'.dat' using 2:3:1 with labels offset char 1,0.6 left font ",9" notitle
+     '$out/plot_labels.dat' using 3:4:2 with labels left font ",9" notitle$leaders
 EOF
 
 cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)

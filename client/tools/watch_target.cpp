@@ -1,18 +1,31 @@
 #include "watch_target.hpp"
 
 #include <charconv>
+#include <cstdio>
 #include <cstdlib>
 
+#include "commands.hpp"
 #include "dn/protocol/messages.hpp"
 
 namespace dn::cli {
 
-Args::Spec session_option() {
-  return {"session", "", true, false, "id of the session to watch (printed by dn denoise and dnrender --server)", "ID"};
-}
-
-Args::Spec watch_key_option() {
-  return {"key", "", true, false, "the session's watch key (default $DN_WATCH_KEY; printed with the id)", "KEY"};
+std::vector<Args::Spec> watch_specs(std::vector<Args::Spec> own) {
+  std::vector<Args::Spec> specs = {
+      server_option(),
+      {"session", "", true, false, "id of the session to watch (printed by dn denoise and dnrender --server)", "ID"},
+      {"key", "", true, false, "the session's watch key (default $DN_WATCH_KEY; printed with the id)", "KEY"},
+  };
+  specs.insert(specs.end(), own.begin(), own.end());
+  specs.insert(specs.end(), {
+      {"token-file", "", true, false, "file holding the server's auth token", "FILE"},
+      {"tonemap", "", true, false, "tone map for PNGs and the preview page: aces | reinhard | clamp (default aces)",
+       "OP"},
+      {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
+      {"timeout", "", true, false, "seconds to wait for the next frame (default 600); longer is an error", "SECONDS"},
+      {"quiet", "-q", false, false, "no per-frame output", ""},
+      {"help", "-h", false, false, "this help", ""},
+  });
+  return specs;
 }
 
 WatchTarget watch_target(const Args& args) {
@@ -36,6 +49,40 @@ WatchTarget watch_target(const Args& args) {
     throw UsageError("--key: expected the session's watch key, " + std::to_string(protocol::kWatchKeyLength) +
                      " lowercase hex digits, got '" + t.key + "' (" + std::to_string(t.key.size()) + " characters)");
   return t;
+}
+
+Display display_options(const Args& args) {
+  Display d;
+  try {
+    d.tonemap = image::parse_tonemap(args.get_or("tonemap", "aces"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--tonemap: ") + e.what());
+  }
+  d.exposure = float(args.get_double("exposure", 1.0));
+  return d;
+}
+
+double watch_timeout_s(const Args& args) {
+  return args.get_double("timeout", 600.0, kMinTimeoutSeconds, kMaxTimeoutSeconds);
+}
+
+Attached attach(const Args& args, const WatchTarget& target, const char* client_name, double timeout_s) {
+  client::ConnectOptions copts;
+  copts.client_name = client_name;
+  if (auto tf = args.get("token-file")) copts.token_file = *tf;
+  copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
+  client::Connection conn = client::Connection::connect(server_url(args.get_or("server", "")), copts);
+  client::Watcher watcher = conn.attach(target.session_id, target.key);
+  return {std::move(conn), std::move(watcher)};
+}
+
+bool ended_normally(const client::Watcher& watcher, bool quiet) {
+  const auto& closed = watcher.closed();
+  if (!closed) return false;
+  if (!quiet)
+    std::fprintf(stderr, "dn: session %llu ended normally after %llu frames\n", (unsigned long long)closed->session_id,
+                 (unsigned long long)closed->frames_processed);
+  return true;
 }
 
 }  // namespace dn::cli

@@ -131,6 +131,13 @@ void print_reconnected(const client::Reconnected& r) {
                r.attempts, r.attempts == 1 ? "" : "s", static_cast<double>(r.took.count()) / 1e3);
 }
 
+// The session's id and a ready `dn watch` command: printed when the session
+// opens and again when a reconnection replaces it (new id, new watch key).
+void print_watch_hint(client::Session& session) {
+  std::fprintf(stderr, "dnrender: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
+               static_cast<unsigned long long>(session.id()), session.watch_command().c_str());
+}
+
 }  // namespace
 
 FrameStreamer::FrameStreamer(const StreamOptions& options) : options_(options) {
@@ -190,14 +197,15 @@ void FrameStreamer::open(const FrameBuffers& sample) {
   // after a lost server").
   client::ReconnectOptions reconnect;
   reconnect.give_up_after = std::chrono::milliseconds(static_cast<int64_t>(options.reconnect_for_s * 1e3));
-  reconnect.on_reconnect = print_reconnected;
+  reconnect.on_reconnect = [state = state_.get(), quiet = options.quiet](const client::Reconnected& r) {
+    print_reconnected(r);
+    // Called once the new session is open: session() is it.
+    if (!quiet && state->session && state->session->session()) print_watch_hint(*state->session->session());
+  };
   client::Connection connection = std::move(*state_->connection);
   state_->connection.reset();
   state_->session.emplace(std::move(connection), desc, state_->connect, reconnect);
-  if (!options.quiet)
-    std::fprintf(stderr, "dnrender: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
-                 static_cast<unsigned long long>(state_->session->session()->id()),
-                 state_->session->session()->watch_command().c_str());
+  if (!options.quiet) print_watch_hint(*state_->session->session());
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
 }
 

@@ -15,23 +15,14 @@ namespace dn::cli {
 
 namespace {
 
-const std::vector<Args::Spec> kSpecs = {
-    server_option(),
-    session_option(),
-    watch_key_option(),
+const std::vector<Args::Spec> kSpecs = watch_specs({
     {"http", "", true, false,
      "where the page is served, HOST:PORT (default " + std::string(kDefaultPreviewAddress) +
          "; port 0 picks a free one)",
      "HOST:PORT"},
     {"http-token", "", true, false,
      "secret the page's URL must carry as ?token= (default $DN_PREVIEW_TOKEN); required off loopback", "TOKEN"},
-    {"token-file", "", true, false, "file holding the server's auth token", "FILE"},
-    {"tonemap", "", true, false, "tone map for the page: aces | reinhard | clamp (default aces)", "OP"},
-    {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
-    {"timeout", "", true, false, "seconds to wait for the next frame (default 600); longer is an error", "SECONDS"},
-    {"quiet", "-q", false, false, "no per-frame output", ""},
-    {"help", "-h", false, false, "this help", ""},
-};
+});
 
 }  // namespace
 
@@ -48,7 +39,6 @@ int run_preview(const std::vector<std::string>& argv) {
                 args.usage().c_str());
     return 0;
   }
-  const std::string url = server_url(args.get_or("server", ""));
   const WatchTarget target = watch_target(args);
   const PreviewAddress http = parse_preview_address(args.get_or("http", kDefaultPreviewAddress));
   std::string token = args.get_or("http-token", "");
@@ -59,21 +49,12 @@ int run_preview(const std::vector<std::string>& argv) {
                      " is not a loopback address: give --http-token TOKEN (or DN_PREVIEW_TOKEN) so that only "
                      "those with the token see the session");
   PreviewContext ctx;
-  try {
-    ctx.tonemap = image::parse_tonemap(args.get_or("tonemap", "aces"));
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--tonemap: ") + e.what());
-  }
-  ctx.exposure = float(args.get_double("exposure", 1.0));
-  const double timeout_s = args.get_double("timeout", 600.0, kMinTimeoutSeconds, kMaxTimeoutSeconds);
+  const Display display = display_options(args);
+  ctx.tonemap = display.tonemap;
+  ctx.exposure = display.exposure;
   const bool quiet = args.has("quiet");
-
-  client::ConnectOptions copts;
-  copts.client_name = "dn-preview";
-  if (auto tf = args.get("token-file")) copts.token_file = *tf;
-  copts.io_timeout = std::chrono::milliseconds(static_cast<long long>(timeout_s * 1000.0));
-  client::Connection conn = client::Connection::connect(url, copts);
-  client::Watcher watcher = conn.attach(target.session_id, target.key);
+  Attached attached = attach(args, target, "dn-preview", watch_timeout_s(args));
+  client::Watcher& watcher = attached.watcher;
   ctx.session_id = target.session_id;
   ctx.pipeline = watcher.info().pipeline;
 
@@ -89,11 +70,7 @@ int run_preview(const std::vector<std::string>& argv) {
     try {
       r = watcher.next();
     } catch (const client::Error&) {
-      const auto& closed = watcher.closed();  // SESSION_CLOSED is the normal end
-      if (!closed) throw;
-      if (!quiet)
-        std::fprintf(stderr, "dn: session %llu ended normally after %llu frames\n",
-                     (unsigned long long)closed->session_id, (unsigned long long)closed->frames_processed);
+      if (!ended_normally(watcher, quiet)) throw;  // SESSION_CLOSED is the normal end
       return kExitOk;
     }
     if (!r.has_output()) continue;
