@@ -9,7 +9,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools spirv-tools spirv-cross
   libopenexr-dev libglm-dev libembree-dev gnuplot-nox
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcivetweb-dev chromium-headless-shell
+  libcivetweb-dev chromium-headless-shell haproxy
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
 )
 missing=()

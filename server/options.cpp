@@ -46,6 +46,22 @@ bool parse_bytes(std::string_view text, uint64_t& out) {
   return true;
 }
 
+// An address clients connect to (so, unlike --listen, a host name is fine):
+// tcp://HOST:PORT with a port in 1..65535, or unix:///PATH; printable ASCII
+// within SESSION.watch_url's limit.
+bool is_advertisable_url(std::string_view url) {
+  if (url.empty() || url.size() > protocol::kMaxWatchUrlBytes) return false;
+  for (const char c : url)
+    if (c < 0x21 || c > 0x7e) return false;
+  if (url.rfind("unix:///", 0) == 0) return url.size() > 8;
+  if (url.rfind("tcp://", 0) != 0) return false;
+  const std::string_view rest = url.substr(6);
+  const size_t colon = rest.rfind(':');
+  if (colon == std::string_view::npos || colon == 0) return false;
+  int port = 0;
+  return parse_number(rest.substr(colon + 1), port) && port >= 1 && port <= 65535;
+}
+
 struct Flag {
   const char* name;
   const char* arg;  // nullptr for a switch
@@ -132,6 +148,13 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.dead_peer_s) && (o.dead_peer_s == 0 || o.dead_peer_s >= 2); }},
       {"--shutdown-grace", "SECONDS", "on SIGTERM, time allowed to finish frames in flight (default 30)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.shutdown_grace_s); }},
+      {"--advertise-url", "URL",
+       "tell each session's owner where watchers reach this server (SESSION.watch_url, protocol 1.8), e.g. a "
+       "balancer's port that routes to this backend alone: tcp://HOST:PORT or unix:///PATH",
+       [](ServerOptions& o, std::string_view v) {
+         o.advertise_url = v;
+         return is_advertisable_url(v);
+       }},
       {"--cache-dir", "DIR",
        "keep compiled pipelines in DIR across runs (default $XDG_CACHE_HOME/dnserver or ~/.cache/dnserver; "
        "created 0700, must belong to this user and not be writable by others)",

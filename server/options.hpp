@@ -38,6 +38,7 @@ struct ServerOptions {
   double dead_peer_s = 120.0;            // TCP keepalive and TCP_USER_TIMEOUT: a vanished peer is noticed in this time
   double shutdown_grace_s = 30.0;        // SIGTERM: time allowed to finish frames in flight
   std::string log_level = "info";
+  std::string advertise_url;             // SESSION.watch_url (1.8): where watchers reach this backend; empty: none
   std::string cache_dir;                 // on-disk pipeline cache; default: the user's cache dir (server/cache_dir.hpp)
   bool cache_dir_given = false;          // --cache-dir was explicit: an unusable directory is an error, not a warning
   bool disk_cache = true;                // --no-disk-cache: compiled pipelines are kept in memory only

@@ -132,6 +132,7 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
                          session->device_bytes(), false, config.channels};
   // A 1.5 client cannot carry the key: its session can be watched by no one.
   if (c->negotiated_minor >= protocol::kWatchKeyMinor) reply.watch_key = session->watch_key();
+  if (c->negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
   send(*c, reply, request_id);
   update_interest(*c);
 }
@@ -193,6 +194,7 @@ void Server::on_attach(net::Connection& c, const protocol::Header& h, const prot
   protocol::Session reply{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true,
                           cfg.channels};
   reply.watch_key = std::string();
+  if (c.negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
   send(c, reply, h.request_id);
 }
 

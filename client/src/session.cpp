@@ -112,8 +112,14 @@ const std::string& Session::watch_key() const {
   return info_.watch_key ? *info_.watch_key : kNone;
 }
 
+const std::string& Session::watch_url() const {
+  static const std::string kNone;
+  return info_.watch_url ? *info_.watch_url : kNone;
+}
+
 std::string Session::watch_command() const {
-  std::string cmd = "dn watch --server " + state_->endpoint() + " --session " + std::to_string(info_.session_id);
+  const std::string& server = watch_url().empty() ? state_->endpoint() : watch_url();
+  std::string cmd = "dn watch --server " + server + " --session " + std::to_string(info_.session_id);
   if (!watch_key().empty()) cmd += " --key " + watch_key();
   return cmd;
 }

@@ -163,6 +163,23 @@ bool read_watch_key(Ctx& c, std::optional<std::string>& out) {
   return true;
 }
 
+// SESSION.watch_url (1.8): printable ASCII, possibly empty.
+bool read_watch_url(Ctx& c, std::optional<std::string>& out) {
+  if (!c.has(kWatchUrlMinor)) {
+    out.reset();
+    return true;
+  }
+  const Field f = c.f("watch_url");
+  std::string url;
+  if (!c.r.str(url, f, kMaxWatchUrlBytes)) return false;
+  for (size_t i = 0; i < url.size(); ++i)
+    if (url[i] < 0x21 || url[i] > 0x7e)
+      return c.r.fail(ErrorCode::Malformed, f,
+                      f.str() + " must be printable ASCII without spaces; byte " + std::to_string(i) + " is not");
+  out = std::move(url);
+  return true;
+}
+
 bool decode(Ctx& c, Hello& m) {
   Reader& r = c.r;
   const Field cap = c.f("capabilities");
@@ -288,7 +305,7 @@ bool decode(Ctx& c, Session& m) {
     return false;
   if (!read_bool(r, m.read_only, c.f("read_only"))) return false;
   return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels") &&
-         read_watch_key(c, m.watch_key);
+         read_watch_key(c, m.watch_key) && read_watch_url(c, m.watch_url);
 }
 
 bool decode(Ctx& c, Frame& m) {

@@ -178,6 +178,7 @@ struct Put {
     s.u64(m.device_bytes);
     put_channels(s, m.channels);
     if (m.watch_key) s.str(*m.watch_key);  // 1.6, for a peer that knows it
+    if (m.watch_url) s.str(*m.watch_url);  // 1.8, likewise
   }
   void operator()(const Frame& m) {
     const FrameInfo& f = m.info;
@@ -228,10 +229,12 @@ struct Put {
 // The minor version whose fields the payload holds: the header always says
 // kVersionMinor (the sender's own), but a WELCOME for a 1.0 client stops
 // after the 1.0 fields (docs/protocol.md §10), so it is checked as 1.0; a
-// SESSION or ATTACH without its watch key is a 1.5 payload.
+// SESSION or ATTACH without its watch key is a 1.5 payload, a SESSION
+// without its watch URL a 1.7 one.
 uint8_t payload_minor(const Message& message) {
   if (const auto* w = std::get_if<Welcome>(&message); w && !w->has_parameters) return 0;
   if (const auto* s = std::get_if<Session>(&message); s && !s->watch_key) return kWatchKeyMinor - 1;
+  if (const auto* s = std::get_if<Session>(&message); s && !s->watch_url) return kWatchUrlMinor - 1;
   if (const auto* a = std::get_if<Attach>(&message); a && !a->watch_key) return kWatchKeyMinor - 1;
   return kVersionMinor;
 }
@@ -260,6 +263,8 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
         to_string(type));
 
   check_welcome_parameters(message);
+  if (const auto* s = std::get_if<Session>(&message); s && s->watch_url && !s->watch_key)
+    throw std::invalid_argument("dn::protocol::encode: SESSION.watch_url (1.8) needs watch_key (1.6) before it");
 
   Counter counter;
   std::visit(Put<Counter>{counter}, message);

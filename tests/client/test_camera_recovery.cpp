@@ -334,6 +334,7 @@ void recording_server(test::Peer& peer, Log& log) {
       s.output_format = o->output_format;
       s.channels = o->channels;
       s.watch_key = "00112233445566778899aabbccddeeff";
+      s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
       peer.send(s, id);
     } else if (auto* f = std::get_if<protocol::Frame>(&m->message)) {
       log.infos.push_back(f->info);

@@ -56,6 +56,7 @@ void echo_server(Peer& peer, EchoLog& log, std::optional<uint64_t> fail_on = std
       session.output_format = o->output_format;
       session.channels = o->channels;
       session.watch_key = "00112233445566778899aabbccddeeff";
+      session.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
       peer.send(session, id);
     } else if (auto* f = std::get_if<Frame>(&m->message)) {
       log.frames.push_back(f->info.frame_index);

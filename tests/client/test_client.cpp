@@ -47,6 +47,7 @@ OpenSession serve_open(Peer& peer, uint64_t session_id = 7) {
   s.device_bytes = 12345;
   s.channels = o->channels;
   s.watch_key = kKey;
+  s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
   peer.send(s, m->header.request_id);
   return *o;
 }
@@ -571,6 +572,7 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
     EXPECT_EQ(a->watch_key, std::optional<std::string>(kKey)) << "ATTACH carries the key given to attach()";
     Session s;
     s.watch_key = "";  // the reply to ATTACH does not repeat it
+    s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
     s.session_id = a->session_id;
     s.width = W;
     s.height = H;

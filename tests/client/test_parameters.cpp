@@ -130,7 +130,7 @@ TEST(ClientParameters, OneOneServerTablesReachTheClientAndHelloSaysOneTwo) {
   EXPECT_EQ(svgf->parameters[1].description, "Number of a-trous iterations.");
   conn.close();
   server.join();
-  EXPECT_EQ(hello_minor, 7);  // the client's own version, 1.7
+  EXPECT_EQ(hello_minor, 8);  // the client's own version, 1.8
 }
 
 TEST(ClientParameters, MisspeltParameterFailsLocallyWithOneOneServer) {

@@ -39,6 +39,7 @@ void stream_then_end(Peer& peer, StreamEnd end) {
   s.pipeline = "passthrough";
   s.read_only = true;
   s.watch_key = "";
+  s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
   peer.send(s, m->header.request_id);
   std::vector<float> out(W * H * 3);
   std::vector<uint8_t> bytes(out.size() * 4);

@@ -31,6 +31,7 @@ TEST(Watcher, AResultAlreadyInTheSocketIsReturnedWithoutWaitingOutTheTimeout) {
     s.pipeline = "passthrough";
     s.read_only = true;
     s.watch_key = "";
+    s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
     peer.send(s, m->header.request_id);
     // After the SESSION has been read by attach(): the RESULT waits, unread, in the client's socket.
     std::this_thread::sleep_for(std::chrono::milliseconds(200));

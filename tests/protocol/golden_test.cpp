@@ -11,7 +11,7 @@ namespace {
 std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, minor})             // version 1.0 ... 1.7
+      .raw({0x01, minor})             // version 1.0 ... 1.8
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -105,7 +105,7 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello(7));  // the sender's own version: 1.7
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(8));  // the sender's own version: 1.8
 }
 
 TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
@@ -173,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(7));
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(8));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session(7);
+  const auto bytes = golden_open_session(8);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;
@@ -201,14 +201,15 @@ TEST(Golden, OpenSessionBothWays) {
 
 // SESSION, request_id 3, session 0x0102030405060708, 640x360 "svgf", F16
 // output, not read-only, 4096 device bytes, one channel (radiance F32), and
-// from 1.6 the watch key (§5.5).
+// from 1.6 the watch key (§5.5), from 1.8 the watch URL.
 const char* const kKey = "0123456789abcdef0123456789abcdef";
+const char* const kUrl = "tcp://lb:7101";
 std::vector<uint8_t> golden_session(int minor) {
   Bytes b;
   b.raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
       .raw({0x05, 0x00})                        // type 5 = SESSION
       .raw({0x00, 0x00, 0x00, 0x00})            // flags
-      .raw({minor >= 6 ? 0x46 : 0x24, 0x00, 0x00, 0x00})  // payload_length 36, 70 with the key
+      .raw({minor >= 8 ? 0x55 : minor >= 6 ? 0x46 : 0x24, 0x00, 0x00, 0x00})  // payload_length 36, 70 with the key, 85 with the URL
       .raw({0x03, 0, 0, 0, 0, 0, 0, 0})         // request_id 3
       // payload
       .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01})  // 0: session_id
@@ -220,6 +221,7 @@ std::vector<uint8_t> golden_session(int minor) {
       .raw({0x00, 0x10, 0, 0, 0, 0, 0, 0})                    // +2: device_bytes 4096
       .raw({0x01, 0x00, 0x00, 0x02});                         // +10: 1 channel, radiance F32
   if (minor >= 6) b.raw({0x20, 0x00}).text(kKey);             // 1.6: watch_key, 32 bytes
+  if (minor >= 8) b.raw({0x0D, 0x00}).text(kUrl);             // 1.8: watch_url, 13 bytes
   return b.v;
 }
 
@@ -236,21 +238,49 @@ std::vector<uint8_t> golden_attach(int minor) {
   return b.v;
 }
 
-Session golden_session_message(std::optional<std::string> key) {
+Session golden_session_message(std::optional<std::string> key, std::optional<std::string> url = std::nullopt) {
   Session s{0x0102030405060708u, 640, 360, "svgf", Format::F16, 4096, false, {{ChannelId::Radiance, Format::F32}}};
   s.watch_key = std::move(key);
+  s.watch_url = std::move(url);
   return s;
 }
 
 TEST(Golden, SessionWithTheWatchKeyBothWays) {
   const Session s = golden_session_message(kKey);
-  EXPECT_EQ(encode(s, 3, 0), golden_session(7));
+  // To a 1.6 or 1.7 client: the 1.7 payload under this sender's own minor.
+  std::vector<uint8_t> expected = golden_session(7);
+  expected[5] = kVersionMinor;
+  EXPECT_EQ(encode(s, 3, 0), expected);
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_session(6);
   auto err = decode_message(bytes, kMaxMessage, d, storage);
   ASSERT_FALSE(err) << err->field << ": " << err->message;
   EXPECT_EQ(diff(s, d.message), "");
+}
+
+TEST(Golden, SessionWithTheWatchUrlBothWays) {
+  const Session s = golden_session_message(kKey, kUrl);
+  EXPECT_EQ(encode(s, 3, 0), golden_session(8));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_session(8);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(s, d.message), "");
+  // A URL needs the key before it on the wire.
+  EXPECT_THROW(encode(golden_session_message(std::nullopt, kUrl), 3, 0), std::invalid_argument);
+}
+
+TEST(Golden, WatchUrlIsPrintableAscii) {
+  auto bytes = golden_session(8);
+  bytes[bytes.size() - 5] = ' ';  // "tcp://lb 7101"
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_TRUE(err) << "a watch URL with a space decoded";
+  EXPECT_EQ(err->code, ErrorCode::Malformed);
+  EXPECT_EQ(err->field, "SESSION.watch_url");
 }
 
 TEST(Golden, SessionFromAnOlderServerHasNoKey) {
@@ -262,7 +292,7 @@ TEST(Golden, SessionFromAnOlderServerHasNoKey) {
     ASSERT_FALSE(err) << minor << ": " << err->field << ": " << err->message;
     EXPECT_EQ(diff(golden_session_message(std::nullopt), d.message), "") << minor;
   }
-  // A 1.7 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
+  // A 1.8 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
   std::vector<uint8_t> expected = golden_session(5);
   expected[5] = kVersionMinor;
   EXPECT_EQ(encode(golden_session_message(std::nullopt), 3, 0), expected);
@@ -270,7 +300,7 @@ TEST(Golden, SessionFromAnOlderServerHasNoKey) {
 
 TEST(Golden, AttachWithTheWatchKeyBothWays) {
   const Attach a{0x0102030405060708u, kKey};
-  EXPECT_EQ(encode(a, 9, 0), golden_attach(7));
+  EXPECT_EQ(encode(a, 9, 0), golden_attach(8));
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_attach(6);

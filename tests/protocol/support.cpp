@@ -195,6 +195,7 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       m.read_only = uniform<int>(rng, 0, 1) == 1;
       m.channels = random_channels(rng);
       m.watch_key = random_watch_key(rng);
+      m.watch_url = uniform<int>(rng, 0, 1) ? "" : "tcp://lb-" + std::to_string(random_u32(rng)) + ":7101";
       o.message = m;
       break;
     }

@@ -31,7 +31,7 @@ def still_scene(rng, w=W, h=H, dtype=np.float32):
 
 def test_connection_reports_the_servers_welcome(conn, server):
     assert conn.endpoint == server.url
-    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 7)
+    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 8)
     assert conn.is_open
     assert conn.limits["max_width"] >= W and conn.limits["max_frames_in_flight"] >= 1
     names = [p.name for p in conn.pipelines()]

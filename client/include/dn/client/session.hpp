@@ -103,8 +103,13 @@ class Session {
   // The capability to watch this session (protocol 1.6): give it to whoever
   // should ATTACH (Connection::attach, `dn watch --key`). Empty from an older server.
   const std::string& watch_key() const;
+  // Where watchers of this session connect (protocol 1.8, dnserver
+  // --advertise-url: e.g. a balancer's port that reaches this backend);
+  // empty when the server names none: then this connection's address.
+  const std::string& watch_url() const;
   // The `dn watch` command line that watches this session, ready to paste:
-  // "dn watch --server URL --session ID --key KEY" (no --key from an older server).
+  // "dn watch --server URL --session ID --key KEY" (no --key from an older
+  // server), URL being watch_url() when the server gives one.
   std::string watch_command() const;
   uint32_t max_in_flight() const { return max_in_flight_; }
   // Submitted and not yet returned by wait()/poll() (answered or not).

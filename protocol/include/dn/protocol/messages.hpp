@@ -19,7 +19,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 7;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag)
+inline constexpr uint8_t kVersionMinor = 8;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag); 1.8: SESSION.watch_url
 inline constexpr size_t kHeaderSize = 24;
 
 // Where dnserver listens when started without --listen, and so where clients
@@ -90,6 +90,8 @@ const char* to_string(MessageType type);
 // ATTACH.watch_key): kWatchKeyLength lowercase hex digits, or empty for "none".
 inline constexpr uint8_t kWatchKeyMinor = 6;
 inline constexpr uint8_t kShareInputMinor = 7;  // the header flag SHARE_INPUT
+inline constexpr uint8_t kWatchUrlMinor = 8;    // SESSION.watch_url
+inline constexpr size_t kMaxWatchUrlBytes = 256;
 inline constexpr size_t kWatchKeyLength = 32;  // 128 random bits
 // Empty, or exactly kWatchKeyLength characters of 0-9a-f: what the decoder accepts.
 bool is_well_formed_watch_key(std::string_view key);
@@ -177,6 +179,11 @@ struct Session {
   // header's minor is >= kWatchKeyMinor). The key in the reply to
   // OPEN_SESSION, empty in the reply to ATTACH.
   std::optional<std::string> watch_key;
+  // 1.8, appended after watch_key (which must then be set): where watchers of
+  // this session connect, e.g. a balancer's port that reaches this backend
+  // (dnserver --advertise-url); empty when the server has none. Printable
+  // ASCII, at most kMaxWatchUrlBytes.
+  std::optional<std::string> watch_url;
 };
 
 // Motion vectors: the protocol's canonical convention is pixels, current

@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# Three dnserver backends behind HAProxy on loopback, configured by the
+# recipe's own file (examples/deploy/haproxy.cfg, docs/deploy.md):
+#   - 12 sessions through the balancer spread over the three backends;
+#   - a watcher reaches the first session through the port its SESSION
+#     advertises (the balancer's port for that backend) and gets frames;
+#   - that backend is killed with SIGKILL mid-stream: its clients reconnect
+#     through the balancer to another backend and go on, no frame reordered,
+#     every frame answered or reported lost (balanced_stream checks);
+#   - frames per second before and after.
+# Bounded and self-stopping; exit 77 (skip) where haproxy is not installed.
+#
+#   haproxy_test.sh DNSERVER DN BALANCED_STREAM HAPROXY_CFG
+set -euo pipefail
+dnserver=$1 dn=$2 balanced=$3 cfg=$4
+haproxy_bin=$(command -v haproxy || true)
+[ -n "$haproxy_bin" ] || [ ! -x /usr/sbin/haproxy ] || haproxy_bin=/usr/sbin/haproxy
+if [ -z "$haproxy_bin" ]; then
+  echo "SKIP: haproxy is not installed (scripts/setup.sh installs Debian's haproxy)"
+  exit 77
+fi
+
+work=$(mktemp -d /tmp/dn-balancer-XXXXXX)
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*"; for f in "$work"/*.log; do echo "--- $f"; tail -5 "$f"; done; exit 1; }
+deadline() { echo $(( $(date +%s) + $1 )); }
+
+# Seven free loopback ports: the frontend, three backends, three watch ports.
+read -r front b1 b2 b3 w1 w2 w3 < <(python3 -c '
+import socket
+socks = [socket.socket() for _ in range(7)]
+for s in socks: s.bind(("127.0.0.1", 0))
+print(*[s.getsockname()[1] for s in socks])')
+
+backend_ports=("$b1" "$b2" "$b3") watch_ports=("$w1" "$w2" "$w3") server_pids=()
+for i in 0 1 2; do
+  "$dnserver" --no-warm-up --listen "tcp://127.0.0.1:${backend_ports[$i]}" \
+    --advertise-url "tcp://127.0.0.1:${watch_ports[$i]}" > "$work/dnserver$i.log" 2>&1 &
+  pids+=($!) server_pids+=($!)
+done
+for i in 0 1 2; do
+  end=$(deadline 60)
+  until grep -q "event=ready" "$work/dnserver$i.log"; do
+    [ "$(date +%s)" -lt "$end" ] || fail "dnserver $i did not start"
+    sleep 0.1
+  done
+done
+
+export DN_FRONTEND="127.0.0.1:$front" DN_B1="127.0.0.1:$b1" DN_B2="127.0.0.1:$b2" DN_B3="127.0.0.1:$b3"
+export DN_W1="127.0.0.1:$w1" DN_W2="127.0.0.1:$w2" DN_W3="127.0.0.1:$w3" DN_ADMIN="$work/admin.sock"
+"$haproxy_bin" -f "$cfg" -db > "$work/haproxy.log" 2>&1 &
+pids+=($!)
+# Every backend up by the protocol's own health check (HELLO -> WELCOME).
+stat() { python3 - "$DN_ADMIN" <<'PY'
+import socket, sys
+s = socket.socket(socket.AF_UNIX)
+s.connect(sys.argv[1])
+s.sendall(b"show stat\n")
+data = b""
+while chunk := s.recv(65536):
+    data += chunk
+for line in data.decode().splitlines():
+    f = line.split(",")
+    if len(f) > 36 and f[0] == "dn_backends" and f[1].startswith("b"):
+        print(f[1], f[17], f[36])
+PY
+}
+end=$(deadline 60)
+until [ -S "$DN_ADMIN" ] && [ "$(stat 2>/dev/null | grep -c ' UP L7OK')" = 3 ]; do
+  [ "$(date +%s)" -lt "$end" ] || fail "haproxy did not see three healthy backends: $(stat 2>&1 | tr '\n' ' ')"
+  sleep 0.2
+done
+echo "haproxy: $(stat | tr '\n' ' ')"
+
+"$balanced" "tcp://$DN_FRONTEND" 12 24 "$work/watch" "$work/kill" > "$work/clients.log" 2>&1 &
+clients=$!
+pids+=($clients)
+watched=0 killed=0
+end=$(deadline 240)
+while kill -0 "$clients" 2>/dev/null; do
+  [ "$(date +%s)" -lt "$end" ] || fail "the clients did not finish"
+  if [ -s "$work/watch" ]; then
+    # The owner's own `dn watch` command: --server is the session's watch URL.
+    read -r -a cmd < "$work/watch"
+    [ "${cmd[0]}" = dn ] || fail "no watch command: ${cmd[*]}"
+    echo "watching: ${cmd[*]}"
+    "$dn" "${cmd[@]:1}" --count 2 --timeout 60 --output "$work/w_%04d.pfm" --quiet || fail "dn watch through the balancer failed"
+    [ "$(ls "$work"/w_*.pfm | wc -l)" = 2 ] || fail "dn watch wrote $(ls "$work"/w_*.pfm | wc -l) frames, not 2"
+    watched=1
+    rm -f "$work/watch"
+  fi
+  if [ -s "$work/kill" ]; then
+    target=$(cat "$work/kill")
+    for i in 0 1 2; do
+      if [ "$target" = "tcp://127.0.0.1:${watch_ports[$i]}" ]; then
+        kill -9 "${server_pids[$i]}"
+        wait "${server_pids[$i]}" 2>/dev/null || true  # reaped here, so bash does not report it
+        killed=1
+        echo "killed backend $((i + 1)) (${backend_ports[$i]}), advertised as $target"
+      fi
+    done
+    [ "$killed" = 1 ] || fail "no backend advertises $target"
+    rm -f "$work/kill"
+  fi
+  sleep 0.05
+done
+status=0
+wait "$clients" || status=$?
+cat "$work/clients.log"
+[ "$watched" = 1 ] || fail "the watch step never came"
+[ "$killed" = 1 ] || fail "the kill step never came"
+echo "haproxy after the kill: $(stat | tr '\n' ' ')"
+[ "$status" = 0 ] || fail "the clients' checks failed"
+echo "PASS"
