@@ -74,6 +74,11 @@ TEST(Capacity, FreeMemoryAndPredictedSessionsMatchWhatOpens) {
             0)
       << out;
   EXPECT_EQ(out, "3\n");
+  const std::string dn = std::string(DN_DN_PATH) + " capacity --server " + server.tcp_url();
+  EXPECT_EQ(run_command(dn + " --pipeline passthrough --size 64by36", out), 2) << out;
+  EXPECT_NE(out.find("--size"), std::string::npos) << out;
+  EXPECT_EQ(run_command(dn + " --pipeline nope --size 64x36", out), 1) << out;
+  EXPECT_NE(out.find("pipeline.nope.device_bytes_fixed"), std::string::npos) << out;
 
   uint64_t opened = 0;
   for (uint64_t i = 0; i < 16; ++i) {
