@@ -113,6 +113,8 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_message_bytes) && o.max_message_bytes >= 4096; }},
       {"--max-session-memory", "BYTES", "device memory per session (default 2G)",
        [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_session_bytes); }},
+      {"--max-device-memory", "BYTES", "device memory of all sessions together (default and at most: the device's local heaps)",
+       [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_device_bytes) && o.max_device_bytes > 0; }},
       {"--max-output-buffer", "BYTES", "queued output per connection before its reading pauses (default 256M)",
        [](ServerOptions& o, std::string_view v) { return parse_bytes(v, o.max_output_buffer_bytes); }},
       {"--max-queued-output", "BYTES",

@@ -24,6 +24,7 @@ struct ServerOptions {
   uint32_t max_frames_in_flight = 4;     // per session, before reading from its connection pauses
   uint64_t max_message_bytes = 1ull << 30;
   uint64_t max_session_bytes = 2ull << 30;   // device bytes per session
+  uint64_t max_device_bytes = 0;             // device bytes of all sessions; 0: the device's local heaps
   uint64_t max_output_buffer_bytes = 256ull << 20;  // per connection, before reading pauses
   uint64_t max_queued_output_bytes = 1ull << 30;    // per connection: above it the connection is closed
   uint64_t receive_budget_bytes = 4ull << 30;       // all connections: declared sizes of messages being received

@@ -16,6 +16,7 @@
 
 #include "dn/protocol/codec.hpp"
 #include "gpu/context.hpp"
+#include "gpu/devices.hpp"
 #include "gpu/pipeline_cache.hpp"
 #include "gpu/transient_pool.hpp"
 #include "server/handshake.hpp"
@@ -54,6 +55,11 @@ double seconds_since(Clock::time_point t, Clock::time_point now) {
 Server::Server(ServerOptions options, gpu::Context& device, std::string device_name, PipelineFactory factory)
     : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
   receive_budget_.limit = options_.receive_budget_bytes;
+  const uint64_t heaps = gpu::describe_device(device_.physical_device(), 0).device_local_bytes;
+  device_budget_bytes_ = options_.max_device_bytes && (options_.max_device_bytes < heaps || heaps == 0)
+                             ? options_.max_device_bytes
+                             : heaps;
+  log::info("device_memory_budget", {{"bytes", device_budget_bytes_}, {"device_local_heaps", heaps}});
 
   // Context-wide resources the pipelines declare (svgf-fb's F_beta table):
   // made once per device before any session can bind them, then shared
@@ -540,6 +546,10 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
   }
   live.sessions = sessions_.size();
   live.sessions_being_built = sessions_being_built_;
+  live.device_budget_bytes = device_budget_bytes_;
+  live.being_built_bytes = bytes_being_built_;
+  live.max_sessions = options_.max_sessions;
+  live.max_session_bytes = options_.max_session_bytes;
   for (auto& [id, s] : sessions_) {
     live.frames_in_flight += s->in_flight;
     live.device_bytes += s->device_bytes();  // a closed one's is freed once its last frame leaves the device
@@ -558,6 +568,12 @@ void Server::on_stats(net::Connection& c, const protocol::Header& h) {
   }
   live.shared_resources = shared_resources_;
   send(c, make_stats(counters_, live, device_), h.request_id);
+}
+
+uint64_t Server::committed_device_bytes() const {
+  uint64_t bytes = bytes_being_built_;
+  for (const auto& [id, s] : sessions_) bytes += s->device_bytes();
+  return bytes;
 }
 
 void Server::save_pipeline_cache() {

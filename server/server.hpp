@@ -109,6 +109,11 @@ class Server {
   std::unique_ptr<Scheduler> scheduler_;
   std::unique_ptr<PipelineBuilder> builder_;
   uint32_t sessions_being_built_ = 0;
+  // Capacity: the device memory all sessions may need (--max-device-memory, at
+  // most the device's local heaps), and what open sessions and builds claim of it.
+  uint64_t device_budget_bytes_ = 0;
+  uint64_t bytes_being_built_ = 0;
+  uint64_t committed_device_bytes() const;
   std::mutex completions_mutex_;  // guards completions_, built_ and warm_up_ (written by other threads)
   std::vector<FrameDone> completions_;
   std::vector<BuiltPipeline> built_;

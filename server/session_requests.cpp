@@ -77,15 +77,25 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
                       "session needs " + std::to_string(estimate) + " bytes of device memory, above the " +
                           std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)",
                       false);
+  // All sessions together stay within the device budget (docs/server.md "Capacity").
+  if (const uint64_t committed = committed_device_bytes(); committed + estimate > device_budget_bytes_)
+    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+                      "session needs " + std::to_string(estimate) + " bytes of device memory; " +
+                          std::to_string(device_budget_bytes_ - std::min(committed, device_budget_bytes_)) +
+                          " of the server's " + std::to_string(device_budget_bytes_) +
+                          "-byte budget are free (--max-device-memory)",
+                      false);
 
   // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
   ++c.sessions_being_built;
   ++sessions_being_built_;
+  bytes_being_built_ += estimate;
   builder_->submit(BuildRequest{c.id(), h.request_id, ready, share_input});
 }
 
 void Server::on_pipeline_built(BuiltPipeline&& built) {
   --sessions_being_built_;
+  bytes_being_built_ -= built.request.prepared.device_bytes();
   counters_.add_build(built);
   net::Connection* c = find_connection(built.request.connection_id);
   if (c) --c->sessions_being_built;
@@ -242,6 +252,7 @@ void Server::on_frame_done(FrameDone&& done) {
     ++counters_.frames_processed;
     ++s->frames_processed;
     counters_.add_frame_timings(done.timings);
+    counters_.frame_times.add(s->config().pipeline, uint64_t{s->config().width} * s->config().height, done.timings);
   }
   if (net::Connection* owner = find_connection(s->owner())) {
     send_encoded(*owner, done.owner_message);

@@ -6,6 +6,7 @@
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
 #include "gpu/transient_pool.hpp"
+#include "server/capacity/pipeline_costs.hpp"
 
 namespace dn::server {
 
@@ -62,6 +63,24 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
   if (live.warm_up) {
     add("warm_up_ms", live.warm_up->ms);
     add("warm_up_kernels", n(live.warm_up->kernels));
+  }
+
+  // Capacity: aggregate figures for every peer (a placer sees no session of anyone else).
+  const uint64_t committed = live.device_bytes + live.being_built_bytes;
+  add("device_memory_budget_bytes", n(live.device_budget_bytes));
+  add("device_memory_free_bytes", n(live.device_budget_bytes - std::min(live.device_budget_bytes, committed)));
+  add("max_sessions", n(live.max_sessions));
+  add("max_session_bytes", n(live.max_session_bytes));
+  add("device_busy_fraction", counters.frame_times.busy_fraction());
+  for (const PipelineCost& cost : pipeline_costs()) {
+    const std::string prefix = "pipeline." + cost.pipeline + ".";
+    add(prefix + "device_bytes_fixed", cost.fixed_bytes);
+    add(prefix + "device_bytes_per_pixel", cost.bytes_per_pixel);
+    add(prefix + "reference_channels", n(cost.reference_channels));  // the model's session: channel_bit mask
+    if (const auto ms = counters.frame_times.ms_per_megapixel(cost.pipeline)) {  // absent until measured
+      add(prefix + "frame_ms_per_megapixel", *ms);
+      add(prefix + "frames_measured", n(counters.frame_times.frames_measured(cost.pipeline)));
+    }
   }
 
   for (const auto& f : live.sessions_figures) {  // lets a watcher find a session to ATTACH to

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
+#include "server/capacity/frame_times.hpp"
 #include "server/pipelines/registry.hpp"
 #include "server/session/pipeline_builder.hpp"
 
@@ -33,6 +34,7 @@ struct ServerCounters {
     uint64_t count = 0;
   };
   std::map<std::string, TimingSum> pass_timings;
+  FrameTimes frame_times;  // per pipeline, for the capacity figures
 
   // OPEN_SESSION builds (successful or not), off the event loop.
   struct Builds {
@@ -59,6 +61,10 @@ struct LiveState {
     double persistent_per_pixel = 0, transient_per_pixel = 0;
   };
   std::vector<SessionFigures> sessions_figures;
+  // Capacity (docs/server.md "Capacity").
+  uint64_t device_budget_bytes = 0;       // what all sessions together may need
+  uint64_t being_built_bytes = 0;         // estimates of the sessions being built
+  uint64_t max_sessions = 0, max_session_bytes = 0;
   std::optional<WarmUpReport> warm_up;                         // once it finished
   std::vector<pipelines::SharedResourceTiming> shared_resources;  // made at start-up
 };

@@ -15,6 +15,7 @@ int run_preview(const std::vector<std::string>& args);
 int run_stats(const std::vector<std::string>& args);
 int run_ping(const std::vector<std::string>& args);
 int run_pipelines(const std::vector<std::string>& args);
+int run_capacity(const std::vector<std::string>& args);
 
 // Exit statuses of every dn command.
 inline constexpr int kExitOk = 0;

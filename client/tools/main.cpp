@@ -22,6 +22,7 @@ std::string help() {
              "  ping      handshake, server limits and pipelines, round-trip time\n"
              "  pipelines the server's pipelines: channels and parameter tables\n"
              "  stats     print the server's statistics\n"
+             "  capacity  how many more sessions of a size and pipeline the server can take\n"
              "\n"
              "'dn <command> --help' lists the options of a command. The server address is\n"
              "--server tcp://HOST:PORT or unix:///path; without it $DN_SERVER, else\n") +
@@ -59,7 +60,8 @@ int main(int argc, char** argv) {
     if (cmd == "ping") return dn::cli::run_ping(args);
     if (cmd == "pipelines") return dn::cli::run_pipelines(args);
     if (cmd == "stats") return dn::cli::run_stats(args);
-    std::fprintf(stderr, "dn: unknown command '%s' (expected denoise, watch, preview, ping, pipelines or stats)\n", cmd.c_str());
+    if (cmd == "capacity") return dn::cli::run_capacity(args);
+    std::fprintf(stderr, "dn: unknown command '%s' (expected denoise, watch, preview, ping, pipelines, stats or capacity)\n", cmd.c_str());
     return dn::cli::kExitUsage;
   } catch (const dn::cli::UsageError& e) {
     std::fprintf(stderr, "dn %s: %s\n", cmd.c_str(), one_line(e.what()).c_str());

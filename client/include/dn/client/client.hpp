@@ -8,6 +8,7 @@
 //   dn::client::Result out = session.denoise(in);
 #pragma once
 
+#include "dn/client/capacity.hpp"
 #include "dn/client/connection.hpp"
 #include "dn/client/endpoint.hpp"
 #include "dn/client/error.hpp"
