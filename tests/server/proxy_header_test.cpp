@@ -1,5 +1,5 @@
 // parse_proxy_header against headers written byte by byte from haproxy's
-// doc/proxy-protocol.txt, section 2.2 (independent of the parser's code).
+// doc/proxy-protocol.txt, section 2.2 (proxy_v2_bytes.hpp, not the parser's code).
 #include "server/net/proxy_header.hpp"
 
 #include <arpa/inet.h>
@@ -10,23 +10,16 @@
 #include <string>
 #include <vector>
 
+#include "proxy_v2_bytes.hpp"
+
 namespace dn::server::net {
 namespace {
 
 using Status = ProxyParse::Status;
 using Bytes = std::vector<uint8_t>;
 
-const Bytes kSignature = {0x0D, 0x0A, 0x0D, 0x0A, 0x00, 0x0D, 0x0A, 0x51, 0x55, 0x49, 0x54, 0x0A};
-
-// Signature, ver_cmd, family/transport, big-endian length, then `rest`.
-Bytes header(uint8_t ver_cmd, uint8_t family, const Bytes& rest, int length = -1) {
-  Bytes h = kSignature;
-  const size_t n = length < 0 ? rest.size() : static_cast<size_t>(length);
-  h.insert(h.end(), {ver_cmd, family, static_cast<uint8_t>(n >> 8), static_cast<uint8_t>(n & 0xFF)});
-  h.insert(h.end(), rest.begin(), rest.end());
-  return h;
-}
-
+using test::proxy_v2;
+const Bytes& kSignature = test::kProxyV2Signature;
 // 203.0.113.7:4242 -> 192.0.2.1:7001, as HAProxy's send-proxy-v2 writes it.
 const Bytes kIpv4Block = {203, 0, 113, 7, 192, 0, 2, 1, 0x10, 0x92, 0x1B, 0x59};
 
@@ -42,7 +35,7 @@ uint16_t port_of(const sockaddr_storage& a) {
 }
 
 TEST(ProxyHeader, ProxyOverIpv4GivesTheClientsAddressAndPort) {
-  const Bytes h = header(0x21, 0x11, kIpv4Block);
+  const Bytes h = proxy_v2(0x21, 0x11, kIpv4Block);
   ProxyParse p = parse_proxy_header(h);
   ASSERT_EQ(p.status, Status::Complete) << p.error;
   EXPECT_EQ(p.header.command, ProxyHeader::Command::Proxy);
@@ -57,7 +50,7 @@ TEST(ProxyHeader, ProxyOverIpv6GivesTheClientsAddressAndPort) {
   Bytes block = {0x20, 0x01, 0x0d, 0xb8, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x07,   // 2001:db8::7
                  0x20, 0x01, 0x0d, 0xb8, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x01,   // 2001:db8::1
                  0xC3, 0x50, 0x1B, 0x59};                                          // 50000 -> 7001
-  ProxyParse p = parse_proxy_header(header(0x21, 0x21, block));
+  ProxyParse p = parse_proxy_header(proxy_v2(0x21, 0x21, block));
   ASSERT_EQ(p.status, Status::Complete) << p.error;
   EXPECT_EQ(p.header.size, 16u + 36u);
   EXPECT_EQ(address_of(p.header.source), "2001:db8::7");
@@ -67,30 +60,30 @@ TEST(ProxyHeader, ProxyOverIpv6GivesTheClientsAddressAndPort) {
 
 TEST(ProxyHeader, LocalKeepsTheSocketsPeerWhateverItsAddressBlock) {
   // HAProxy's check-send-proxy: LOCAL, usually UNSPEC with no addresses...
-  ProxyParse bare = parse_proxy_header(header(0x20, 0x00, {}));
+  ProxyParse bare = parse_proxy_header(proxy_v2(0x20, 0x00, {}));
   ASSERT_EQ(bare.status, Status::Complete) << bare.error;
   EXPECT_EQ(bare.header.command, ProxyHeader::Command::Local);
   EXPECT_EQ(bare.header.size, 16u);
   EXPECT_EQ(bare.header.source.ss_family, AF_UNSPEC);
   // ...but the length must be honoured and the family ignored (spec 2.2).
-  ProxyParse with_block = parse_proxy_header(header(0x20, 0x11, kIpv4Block));
+  ProxyParse with_block = parse_proxy_header(proxy_v2(0x20, 0x11, kIpv4Block));
   ASSERT_EQ(with_block.status, Status::Complete) << with_block.error;
   EXPECT_EQ(with_block.header.size, 28u);
   EXPECT_EQ(with_block.header.source.ss_family, AF_UNSPEC);
-  EXPECT_EQ(parse_proxy_header(header(0x20, 0xFF, {1, 2, 3})).status, Status::Complete);
+  EXPECT_EQ(parse_proxy_header(proxy_v2(0x20, 0xFF, {1, 2, 3})).status, Status::Complete);
 }
 
 TEST(ProxyHeader, UnspecUnixAndUdpFallBackToTheSocketsPeer) {
-  ProxyParse unspec = parse_proxy_header(header(0x21, 0x00, {9, 9, 9, 9}));
+  ProxyParse unspec = parse_proxy_header(proxy_v2(0x21, 0x00, {9, 9, 9, 9}));
   ASSERT_EQ(unspec.status, Status::Complete) << unspec.error;
   EXPECT_EQ(unspec.header.command, ProxyHeader::Command::Proxy);
   EXPECT_EQ(unspec.header.size, 20u);
   EXPECT_EQ(unspec.header.source.ss_family, AF_UNSPEC);
-  ProxyParse unix_stream = parse_proxy_header(header(0x21, 0x31, Bytes(216, 'a')));
+  ProxyParse unix_stream = parse_proxy_header(proxy_v2(0x21, 0x31, Bytes(216, 'a')));
   ASSERT_EQ(unix_stream.status, Status::Complete) << unix_stream.error;
   EXPECT_EQ(unix_stream.header.size, 16u + 216u);
   EXPECT_EQ(unix_stream.header.source.ss_family, AF_UNSPEC);
-  ProxyParse udp = parse_proxy_header(header(0x21, 0x12, kIpv4Block));
+  ProxyParse udp = parse_proxy_header(proxy_v2(0x21, 0x12, kIpv4Block));
   ASSERT_EQ(udp.status, Status::Complete) << udp.error;
   EXPECT_EQ(udp.header.source.ss_family, AF_UNSPEC);
 }
@@ -99,7 +92,7 @@ TEST(ProxyHeader, TlvsAreSkippedAndNotOneByteMoreIsTaken) {
   Bytes rest = kIpv4Block;
   // PP2_TYPE_ALPN "dn", PP2_TYPE_NOOP of 3 bytes.
   rest.insert(rest.end(), {0x01, 0x00, 0x02, 'd', 'n', 0x04, 0x00, 0x03, 0, 0, 0});
-  Bytes h = header(0x21, 0x11, rest);
+  Bytes h = proxy_v2(0x21, 0x11, rest);
   const size_t header_size = h.size();
   h.insert(h.end(), {'D', 'N', 'P', '1'});  // the protocol's first bytes follow
   ProxyParse p = parse_proxy_header(h);
@@ -112,7 +105,7 @@ TEST(ProxyHeader, TlvsAreSkippedAndNotOneByteMoreIsTaken) {
 TEST(ProxyHeader, SplitAcrossReadsAsksForExactlyTheHeader) {
   Bytes rest = kIpv4Block;
   rest.insert(rest.end(), {0x04, 0x00, 0x02, 0, 0});
-  const Bytes h = header(0x21, 0x11, rest);
+  const Bytes h = proxy_v2(0x21, 0x11, rest);
   // Every prefix: NeedMore, asking for the fixed part and then for the whole header.
   for (size_t n = 0; n < h.size(); ++n) {
     ProxyParse p = parse_proxy_header(std::span(h.data(), n));
@@ -137,39 +130,39 @@ TEST(ProxyHeader, AWrongSignatureIsRefusedAtItsFirstWrongByte) {
   // PROXY v1 text is not accepted.
   const std::string v1 = "PROXY TCP4 203.0.113.7 192.0.2.1 4242 7001\r\n";
   expect_error(Bytes(v1.begin(), v1.end()), "signature");
-  Bytes last_wrong = header(0x21, 0x11, kIpv4Block);
+  Bytes last_wrong = proxy_v2(0x21, 0x11, kIpv4Block);
   last_wrong[11] = 0x0B;
   expect_error(last_wrong, "signature");
 }
 
 TEST(ProxyHeader, VersionOtherThanTwoIsRefused) {
-  expect_error(header(0x11, 0x11, kIpv4Block), "version 1");
+  expect_error(proxy_v2(0x11, 0x11, kIpv4Block), "version 1");
   Bytes just_version = kSignature;
   just_version.push_back(0x31);
   expect_error(just_version, "version 3");
 }
 
-TEST(ProxyHeader, UnknownCommandIsRefused) { expect_error(header(0x22, 0x11, kIpv4Block), "command 0x02"); }
+TEST(ProxyHeader, UnknownCommandIsRefused) { expect_error(proxy_v2(0x22, 0x11, kIpv4Block), "command 0x02"); }
 
 TEST(ProxyHeader, UnknownFamilyOrTransportIsRefused) {
-  expect_error(header(0x21, 0x41, kIpv4Block), "0x41");
-  expect_error(header(0x21, 0x13, kIpv4Block), "0x13");
+  expect_error(proxy_v2(0x21, 0x41, kIpv4Block), "0x41");
+  expect_error(proxy_v2(0x21, 0x13, kIpv4Block), "0x13");
 }
 
 TEST(ProxyHeader, ALengthTooShortForTheFamilyIsRefused) {
-  expect_error(header(0x21, 0x11, {203, 0, 113, 7}), "needs 12");
-  expect_error(header(0x21, 0x21, kIpv4Block), "needs 36");
-  expect_error(header(0x21, 0x31, Bytes(100, 0)), "needs 216");
+  expect_error(proxy_v2(0x21, 0x11, {203, 0, 113, 7}), "needs 12");
+  expect_error(proxy_v2(0x21, 0x21, kIpv4Block), "needs 36");
+  expect_error(proxy_v2(0x21, 0x31, Bytes(100, 0)), "needs 216");
 }
 
 TEST(ProxyHeader, AHeaderLongerThanTheLimitIsRefusedFromItsLengthAlone) {
   // Only the fixed 16 bytes: the declared length already says too long.
-  expect_error(header(0x21, 0x11, {}, static_cast<int>(kProxyMaxBytes - 16 + 1)), "longer than the 536");
-  expect_error(header(0x21, 0x11, {}, 0xFFFF), "65551 bytes");
+  expect_error(proxy_v2(0x21, 0x11, {}, static_cast<int>(kProxyMaxBytes - 16 + 1)), "longer than the 536");
+  expect_error(proxy_v2(0x21, 0x11, {}, 0xFFFF), "65551 bytes");
   // Exactly the limit is accepted.
   Bytes rest = kIpv4Block;
   rest.resize(kProxyMaxBytes - 16, 0);
-  EXPECT_EQ(parse_proxy_header(header(0x21, 0x11, rest)).status, Status::Complete);
+  EXPECT_EQ(parse_proxy_header(proxy_v2(0x21, 0x11, rest)).status, Status::Complete);
 }
 
 }  // namespace
