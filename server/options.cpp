@@ -75,6 +75,10 @@ const std::vector<Flag>& flags() {
   static const std::vector<Flag> table = {
       {"--listen", "URL", listen_help.c_str(),
        [](ServerOptions& o, std::string_view v) { o.listen.emplace_back(v); return true; }},
+      {"--listen-proxied", "URL",
+       "listen on URL (as --listen) behind a balancer: every connection must start with a PROXY protocol v2 "
+       "header (HAProxy send-proxy-v2), whose source address becomes the peer; requires a token; repeatable",
+       [](ServerOptions& o, std::string_view v) { o.listen_proxied.emplace_back(v); return true; }},
       {"--token-file", "PATH", "read the shared authentication token from PATH (else $DN_TOKEN)",
        [](ServerOptions& o, std::string_view v) { o.token_file = v; return true; }},
       {"--allow-uid", "UID", "also accept Unix-socket peers with this uid (own uid and root always); repeatable",
@@ -245,7 +249,9 @@ ParseOutcome parse_options(int argc, char** argv, ServerOptions& out) {
       return result;
     }
   }
-  if (out.listen.empty()) out.listen.push_back(protocol::kDefaultServerUrl);
+  // The default listener only when none is given: several servers behind one
+  // balancer on one machine must not all try to take the default port.
+  if (out.listen.empty() && out.listen_proxied.empty()) out.listen.push_back(protocol::kDefaultServerUrl);
 
   if (!out.token_file.empty()) {
     std::ifstream in(out.token_file);

@@ -10,6 +10,7 @@ namespace dn::server {
 
 struct ServerOptions {
   std::vector<std::string> listen;       // tcp://HOST:PORT or unix:///PATH; default protocol::kDefaultServerUrl
+  std::vector<std::string> listen_proxied;  // same URLs, behind a balancer: PROXY v2 header first (docs/server.md)
   std::string token_file;                // shared secret; also DN_TOKEN in the environment
   std::string token;                     // resolved token (from file or environment)
   std::vector<uint32_t> allowed_uids;    // Unix-socket peers besides our own uid and root

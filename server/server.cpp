@@ -22,6 +22,7 @@
 #include "server/handshake.hpp"
 #include "server/log.hpp"
 #include "server/net/peer_identity.hpp"
+#include "server/net/proxy_header.hpp"
 #include "server/net/socket_options.hpp"
 #include "server/stats.hpp"
 #include "server/net/auth.hpp"
@@ -68,20 +69,30 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
   for (const auto& r : shared_resources_)
     log::info("shared_resource", {{"name", r.name}, {"ms", r.ms}, {"device", device_name_}});
 
-  std::vector<net::Endpoint> endpoints;
-  for (const std::string& url : options_.listen) {
-    std::string error;
-    auto e = net::parse_endpoint(url, error);
-    if (!e) throw std::runtime_error("--listen " + error);
-    if (e->kind == net::Endpoint::Kind::Tcp && !net::is_loopback(*e) && options_.token.empty())
-      throw std::runtime_error("--listen " + url +
-                               " is not a loopback address: set an authentication token with --token-file or DN_TOKEN");
-    endpoints.push_back(*e);
+  std::vector<std::pair<net::Endpoint, bool>> endpoints;  // and whether proxied
+  for (const bool proxied : {false, true}) {
+    const char* flag = proxied ? "--listen-proxied " : "--listen ";
+    for (const std::string& url : proxied ? options_.listen_proxied : options_.listen) {
+      std::string error;
+      auto e = net::parse_endpoint(url, error);
+      if (!e) throw std::runtime_error(flag + error);
+      if (e->kind == net::Endpoint::Kind::Tcp && !net::is_loopback(*e) && options_.token.empty())
+        throw std::runtime_error(flag + url +
+                                 " is not a loopback address: set an authentication token with --token-file or DN_TOKEN");
+      // A balancer serves whoever reaches it, wherever its own listener is.
+      if (proxied && options_.token.empty())
+        throw std::runtime_error(flag + url +
+                                 " is reached through a balancer: set an authentication token with --token-file or DN_TOKEN");
+      endpoints.emplace_back(*e, proxied);
+    }
   }
-  for (const auto& e : endpoints) {
+  for (const auto& [e, proxied] : endpoints) {
     listeners_.push_back(net::open_listener(e, !options_.allowed_uids.empty()));
     net::Listener& l = listeners_.back();
-    log::info("listen", {{"url", listening_urls().back()}, {"auth", options_.token.empty() ? "none" : "token"}});
+    l.proxied = proxied;
+    log::info("listen", {{"url", listening_urls().back()},
+                         {"auth", options_.token.empty() ? "none" : "token"},
+                         {"proxy_protocol", proxied ? "v2" : "none"}});
     size_t index = listeners_.size() - 1;
     loop_.add(l.fd, EPOLLIN, [this, index](uint32_t) { accept_from(listeners_[index]); });
   }
@@ -213,7 +224,7 @@ void Server::accept_from(net::Listener& listener) {
       if (errno != EAGAIN && errno != EWOULDBLOCK) log::warn("accept.failed", {{"error", std::strerror(errno)}});
       return;
     }
-    admit(fd, addr, is_unix);
+    admit(fd, addr, is_unix, listener.proxied);
   }
 }
 
@@ -225,7 +236,7 @@ uint64_t Server::adopt(int fd) {
   return id;
 }
 
-void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix) {
+void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix, bool proxied) {
   uint64_t id = next_connection_id_++;
   ++counters_.connections_accepted;
   // Until HELLO, only control messages are expected: no peer makes us allocate a frame's worth unasked.
@@ -235,7 +246,10 @@ void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix) {
   net::Connection& c = *conn;
   c.peer_identity = net::peer_identity(fd, addr, is_unix);
   connections_[id] = std::move(conn);
-  count_connection(c, +1);
+  // Behind a balancer the peer is the one its PROXY header names: counted
+  // per peer once that is read (on_proxy_header), not as the balancer.
+  if (proxied) c.expect_proxy_header();
+  else count_connection(c, +1);
   ++unauthenticated_;
   loop_.add(fd, EPOLLIN, [this, id](uint32_t events) { on_connection_event(id, events); });
   log::debug("connection.open", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}});
@@ -246,21 +260,15 @@ void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix) {
   // Both default to half of --max-connections: a flood from one peer, or of
   // connections that never say HELLO, leaves the other half to everyone else.
   const uint32_t half = std::max(1u, options_.max_connections / 2);
-  const uint32_t per_peer = options_.max_connections_per_peer ? options_.max_connections_per_peer : half;
   const uint32_t unauthenticated = options_.max_unauthenticated ? options_.max_unauthenticated : half;
   if (connections_.size() > options_.max_connections)
     refusal = "server already has " + std::to_string(options_.max_connections) + " connections (--max-connections)";
-  else if (peer_connections_[c.peer_identity] > per_peer)
-    refusal = "peer " + c.peer_identity + " already has " + std::to_string(per_peer) +
-              " connections (--max-connections-per-peer)";
-  else if (unauthenticated_ > unauthenticated)
+  else if (!proxied)
+    refusal = per_peer_refusal(c);
+  if (refusal.empty() && unauthenticated_ > unauthenticated)
     refusal = "server already has " + std::to_string(unauthenticated) +
               " connections without HELLO (--max-unauthenticated)";
-  if (!refusal.empty()) {
-    log::warn("connection.refused", {{"conn", id}, {"peer", c.peer()}, {"identity", c.peer_identity}, {"reason", refusal}});
-    send_error(c, 0, ErrorCode::LimitExceeded, "connections", refusal, true);
-    return;
-  }
+  if (!refusal.empty()) return refuse(c, refusal);
   if (is_unix) {
     uint32_t uid = 0;
     if (!net::unix_peer_allowed(fd, options_.allowed_uids, uid)) {
@@ -269,6 +277,45 @@ void Server::admit(int fd, const sockaddr_storage& addr, bool is_unix) {
                  "Unix-socket peer uid " + std::to_string(uid) + " is not allowed (--allow-uid)", true);
     }
   }
+}
+
+std::string Server::per_peer_refusal(const net::Connection& c) const {
+  // Defaults to half of --max-connections, as --max-unauthenticated does (admit).
+  const uint32_t per_peer =
+      options_.max_connections_per_peer ? options_.max_connections_per_peer : std::max(1u, options_.max_connections / 2);
+  auto it = peer_connections_.find(c.peer_identity);
+  if (it == peer_connections_.end() || it->second <= per_peer) return {};
+  return "peer " + c.peer_identity + " already has " + std::to_string(per_peer) +
+         " connections (--max-connections-per-peer)";
+}
+
+void Server::refuse(net::Connection& c, const std::string& refusal) {
+  log::warn("connection.refused", {{"conn", c.id()}, {"peer", c.peer()}, {"identity", c.peer_identity}, {"reason", refusal}});
+  send_error(c, 0, ErrorCode::LimitExceeded, "connections", refusal, true);
+}
+
+void Server::on_proxy_header(net::Connection& c) {
+  const net::ProxyHeader& h = c.proxy_header();
+  const std::string via = c.peer();
+  // LOCAL (the balancer's health check), UNSPEC, UNIX or UDP: the socket's own peer stays.
+  const bool forwarded = h.source.ss_family != AF_UNSPEC;
+  if (forwarded) {
+    c.set_peer(net::peer_name(h.source, false));
+    c.peer_identity = net::address_identity(h.source);
+  }
+  log::write(forwarded ? log::Level::Info : log::Level::Debug, "connection.proxied",
+             {{"conn", c.id()},
+              {"peer", c.peer()},
+              {"via", via},
+              {"command", h.command == net::ProxyHeader::Command::Local ? "LOCAL" : "PROXY"},
+              {"identity", c.peer_identity}});
+  count_connection(c, +1);
+  if (std::string refusal = per_peer_refusal(c); !refusal.empty()) refuse(c, refusal);
+}
+
+void Server::refuse_proxy_header(net::Connection& c, ErrorCode code, const std::string& reason) {
+  log::warn("proxy.refused", {{"conn", c.id()}, {"peer", c.peer()}, {"reason", reason}});
+  send_error(c, 0, code, "proxy_header", reason, true);
 }
 
 net::Connection* Server::find_connection(uint64_t id) {
@@ -283,7 +330,13 @@ void Server::on_connection_event(uint64_t id, uint32_t events) {
   if (events & EPOLLOUT) {
     if (!c->flush()) return close_connection(id, "write failed");
   }
-  if (events & (EPOLLIN | EPOLLHUP)) {
+  if ((events & (EPOLLIN | EPOLLHUP)) && c->awaiting_proxy_header() && !c->close_after_flush) {
+    auto status = c->read_proxy_header();
+    if (status == net::Connection::ReadStatus::Closed) return close_connection(id, "peer closed before a PROXY header");
+    if (status == net::Connection::ReadStatus::Failed) refuse_proxy_header(*c, ErrorCode::BadMagic, c->proxy_error());
+    else if (!c->awaiting_proxy_header()) on_proxy_header(*c);
+  }
+  if ((events & (EPOLLIN | EPOLLHUP)) && !c->awaiting_proxy_header()) {
     auto status = c->read_available(
         [&](const protocol::Header& h, std::vector<uint8_t>&& payload, bool refused) {
           if (!refused) return handle_message(*c, h, std::move(payload));
@@ -440,7 +493,7 @@ void Server::close_connection(uint64_t id, const char* reason) {
   if (it == connections_.end()) return;
   std::unique_ptr<net::Connection> c = std::move(it->second);
   connections_.erase(it);
-  count_connection(*c, -1);
+  if (!c->awaiting_proxy_header()) count_connection(*c, -1);  // counted once its peer was known
   if (!c->authenticated) --unauthenticated_;
   loop_.remove(c->fd());
   counters_.bytes_in_closed += c->bytes_in;
@@ -514,7 +567,12 @@ void Server::check_timers() {
       }
     }
     if (!c->authenticated) {
-      if (seconds_since(c->created, now) > options_.handshake_timeout_s) {
+      if (seconds_since(c->created, now) > options_.handshake_timeout_s && c->awaiting_proxy_header()) {
+        refuse_proxy_header(*c, ErrorCode::Timeout,
+                            "no complete PROXY header within " + std::to_string(options_.handshake_timeout_s) +
+                                " s of connecting (--handshake-timeout)");
+        update_interest(*c);
+      } else if (seconds_since(c->created, now) > options_.handshake_timeout_s) {
         send_error(*c, 0, ErrorCode::Timeout, "HELLO",
                    "no HELLO within " + std::to_string(options_.handshake_timeout_s) + " s of connecting", true);
         update_interest(*c);

@@ -62,7 +62,13 @@ class Server {
   using Bytes = net::Bytes;
 
   void accept_from(net::Listener& listener);
-  void admit(int fd, const sockaddr_storage& addr, bool is_unix);
+  void admit(int fd, const sockaddr_storage& addr, bool is_unix, bool proxied = false);
+  // --max-connections-per-peer, once the connection's peer is known and counted: a reason, or empty.
+  std::string per_peer_refusal(const net::Connection& c) const;
+  void refuse(net::Connection& c, const std::string& refusal);
+  // Proxied listeners: the PROXY header names the peer (server/net/proxy_header.hpp).
+  void on_proxy_header(net::Connection& c);
+  void refuse_proxy_header(net::Connection& c, protocol::ErrorCode code, const std::string& reason);
   void on_connection_event(uint64_t connection_id, uint32_t events);
   void handle_message(net::Connection& c, const protocol::Header& header, std::vector<uint8_t>&& payload);
 

@@ -72,6 +72,31 @@ Connection::ReadStatus Connection::read_available(const MessageHandler& handler,
   return ReadStatus::Open;
 }
 
+Connection::ReadStatus Connection::read_proxy_header() {
+  while (proxy_pending_) {
+    proxy_ = parse_proxy_header(proxy_bytes_);
+    if (proxy_.status == ProxyParse::Status::Error) return ReadStatus::Failed;
+    if (proxy_.status == ProxyParse::Status::Complete) {
+      proxy_pending_ = false;
+      proxy_bytes_ = {};
+      break;
+    }
+    const size_t have = proxy_bytes_.size();
+    proxy_bytes_.resize(proxy_.need);
+    ssize_t n = ::recv(fd_, proxy_bytes_.data() + have, proxy_.need - have, 0);
+    proxy_bytes_.resize(have + static_cast<size_t>(std::max<ssize_t>(n, 0)));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) return ReadStatus::Open;
+      return ReadStatus::Closed;
+    }
+    if (n == 0) return ReadStatus::Closed;
+    bytes_in += static_cast<uint64_t>(n);
+    last_received = Clock::now();
+  }
+  return ReadStatus::Open;
+}
+
 void Connection::queue(Bytes bytes, uint64_t watch_session) {
   if (watch_session != 0) {
     for (Outgoing& o : out_) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dn/protocol/codec.hpp"
+#include "server/net/proxy_header.hpp"
 
 namespace dn::server::net {
 
@@ -45,6 +46,18 @@ class Connection {
   uint64_t id() const { return id_; }
   bool is_unix() const { return is_unix_; }
   const std::string& peer() const { return peer_; }
+  // The client a balancer's PROXY header names replaces the socket's peer.
+  void set_peer(std::string peer) { peer_ = std::move(peer); }
+
+  // Proxied listeners (--listen-proxied): a PROXY v2 header comes before the
+  // protocol. read_proxy_header() reads exactly its bytes, never the protocol's:
+  // Open while it is incomplete (or once it is: awaiting_proxy_header() turns
+  // false and proxy_header() holds it), Closed, or Failed (proxy_error()).
+  void expect_proxy_header() { proxy_pending_ = true; }
+  bool awaiting_proxy_header() const { return proxy_pending_; }
+  ReadStatus read_proxy_header();
+  const ProxyHeader& proxy_header() const { return proxy_.header; }
+  const std::string& proxy_error() const { return proxy_.error; }
 
   // Reads until the socket would block, at most `budget` bytes, handing each
   // complete message to `handler`. Stops early once reading is paused.
@@ -103,6 +116,9 @@ class Connection {
   bool is_unix_;
   std::string peer_;
   void release_budget();
+  bool proxy_pending_ = false;
+  std::vector<uint8_t> proxy_bytes_;  // the header so far
+  ProxyParse proxy_;
 
   protocol::MessageReader reader_;
   ReceiveBudget* budget_;

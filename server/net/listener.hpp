@@ -25,6 +25,7 @@ struct Listener {
   Endpoint endpoint;
   int fd = -1;
   uint16_t bound_port = 0;  // the real port when 0 was asked for
+  bool proxied = false;     // --listen-proxied: each connection starts with a PROXY v2 header
   // Unix: the socket file this process created (device, inode), so that
   // closing removes it and never a file another process put there since.
   uint64_t socket_dev = 0, socket_ino = 0;

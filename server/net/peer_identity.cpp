@@ -76,6 +76,10 @@ std::string peer_identity(int fd, const sockaddr_storage& peer, bool is_unix) {
   if (is_loopback(peer) && ::getsockname(fd, reinterpret_cast<sockaddr*>(&ours), &len) == 0 &&
       loopback_peer_uid(peer, ours, uid))
     return "uid:" + std::to_string(uid);
+  return address_identity(peer);
+}
+
+std::string address_identity(const sockaddr_storage& peer) {
   char host[INET6_ADDRSTRLEN] = "";
   if (peer.ss_family == AF_INET)
     inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(&peer)->sin_addr, host, sizeof host);

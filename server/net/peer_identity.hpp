@@ -13,5 +13,9 @@ namespace dn::server::net {
 
 // "uid:1000", "ip:192.0.2.7" or "ip:::1"; "unknown" when nothing is known.
 std::string peer_identity(int fd, const sockaddr_storage& peer, bool is_unix);
+// "ip:ADDRESS" of an IPv4/IPv6 address, "unknown" for anything else: the
+// identity of an address alone (a balancer's forwarded client, whose socket
+// and so whose uid this machine cannot see).
+std::string address_identity(const sockaddr_storage& address);
 
 }  // namespace dn::server::net
