@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Three dnserver backends behind HAProxy on loopback, configured by the
 # recipe's own file (examples/deploy/haproxy.cfg, docs/deploy.md):
+#   - the backends listen with --listen-proxied (PROXY protocol v2, so a
+#     token is required) and log each client's own address;
 #   - 12 sessions through the balancer spread over the three backends;
 #   - a watcher reaches the first session through the port its SESSION
 #     advertises (the balancer's port for that backend) and gets frames;
@@ -38,9 +40,19 @@ socks = [socket.socket() for _ in range(7)]
 for s in socks: s.bind(("127.0.0.1", 0))
 print(*[s.getsockname()[1] for s in socks])')
 
+# Behind a balancer every listener needs the token; the clients and the
+# health check present it.
+export DN_TOKEN="balancer-test-$$-$RANDOM"
+DN_CHECK_HELLO=$(python3 -c '
+import os, struct
+t, n = os.environ["DN_TOKEN"].encode(), b"haproxy"
+p = struct.pack("<IH", 0, len(n)) + n + struct.pack("<H", len(t)) + t
+print((b"DNSV" + bytes([1, 8]) + struct.pack("<HIIQ", 1, 0, len(p), 1) + p).hex().upper())')
+export DN_CHECK_HELLO
+
 backend_ports=("$b1" "$b2" "$b3") watch_ports=("$w1" "$w2" "$w3") server_pids=()
 for i in 0 1 2; do
-  "$dnserver" --no-warm-up --listen "tcp://127.0.0.1:${backend_ports[$i]}" \
+  "$dnserver" --no-warm-up --listen-proxied "tcp://127.0.0.1:${backend_ports[$i]}" \
     --advertise-url "tcp://127.0.0.1:${watch_ports[$i]}" > "$work/dnserver$i.log" 2>&1 &
   pids+=($!) server_pids+=($!)
 done
@@ -77,6 +89,13 @@ until [ -S "$DN_ADMIN" ] && [ "$(stat 2>/dev/null | grep -c ' UP L7OK')" = 3 ]; 
   sleep 0.2
 done
 echo "haproxy: $(stat | tr '\n' ' ')"
+# A placer asks each backend, through its balancer port, how many sessions fit.
+for i in 0 1 2; do
+  fit=$("$dn" capacity --server "tcp://127.0.0.1:${watch_ports[$i]}" -p passthrough --size 32x18) ||
+    fail "dn capacity through the balancer's port for backend $((i + 1)) failed"
+  [ "$fit" -ge 4 ] 2>/dev/null || fail "backend $((i + 1)) says $fit passthrough 32x18 sessions fit, fewer than the 4 it will get"
+  echo "backend $((i + 1)): $fit more passthrough 32x18 sessions fit"
+done
 
 "$balanced" "tcp://$DN_FRONTEND" 12 24 "$work/watch" "$work/kill" > "$work/clients.log" 2>&1 &
 clients=$!
@@ -117,4 +136,12 @@ cat "$work/clients.log"
 [ "$killed" = 1 ] || fail "the kill step never came"
 echo "haproxy after the kill: $(stat | tr '\n' ' ')"
 [ "$status" = 0 ] || fail "the clients' checks failed"
+# The backends saw the clients' own addresses (PROXY), and the checks as LOCAL.
+for i in 0 1 2; do
+  grep -q "event=connection.proxied .*command=PROXY" "$work/dnserver$i.log" ||
+    fail "backend $((i + 1)) logged no forwarded client address"
+  grep -q "event=connection.proxied .*command=LOCAL" "$work/dnserver$i.log" ||
+    grep -q "event=connection.hello" "$work/dnserver$i.log" || fail "backend $((i + 1)) saw no health check"
+done
+echo "backend 1 log: $(grep -m1 'event=connection.proxied .*command=PROXY' "$work/dnserver0.log" | cut -c1-200)"
 echo "PASS"
