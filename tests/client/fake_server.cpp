@@ -34,6 +34,18 @@ Welcome test_welcome(uint32_t max_in_flight, uint64_t max_message_bytes) {
   return w;
 }
 
+protocol::Session attach_reply(uint64_t session_id, uint32_t width, uint32_t height) {
+  protocol::Session s;
+  s.session_id = session_id;
+  s.width = width;
+  s.height = height;
+  s.pipeline = "passthrough";
+  s.read_only = true;
+  s.watch_key = "";  // the reply to ATTACH does not repeat the key
+  s.watch_url = "";  // ... and this server advertises none
+  return s;
+}
+
 Welcome test_welcome_with_parameters() {
   Welcome w = test_welcome();
   w.has_parameters = true;

@@ -58,6 +58,8 @@ protocol::Welcome test_welcome(uint32_t max_in_flight = 4, uint64_t max_message_
 // test_welcome() from a 1.1 server: svgf takes alpha_colour (0.05 in [0, 1])
 // and atrous_iterations (integer, 4 in [0, 8]); passthrough takes nothing.
 protocol::Welcome test_welcome_with_parameters();
+// A 1.8 server's reply to ATTACH: a read-only passthrough session of w x h.
+protocol::Session attach_reply(uint64_t session_id, uint32_t width, uint32_t height);
 
 class FakeServer {
  public:

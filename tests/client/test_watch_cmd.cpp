@@ -32,15 +32,7 @@ void stream_then_end(Peer& peer, StreamEnd end) {
   ASSERT_TRUE(m);
   auto* a = std::get_if<Attach>(&m->message);
   ASSERT_NE(a, nullptr);
-  Session s;
-  s.session_id = a->session_id;
-  s.width = W;
-  s.height = H;
-  s.pipeline = "passthrough";
-  s.read_only = true;
-  s.watch_key = "";
-  s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
-  peer.send(s, m->header.request_id);
+  peer.send(dn::test::attach_reply(a->session_id, W, H), m->header.request_id);
   std::vector<float> out(W * H * 3);
   std::vector<uint8_t> bytes(out.size() * 4);
   for (uint64_t frame : {1u, 2u}) {

@@ -24,15 +24,7 @@ TEST(Watcher, AResultAlreadyInTheSocketIsReturnedWithoutWaitingOutTheTimeout) {
     peer.handshake_with(dn::test::test_welcome_with_parameters());
     auto m = peer.recv();
     ASSERT_TRUE(m);
-    Session s;
-    s.session_id = 42;
-    s.width = W;
-    s.height = H;
-    s.pipeline = "passthrough";
-    s.read_only = true;
-    s.watch_key = "";
-    s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
-    peer.send(s, m->header.request_id);
+    peer.send(dn::test::attach_reply(42, W, H), m->header.request_id);
     // After the SESSION has been read by attach(): the RESULT waits, unread, in the client's socket.
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     std::vector<uint8_t> bytes(W * H * 3 * 4, 0);

@@ -13,15 +13,19 @@ namespace {
 
 constexpr const char* kAdvertised = "tcp://balancer.example:7101";
 
-TEST(AdvertiseUrl, OwnerAndWatcherLearnWhereToWatch) {
-  ServerProcess server({"--advertise-url", kAdvertised});
-  client::Connection owner = client::Connection::connect(server.tcp_url(), {});
+client::Session open_passthrough(client::Connection& conn) {
   client::SessionDesc desc;
   desc.width = 16;
   desc.height = 8;
   desc.pipeline = "passthrough";
   desc.channel(protocol::ChannelId::Radiance);
-  client::Session session = owner.open_session(desc);
+  return conn.open_session(desc);
+}
+
+TEST(AdvertiseUrl, OwnerAndWatcherLearnWhereToWatch) {
+  ServerProcess server({"--advertise-url", kAdvertised});
+  client::Connection owner = client::Connection::connect(server.tcp_url(), {});
+  client::Session session = open_passthrough(owner);
   EXPECT_EQ(session.watch_url(), kAdvertised);
   EXPECT_EQ(session.watch_command().rfind(std::string("dn watch --server ") + kAdvertised + " --session ", 0), 0u)
       << session.watch_command();
@@ -39,12 +43,7 @@ TEST(AdvertiseUrl, OwnerAndWatcherLearnWhereToWatch) {
 TEST(AdvertiseUrl, WithoutItTheUrlIsEmptyAndTheCommandNamesThisConnection) {
   ServerProcess server;
   client::Connection owner = client::Connection::connect(server.tcp_url(), {});
-  client::SessionDesc desc;
-  desc.width = 16;
-  desc.height = 8;
-  desc.pipeline = "passthrough";
-  desc.channel(protocol::ChannelId::Radiance);
-  client::Session session = owner.open_session(desc);
+  client::Session session = open_passthrough(owner);
   EXPECT_EQ(session.watch_url(), "");
   EXPECT_NE(session.watch_command().find(owner.endpoint()), std::string::npos) << session.watch_command();
 }
