@@ -9,7 +9,8 @@
 #   - that backend is killed with SIGKILL mid-stream: its clients reconnect
 #     through the balancer to another backend and go on, no frame reordered,
 #     every frame answered or reported lost (balanced_stream checks);
-#   - frames per second before and after.
+#   - frames per second before and after;
+#   - draining a backend (HAProxy's runtime API) sends new sessions elsewhere.
 # Bounded and self-stopping; exit 77 (skip) where haproxy is not installed.
 #
 #   haproxy_test.sh DNSERVER DN BALANCED_STREAM HAPROXY_CFG
@@ -69,20 +70,19 @@ export DN_W1="127.0.0.1:$w1" DN_W2="127.0.0.1:$w2" DN_W3="127.0.0.1:$w3" DN_ADMI
 "$haproxy_bin" -f "$cfg" -db > "$work/haproxy.log" 2>&1 &
 pids+=($!)
 # Every backend up by the protocol's own health check (HELLO -> WELCOME).
-stat() { python3 - "$DN_ADMIN" <<'PY'
+admin() { python3 - "$DN_ADMIN" "$1" <<'PY'
 import socket, sys
 s = socket.socket(socket.AF_UNIX)
 s.connect(sys.argv[1])
-s.sendall(b"show stat\n")
+s.sendall(sys.argv[2].encode() + b"\n")
 data = b""
 while chunk := s.recv(65536):
     data += chunk
-for line in data.decode().splitlines():
-    f = line.split(",")
-    if len(f) > 36 and f[0] == "dn_backends" and f[1].startswith("b"):
-        print(f[1], f[17], f[36])
+print(data.decode(), end="")
 PY
 }
+# Each backend of dn_backends: name, status, check status, current connections.
+stat() { admin "show stat" | awk -F, '$1 == "dn_backends" && $2 ~ /^b/ { print $2, $18, $37, $5 }'; }
 end=$(deadline 60)
 until [ -S "$DN_ADMIN" ] && [ "$(stat 2>/dev/null | grep -c ' UP L7OK')" = 3 ]; do
   [ "$(date +%s)" -lt "$end" ] || fail "haproxy did not see three healthy backends: $(stat 2>&1 | tr '\n' ' ')"
@@ -135,6 +135,40 @@ cat "$work/clients.log"
 [ "$watched" = 1 ] || fail "the watch step never came"
 [ "$killed" = 1 ] || fail "the kill step never came"
 echo "haproxy after the kill: $(stat | tr '\n' ' ')"
+
+# Maintenance: drain one of the two live backends; new sessions go to the other.
+drain=""
+for i in 0 1 2; do
+  kill -0 "${server_pids[$i]}" 2>/dev/null && { drain=b$((i + 1)); break; }
+done
+admin "set server dn_backends/$drain state drain" > /dev/null
+python3 - "$DN_FRONTEND" "$DN_TOKEN" > "$work/drain.log" 2>&1 <<'PY' &
+# Four connections through the balancer, each HELLO -> WELCOME, held open.
+import socket, struct, sys, time
+host, port = sys.argv[1].rsplit(":", 1)
+token, name = sys.argv[2].encode(), b"drain-check"
+payload = struct.pack("<IH", 0, len(name)) + name + struct.pack("<H", len(token)) + token
+hello = b"DNSV" + bytes([1, 8]) + struct.pack("<HIIQ", 1, 0, len(payload), 1) + payload
+conns = []
+for _ in range(4):
+    c = socket.create_connection((host, int(port)))
+    c.sendall(hello)
+    assert c.recv(24)[6:8] == b"\x02\x00", "no WELCOME"
+    conns.append(c)
+print("held", len(conns), flush=True)
+time.sleep(30)
+PY
+holder=$!
+pids+=($holder)
+end=$(deadline 30)
+until grep -q "held 4" "$work/drain.log"; do
+  [ "$(date +%s)" -lt "$end" ] || fail "the drain check's connections did not open: $(cat "$work/drain.log")"
+  sleep 0.1
+done
+echo "draining $drain, then 4 new connections: $(stat | tr '\n' ' ')"
+stat | awk -v d="$drain" '$1 == d && $4 != 0 { bad = 1 } $1 != d && $2 == "UP" && $4 != 4 { bad = 1 } END { exit bad }' ||
+  fail "draining $drain did not send the 4 new connections to the other live backend"
+kill "$holder" 2>/dev/null || true
 [ "$status" = 0 ] || fail "the clients' checks failed"
 # The backends saw the clients' own addresses (PROXY), and the checks as LOCAL.
 for i in 0 1 2; do
