@@ -237,6 +237,28 @@ HostPlanes make_planes(uint32_t w, uint32_t h, int t, uint64_t needed, int sampl
     if (want(ChannelId::SpecularF0)) p.values[ChannelId::SpecularF0] = std::move(f0);
     if (want(ChannelId::Roughness)) p.values[ChannelId::Roughness] = std::move(roughness);
   }
+  // Reflection features (reflect): a mirror-like surface 1 unit above the
+  // height field, seen straight down: the reflected point is the pixel's own
+  // point raised by 1, with the field's normal and albedo.
+  if (want(ChannelId::ReflectionPosition)) {
+    std::vector<float> position(3 * n), reflected(3 * n), direction(3 * n), rdepth(n), distance(n, 1.0f);
+    for (size_t i = 0; i < n; ++i) {
+      const float x = float(i % w) + kPanX * float(t), y = float(i / w) + kPanY * float(t);
+      position[3 * i] = reflected[3 * i] = x;
+      position[3 * i + 1] = reflected[3 * i + 1] = y;
+      position[3 * i + 2] = depth[i];
+      reflected[3 * i + 2] = depth[i] + 1.0f;
+      direction[3 * i + 2] = 1.0f;
+      rdepth[i] = depth[i] + 1.0f;
+    }
+    p.values[ChannelId::Position] = std::move(position);
+    p.values[ChannelId::ReflectionPosition] = std::move(reflected);
+    p.values[ChannelId::ReflectionAlbedo] = albedo;
+    p.values[ChannelId::ReflectionNormal] = normal;
+    p.values[ChannelId::ReflectionDepth] = std::move(rdepth);
+    p.values[ChannelId::ReflectionDirection] = std::move(direction);
+    p.values[ChannelId::ReflectionDistance] = std::move(distance);
+  }
   // Sample statistics (stat, stat-temporal): kStatSamples exponential
   // samples per pixel around the radiance's mean, accumulated as dnrender
   // does (paper 003 Alg. 1); the radiance is their raw mean.
@@ -324,9 +346,11 @@ EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t, int s
 }
 
 // The channels a session of `desc` declares: the required ones (svgf-fb
-// requires split lighting, F0 and roughness), plus radiance where it is only
-// optional (svgf); optional split lighting and emission would add passes, so
-// they are left out and the svgf row stays comparable.
+// requires specular, F0 and roughness), plus radiance where it is only
+// optional (svgf), or diffuse where the pipeline takes no radiance (svgf-fb,
+// reflect: diffuse or diffuse_lighting, one is needed); optional split
+// lighting and emission would add passes to svgf, so they are left out there
+// and the svgf row stays comparable.
 std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format,
                                                      int sample_period) {
   std::vector<dn::protocol::ChannelDecl> out;
@@ -338,6 +362,10 @@ std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::Pipelin
   const uint64_t radiance = dn::protocol::channel_bit(dn::protocol::ChannelId::Radiance);
   if (!(desc.required_channels & radiance) && (desc.optional_channels & radiance))
     out.insert(out.begin(), {dn::protocol::ChannelId::Radiance, format});
+  // svgf-fb and reflect require specular and take diffuse in either form: send it.
+  const uint64_t diffuse = dn::protocol::channel_bit(dn::protocol::ChannelId::Diffuse);
+  if (!((desc.required_channels | desc.optional_channels) & radiance) && (desc.optional_channels & diffuse))
+    out.insert(out.begin(), {dn::protocol::ChannelId::Diffuse, format});
   const uint64_t mask = dn::protocol::channel_bit(dn::protocol::ChannelId::SampleCount);
   if (sample_period > 1 && (desc.optional_channels & mask)) out.push_back({dn::protocol::ChannelId::SampleCount, format});
   return out;

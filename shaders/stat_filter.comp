@@ -40,11 +40,11 @@
 
 vec3 filter_pixel(uint p) {
   vec3 raw_p = dn_stat_value(p);
-  vec4 theta_p = theta.data[p];
+  vec4 theta_p = theta_at(p);
   if (!(theta_p.w > 0.0)) return dn_stat_remodulate(raw_p, p);
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec3 var_p = variance.data[p].rgb;
+  vec3 var_p = variance_at(p).rgb;
   vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
@@ -59,7 +59,7 @@ vec3 filter_pixel(uint p) {
       int d2xy = dx * dx + dy * dy;
       if (x < 0 || x >= size.x || d2xy > r * r || d2xy == 0) continue;
       uint q = uint(y) * frame.size.x + uint(x);
-      float m = dn_stat_membership(theta_p, var_p, theta.data[q], variance.data[q].rgb, k);
+      float m = dn_stat_membership(theta_p, var_p, theta_at(q), variance_at(q).rgb, k);
       if (m == 0.0) continue;
       vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));

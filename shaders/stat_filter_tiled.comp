@@ -32,7 +32,7 @@ struct Tap {
 
 Tap dn_tile_fetch(ivec2 p) {
   uint i = dn_grid_index(uvec2(p), dn_grid.size);
-  return Tap(theta.data[i], variance.data[i], vec4(dn_stat_value(i), 0.0),
+  return Tap(theta_at(i), variance_at(i), vec4(dn_stat_value(i), 0.0),
              vec4(dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, i)), 0.0),
              vec4(dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, i)), 0.0));
 }

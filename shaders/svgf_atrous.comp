@@ -54,9 +54,9 @@
 // DISPLAY_FILL's sources: foreground pixels with a normal and data.
 bool dn_fill_source(ivec2 q, out vec3 value) {
   uint qi = uint(q.y) * frame.size.x + uint(q.x);
-  vec4 s = src.data[qi];
+  vec4 s = src_at(qi);
   value = s.rgb;
-  return uintBitsToFloat(guide.data[qi].x) > 0.0 && s.w != DN_SVGF_NO_DATA;
+  return uintBitsToFloat(guide_at(qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
 }
 #include "ring_fill.glsl"
 
@@ -105,12 +105,12 @@ void main() {
       ivec2 p = base + STEP * ivec2(i, j);
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
-      uvec4 gd = guide.data[pi];
+      uvec4 gd = guide_at(pi);
       ccls[k] = gd.w;
       cz[k] = uintBitsToFloat(gd.x);
       act[k] = p.x < size.x && p.y < size.y && cz[k] > 0.0;
       cn[k] = dn_svgf_unpack_normal(gd.y);
-      vec4 cs = src.data[pi];
+      vec4 cs = src_at(pi);
       // A pixel without data takes its neighbours' (no luminance weight: it
       // has no luminance) and adds nothing of its own.
       bool has_data = cs.w != DN_SVGF_NO_DATA;
@@ -134,7 +134,7 @@ void main() {
             if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
             // HDR step rule: a neighbour's variance counts only where its
             // own noise explains the luminance step to p.
-            vec4 sq = src.data[uint(q.y) * uint(size.x) + uint(q.x)];
+            vec4 sq = src_at(uint(q.y) * uint(size.x) + uint(q.x));
             bool same = sq.w != DN_SVGF_NO_DATA &&
                         ((xx == 0 && yy == 0) || abs(cl[k] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w));
             float kk = same ? g[xx + 1] * g[yy + 1] : 0.0;
@@ -142,7 +142,7 @@ void main() {
             gw += kk;
           }
         }
-        float len = temporal.data[pi].z;
+        float len = temporal_at(pi).z;
         float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
         // luminance_ramp_in r: the age gate's weight comes in over r samples,
         // bandwidth x 2^r, ..., 2 (switched on at once, the display jumps).
@@ -162,8 +162,8 @@ void main() {
       ivec2 qc = clamp(q, ivec2(0), size - 1);
       bool inside = q == qc;
       uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-      uvec4 gq = guide.data[qi];
-      vec4 s = src.data[qi];
+      uvec4 gq = guide_at(qi);
+      vec4 s = src_at(qi);
       float zq = uintBitsToFloat(gq.x);
       bool tap_ok = inside && zq > 0.0 && s.w != DN_SVGF_NO_DATA;
       uint qcls = gq.w;
@@ -205,7 +205,7 @@ void main() {
       if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask |= 1u << uint(k);
       dst.data[pi] = result;
       if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
-          (!AGE_GATED_LUMINANCE || temporal.data[pi].z >= min_age))
+          (!AGE_GATED_LUMINANCE || temporal_at(pi).z >= min_age))
         colour_history.data[pi].rgb = result.rgb;
     }
   }

@@ -48,7 +48,7 @@ bool clip_box(ivec2 pos, vec3 d, float widen, out vec3 lo, out vec3 hi) {
       ivec2 q = pos + ivec2(xx, yy);
       if (!dn_inside(q, frame.size.xy)) continue;
       uint qi = uint(q.y) * frame.size.x + uint(q.x);
-      vec4 v = neighbourhood.data[qi];
+      vec4 v = neighbourhood_at(qi);
       if (v.w != 0.0) {
         pre_lo = min(pre_lo, v.rgb);
         pre_hi = max(pre_hi, v.rgb);
@@ -80,7 +80,7 @@ float history_sigma(ivec2 prev, vec2 own) {
     for (int xx = -1; xx <= 1; ++xx) {
       ivec2 q = prev + ivec2(xx, yy);
       if (!dn_inside(q, frame.size.xy)) continue;
-      uvec4 bits = prev_aux.data[uint(q.y) * frame.size.x + uint(q.x)];
+      uvec4 bits = prev_aux_at(uint(q.y) * frame.size.x + uint(q.x));
       if (uintBitsToFloat(bits.z) > 0.0) sigma = max(sigma, dn_moments_sigma(uintBitsToFloat(bits.xy)));
     }
   return sigma;
@@ -121,7 +121,7 @@ bool geometry_tests = true;
 bool tap_valid(ivec2 q, float z, vec3 n, vec2 grad, out vec4 aux) {
   aux = vec4(0.0);
   if (!dn_inside(q, frame.size.xy)) return false;
-  uvec4 bits = prev_aux.data[uint(q.y) * frame.size.x + uint(q.x)];
+  uvec4 bits = prev_aux_at(uint(q.y) * frame.size.x + uint(q.x));
   aux = vec4(uintBitsToFloat(bits.xyz), 0.0);
   if (!(aux.z > 0.0)) return false;
   if (!geometry_tests) return true;
@@ -132,7 +132,7 @@ void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout 
              inout float sw) {
   vec4 aux;
   if (!tap_valid(q, z, n, grad, aux)) return;
-  vec4 h = prev_colour.data[uint(q.y) * frame.size.x + uint(q.x)];
+  vec4 h = prev_colour_at(uint(q.y) * frame.size.x + uint(q.x));
   sc += w * h.rgb;
   sl += w * h.a;
   sm += w * aux.xy;
@@ -169,7 +169,7 @@ void main() {
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
   bool history_allowed = READ_HISTORY;
   if (REFLECTION) {
-    vec4 r = reflection.data[p];
+    vec4 r = reflection_at(p);
     mv = r.xy;
     geometry_tests = r.z != DN_REFLECT_GLOSSY;
     history_allowed = history_allowed && r.w != DN_REFLECT_REJECTED;  // reflect's Eq. 1 threshold
@@ -214,7 +214,7 @@ void main() {
   // Clipped signals (highlights and reflections): reject a history the
   // current frame contradicts, else clip it to the current neighbourhood.
   if (valid && clipped_here(p)) {
-    vec4 pre = neighbourhood.data[p];
+    vec4 pre = neighbourhood_at(p);
     ivec2 prev_pixel = ivec2(floor(dn_previous_position(p, size.x, mv)));
     float sigma = -1.0;  // history_sigma, read once and only where needed
     // Not with REFLECTION: that history follows the reflection, and the
@@ -250,7 +250,7 @@ void main() {
   }
   if (WRITE_GUIDE)
     guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
-                          floatBitsToUint(grad.x), REFLECTION ? uint(reflection.data[p].z) : 0u);
+                          floatBitsToUint(grad.x), REFLECTION ? uint(reflection_at(p).z) : 0u);
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
   if (MASKED && !sampled(p)) {

@@ -18,7 +18,7 @@
 #include "passes/svgf_taa.pass"
 
 vec3 blend(uint p) {
-  vec4 c = current.data[p];
+  vec4 c = current_at(p);
   vec3 out_c = c.rgb;
   if (c.a < 1.0) {
     ivec2 size = ivec2(frame.size.xy);
@@ -28,16 +28,16 @@ vec3 blend(uint p) {
       for (int dx = -1; dx <= 1; ++dx) {
         ivec2 q = pos + ivec2(dx, dy);
         if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-        vec3 v = current.data[uint(q.y) * frame.size.x + uint(q.x)].rgb;
+        vec3 v = current_at(uint(q.y) * frame.size.x + uint(q.x)).rgb;
         lo = min(lo, v);
         hi = max(hi, v);
       }
-    vec4 reprojected = previous.data[p];
+    vec4 reprojected = previous_at(p);
     vec3 prev = clamp(reprojected.rgb, lo, hi);
     if (DISPLAY_LAG) prev = mix(prev, reprojected.rgb, max(reprojected.a, 0.0));
     out_c = mix(prev, c.rgb, c.a);
   }
-  if (DISPLAY_LAG) lag.data[p] = previous.data[p].a;
+  if (DISPLAY_LAG) lag.data[p] = previous_at(p).a;
   history.data[3u * p] = out_c.r;
   history.data[3u * p + 1u] = out_c.g;
   history.data[3u * p + 2u] = out_c.b;

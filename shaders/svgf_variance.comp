@@ -77,8 +77,8 @@ void main() {
       inside[k] = p.x < size.x && p.y < size.y;
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
-      uvec4 gd = guide.data[pi];
-      vec4 t = temporal.data[pi];
+      uvec4 gd = guide_at(pi);
+      vec4 t = temporal_at(pi);
       float gz = uintBitsToFloat(gd.x);
       len[k] = t.z;
       // No data (a foreground pixel of length 0: only a MASKED reprojection
@@ -107,7 +107,7 @@ void main() {
             ivec2 q = p + ivec2(xx, yy);
             if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
             uint qi = uint(q.y) * uint(size.x) + uint(q.x);
-            if (uintBitsToFloat(guide.data[qi].x) > 0.0 && temporal.data[qi].w >= 0.5 * t.w) isolated[k] = false;
+            if (uintBitsToFloat(guide_at(qi).x) > 0.0 && temporal_at(qi).w >= 0.5 * t.w) isolated[k] = false;
           }
       }
     }
@@ -118,8 +118,8 @@ void main() {
         ivec2 q = base + ivec2(c - 3, r - 3);
         ivec2 qc = clamp(q, ivec2(0), size - 1);
         uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-        uvec2 gq = guide.data[qi].xy;
-        vec4 tq = temporal.data[qi];
+        uvec2 gq = guide_at(qi).xy;
+        vec4 tq = temporal_at(qi);
         float zq = uintBitsToFloat(gq.x);
         bool tap_ok = q == qc && zq > 0.0;
         vec3 nq = dn_svgf_unpack_normal(gq.y);

@@ -75,7 +75,10 @@ Buffer::Buffer(Context& context, uint64_t size, BufferKind kind, std::string nam
   const VkBufferUsageFlags usage =
       kind == BufferKind::Constants
           ? VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
-          : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+          // Texel usage: a pass may read a buffer through a uniform texel
+          // buffer view (one gathered fetch per texel on lavapipe).
+          : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   try {
     buffer_ = make_buffer(device_, size, usage);
     VkMemoryPropertyFlags flags = 0;

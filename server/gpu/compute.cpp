@@ -30,9 +30,12 @@ std::array<uint32_t, 2> checked_local_size(const KernelDesc& desc) {
 }  // namespace
 
 Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
-    : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers),
+    : device_(device), name_(desc.name), storage_buffers_(desc.storage_buffers), texel_formats_(desc.texel_formats),
       push_constant_bytes_(desc.push_constant_bytes) {
   if (desc.spirv.empty()) throw Error("kernel " + name_ + ": no SPIR-V (shader not embedded?)");
+  if (!texel_formats_.empty() && texel_formats_.size() != storage_buffers_)
+    throw Error("kernel " + name_ + ": " + std::to_string(texel_formats_.size()) + " texel formats for " +
+                std::to_string(storage_buffers_) + " bindings");
   const auto local = checked_local_size(desc);
   local_size_x_ = local[0];
   local_size_y_ = local[1];
@@ -44,7 +47,9 @@ Kernel::Kernel(VkDevice device, const KernelDesc& desc, VkPipelineCache cache)
     std::vector<VkDescriptorSetLayoutBinding> bindings(desc.storage_buffers + 1);
     for (uint32_t i = 0; i < bindings.size(); ++i) {
       bindings[i].binding = i;
-      bindings[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;  // 0 too: see BufferKind::Constants
+      bindings[i].descriptorType = i > 0 && texel_format(i - 1) != VK_FORMAT_UNDEFINED
+                                       ? VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER
+                                       : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;  // 0 too: see BufferKind::Constants
       bindings[i].descriptorCount = 1;
       bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }
@@ -140,7 +145,7 @@ double KernelCache::compile_ms_of_this_thread() { return compile_ms_this_thread;
 
 std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
   Key key{desc.spirv.data(), desc.spirv.size(), desc.storage_buffers, desc.spec_constants,
-          desc.local_size_x, desc.local_size_y, desc.push_constant_bytes};
+          desc.local_size_x, desc.local_size_y, desc.push_constant_bytes, desc.texel_formats};
   std::promise<std::shared_ptr<const Kernel>> promise;
   std::shared_future<std::shared_ptr<const Kernel>> compiled_elsewhere;
   {
@@ -186,16 +191,20 @@ size_t KernelCache::size() const {
 
 DescriptorPool::DescriptorPool(Context& context, uint32_t sets, uint32_t storage_buffers_total)
     : device_(context.device()) {
-  // Every binding is a storage buffer: each set's constants (binding 0) and its storage buffers.
-  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, sets + storage_buffers_total};
+  // Each set's constants (binding 0) and its buffers, any of which may be a
+  // storage buffer or a texel buffer.
+  const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, sets + storage_buffers_total},
+                                         {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(1u, storage_buffers_total)}};
   VkDescriptorPoolCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   info.maxSets = sets;
-  info.poolSizeCount = 1;
-  info.pPoolSizes = &size;
+  info.poolSizeCount = 2;
+  info.pPoolSizes = sizes;
   check(vkCreateDescriptorPool(device_, &info, nullptr, &pool_), "vkCreateDescriptorPool");
 }
 
 DescriptorPool::~DescriptorPool() {
+  for (auto& [set, views] : views_)
+    for (VkBufferView v : views) vkDestroyBufferView(device_, v, nullptr);
   if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);
 }
 
@@ -220,17 +229,41 @@ void DescriptorPool::write(VkDescriptorSet set, const Kernel& kernel, VkBuffer c
     throw Error("kernel " + kernel.name() + ": " + std::to_string(storage.size()) + " storage buffers given, " +
                 std::to_string(kernel.storage_buffers()) + " expected");
   std::vector<VkDescriptorBufferInfo> infos(storage.size() + 1);
+  std::vector<VkBufferView> views(storage.size() + 1, VK_NULL_HANDLE);
   std::vector<VkWriteDescriptorSet> writes(storage.size() + 1);
-  for (size_t i = 0; i < infos.size(); ++i) {
-    infos[i] = {i == 0 ? constants : storage[i - 1], 0, VK_WHOLE_SIZE};
-    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    writes[i].dstSet = set;
-    writes[i].dstBinding = static_cast<uint32_t>(i);
-    writes[i].descriptorCount = 1;
-    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    writes[i].pBufferInfo = &infos[i];
+  try {
+    for (size_t i = 0; i < infos.size(); ++i) {
+      const VkFormat texel = i == 0 ? VK_FORMAT_UNDEFINED : kernel.texel_format(static_cast<uint32_t>(i - 1));
+      writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[i].dstSet = set;
+      writes[i].dstBinding = static_cast<uint32_t>(i);
+      writes[i].descriptorCount = 1;
+      if (texel == VK_FORMAT_UNDEFINED) {
+        infos[i] = {i == 0 ? constants : storage[i - 1], 0, VK_WHOLE_SIZE};
+        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[i].pBufferInfo = &infos[i];
+      } else {
+        VkBufferViewCreateInfo vi{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+        vi.buffer = storage[i - 1];
+        vi.format = texel;
+        vi.range = VK_WHOLE_SIZE;
+        check(vkCreateBufferView(device_, &vi, nullptr, &views[i]), "vkCreateBufferView");
+        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+        writes[i].pTexelBufferView = &views[i];
+      }
+    }
+  } catch (...) {
+    for (VkBufferView v : views)
+      if (v) vkDestroyBufferView(device_, v, nullptr);
+    throw;
   }
   vkUpdateDescriptorSets(device_, static_cast<uint32_t>(writes.size()), writes.data(), 0, nullptr);
+  // The set no longer refers to its old views (and is idle: see write()).
+  auto& owned = views_[set];
+  for (VkBufferView v : owned) vkDestroyBufferView(device_, v, nullptr);
+  owned.clear();
+  for (VkBufferView v : views)
+    if (v) owned.push_back(v);
 }
 
 }  // namespace dn::gpu

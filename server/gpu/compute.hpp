@@ -1,6 +1,7 @@
 // Compute kernels: a SPIR-V module specialised into a VkPipeline, with its
-// descriptor-set layout (binding 0: the frame constants, bindings 1..n: the
-// pass's buffers; all storage buffers, see BufferKind::Constants) and pipeline layout. Kernels are immutable and shared: the
+// descriptor-set layout (binding 0: the frame constants, a storage buffer,
+// see BufferKind::Constants; bindings 1..n: the pass's buffers, storage
+// buffers or uniform texel buffers) and pipeline layout. Kernels are immutable and shared: the
 // Context's KernelCache hands out one per (module, binding count,
 // specialization constants, workgroup shape, push-constant size), so
 // sessions with the same formats and shader compile it once.
@@ -46,6 +47,10 @@ struct KernelDesc {
   std::string name;                  // for error messages
   std::span<const uint32_t> spirv;
   uint32_t storage_buffers = 0;      // bindings 1..storage_buffers
+  // Empty, or one per binding 1..storage_buffers: VK_FORMAT_UNDEFINED for a
+  // storage buffer, else the binding is a uniform texel buffer and the
+  // DescriptorPool views the bound buffer in this format.
+  std::vector<VkFormat> texel_formats;
   std::vector<SpecConstant> spec_constants;
   // Workgroup shape. 0 (the default): the caller sets constant 0 itself in
   // spec_constants and the kernel is 1-D, as every pass before 2-D kernels.
@@ -77,6 +82,8 @@ class Kernel {
 
   const std::string& name() const { return name_; }
   uint32_t storage_buffers() const { return storage_buffers_; }
+  // Binding i + 1's texel format (VK_FORMAT_UNDEFINED: a storage buffer).
+  VkFormat texel_format(uint32_t i) const { return i < texel_formats_.size() ? texel_formats_[i] : VK_FORMAT_UNDEFINED; }
   VkDescriptorSetLayout set_layout() const { return set_layout_; }
   VkPipelineLayout layout() const { return layout_; }
   VkPipeline pipeline() const { return pipeline_; }
@@ -98,6 +105,7 @@ class Kernel {
   VkDevice device_;
   std::string name_;
   uint32_t storage_buffers_;
+  std::vector<VkFormat> texel_formats_;
   uint32_t local_size_x_ = 0;
   uint32_t local_size_y_ = 0;
   uint32_t push_constant_bytes_ = 0;
@@ -127,7 +135,8 @@ class KernelCache {
   static double compile_ms_of_this_thread();
 
  private:
-  using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>, uint32_t, uint32_t, uint32_t>;
+  using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>, uint32_t, uint32_t, uint32_t,
+                         std::vector<VkFormat>>;
   VkDevice device_;
   VkPipelineCache pipeline_cache_;
   mutable std::mutex mutex_;
@@ -136,7 +145,9 @@ class KernelCache {
 };
 
 // Descriptor sets of one pipeline instance: a pool sized for `sets` sets of
-// kernels with up to `storage_per_set` storage buffers each.
+// kernels with `storage_buffers_total` buffer bindings in all (storage or
+// texel). It owns the texel buffer views its sets use: a set's views are
+// made when it is written and destroyed when it is rewritten or the pool goes.
 class DescriptorPool {
  public:
   DescriptorPool(Context& context, uint32_t sets, uint32_t storage_buffers_total);
@@ -144,7 +155,8 @@ class DescriptorPool {
   DescriptorPool(const DescriptorPool&) = delete;
   DescriptorPool& operator=(const DescriptorPool&) = delete;
 
-  // Allocates and writes a set: binding 0 = constants, 1.. = storage (whole buffers).
+  // Allocates and writes a set: binding 0 = constants, 1.. = the buffers
+  // (whole; a texel binding views the whole buffer in its format).
   VkDescriptorSet allocate(const Kernel& kernel, VkBuffer constants, std::span<const VkBuffer> storage);
   // Rewrites a set allocated for `kernel` to other buffers (e.g. when the
   // transient buffers leased for a frame are not last frame's). The set must
@@ -154,6 +166,7 @@ class DescriptorPool {
  private:
   VkDevice device_;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
+  std::map<VkDescriptorSet, std::vector<VkBufferView>> views_;
 };
 
 }  // namespace dn::gpu

@@ -228,6 +228,7 @@ void Context::create_device() {
   limits_.max_memory_allocation_size = m3.maxMemoryAllocationSize;
   for (int i = 0; i < 3; ++i) limits_.max_compute_work_group_count[i] = l.maxComputeWorkGroupCount[i];
   limits_.max_compute_work_group_invocations = l.maxComputeWorkGroupInvocations;
+  limits_.max_texel_buffer_elements = l.maxTexelBufferElements;
 }
 
 Context::~Context() {

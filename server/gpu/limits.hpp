@@ -15,6 +15,7 @@ struct DeviceLimits {
   uint64_t max_memory_allocation_size = uint64_t{1} << 30; // spec minimum (maintenance3): 1 GiB
   uint32_t max_compute_work_group_count[3] = {65535, 65535, 65535};
   uint32_t max_compute_work_group_invocations = 128;
+  uint32_t max_texel_buffer_elements = 65536;  // spec minimum; texel bindings (shaders/include/pass.glsl)
 };
 
 // Limits of the current device (see above).

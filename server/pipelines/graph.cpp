@@ -321,6 +321,7 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
       pass.kernel = context.kernels().get(kernel_desc(ps, kWorkgroupSize));
       for (const auto& ref : ps.bindings())
         pass.binds_transient = pass.binds_transient || (ref.bound() && node(ref.buffer).transient >= 0);
+      check_texel_limit(pass);
       for (uint32_t parity = 0; parity < 2; ++parity)
         pass.sets[parity] = descriptors_->allocate(*pass.kernel, constants_.handle(), storage_of(pass, parity));
 
@@ -341,6 +342,18 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
     scratch_.release();  // nothing runs yet: other sessions may use it until our first frame
   } catch (const gpu::Error& e) {
     throw DeviceFailure(std::string("creating pipeline ") + config.pipeline + ": " + e.what());
+  }
+}
+
+void GraphPipeline::check_texel_limit(const Pass& pass) {
+  const auto& decls = pass.spec->declaration().bindings;
+  for (size_t i = 0; i < decls.size(); ++i) {
+    if (decls[i].access != shaders::Access::texel || !pass.spec->bindings()[i].bound()) continue;
+    const uint64_t texels = bound(pass.spec->bindings()[i], 0).size() / texel_bytes(decls[i].element);
+    if (texels > context_.limits().max_texel_buffer_elements)
+      throw DeviceFailure("pass " + pass.spec->name() + " reads " + pass.spec->bindings()[i].buffer + " (" +
+                          std::to_string(texels) + " elements) through a texel buffer; the device allows " +
+                          std::to_string(context_.limits().max_texel_buffer_elements));
   }
 }
 

@@ -181,6 +181,8 @@ class GraphPipeline final : public Pipeline {
   // free) and points the descriptor sets at them if they changed.
   void lease_scratch();
   std::vector<VkBuffer> storage_of(const Pass& pass, uint32_t parity);
+  // DeviceFailure when a texel binding's buffer has more elements than the device views.
+  void check_texel_limit(const Pass& pass);
 
   gpu::Context& context_;
   std::shared_ptr<const GraphSpec> spec_;

@@ -56,11 +56,44 @@ std::vector<gpu::SpecConstant> PassSpec::specialization(uint32_t workgroup_size)
   return out;
 }
 
+namespace {
+
+struct TexelElement {
+  std::string_view element;
+  VkFormat format;
+  uint32_t bytes;
+};
+// One row per DN_TEXEL_SAMPLER_<element> of shaders/include/pass.glsl.
+constexpr TexelElement kTexelElements[] = {
+    {"vec4", VK_FORMAT_R32G32B32A32_SFLOAT, 16}, {"vec2", VK_FORMAT_R32G32_SFLOAT, 8},
+    {"float", VK_FORMAT_R32_SFLOAT, 4},          {"uvec4", VK_FORMAT_R32G32B32A32_UINT, 16},
+    {"uvec2", VK_FORMAT_R32G32_UINT, 8},         {"uint", VK_FORMAT_R32_UINT, 4},
+};
+
+const TexelElement& texel_element(std::string_view element) {
+  for (const auto& t : kTexelElements)
+    if (t.element == element) return t;
+  throw std::logic_error("texel binding of element type " + std::string(element) + ": no texel form");
+}
+
+}  // namespace
+
+VkFormat texel_format(std::string_view element) { return texel_element(element).format; }
+uint32_t texel_bytes(std::string_view element) { return texel_element(element).bytes; }
+
 gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::SpecConstant> constants) {
   gpu::KernelDesc desc;
   desc.name = std::string(decl.shader);
   desc.spirv = shaders::get(decl.shader);
   desc.storage_buffers = static_cast<uint32_t>(decl.bindings.size());
+  for (const auto& b : decl.bindings)
+    if (b.access == shaders::Access::texel) {
+      desc.texel_formats.assign(decl.bindings.size(), VK_FORMAT_UNDEFINED);
+      break;
+    }
+  if (!desc.texel_formats.empty())
+    for (size_t i = 0; i < decl.bindings.size(); ++i)
+      if (decl.bindings[i].access == shaders::Access::texel) desc.texel_formats[i] = texel_format(decl.bindings[i].element);
   desc.spec_constants = std::move(constants);
   return desc;
 }

@@ -77,6 +77,11 @@ class PassSpec {
 
 // The kernel description of a declared shader with these constants.
 gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::SpecConstant> constants);
+// The view format of a texel binding of this element type (shaders/include/
+// pass.glsl lists the types it expands) and its bytes per element; throws
+// std::logic_error for a type with no texel form.
+VkFormat texel_format(std::string_view element);
+uint32_t texel_bytes(std::string_view element);
 // The kernel description of a pass: 1-D with the graph's workgroup size, or its grid's square workgroups.
 gpu::KernelDesc kernel_desc(const PassSpec& pass, uint32_t linear_workgroup_size);
 

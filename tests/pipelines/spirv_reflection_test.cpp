@@ -92,7 +92,7 @@ TEST(Reflection, EveryEmbeddedShaderHasADeclarationAndViceVersa) {
 
 class ShaderReflection : public testing::TestWithParam<std::string> {};
 
-TEST_P(ShaderReflection, StorageBuffersMatchTheDeclaration) {
+TEST_P(ShaderReflection, BuffersMatchTheDeclaration) {
   const shaders::Declaration* decl = shaders::declaration(GetParam());
   ASSERT_NE(decl, nullptr);
   const Value r = reflection(GetParam());
@@ -121,6 +121,24 @@ TEST_P(ShaderReflection, StorageBuffersMatchTheDeclaration) {
     ASSERT_TRUE(member.has("array"));
     EXPECT_EQ(member["array"].array.size(), 1u);
     EXPECT_EQ(member["array"][0].number, 0.0) << "runtime-sized";
+  }
+  // Texel bindings (pass.glsl): a [u]samplerBuffer named <name>_texels of
+  // the element's scalar kind. (A bench kernel's own sampled image is not
+  // part of its declaration: bench_bilinear_image.)
+  const Value& textures = r.has("textures") ? r["textures"] : empty;
+  for (const Value& t : textures.array) {
+    if (t["type"].string.find("samplerBuffer") == std::string::npos) continue;
+    const uint32_t binding = static_cast<uint32_t>(t["binding"].number);
+    SCOPED_TRACE("binding " + std::to_string(binding) + " (" + t["name"].string + ")");
+    EXPECT_EQ(t["set"].number, 0.0);
+    ASSERT_GE(binding, 1u);
+    ASSERT_LE(binding, decl->bindings.size()) << "not declared";
+    EXPECT_TRUE(seen.insert(binding).second) << "bound twice";
+    const shaders::BindingDecl& d = decl->bindings[binding - 1];
+    EXPECT_EQ(d.access, shaders::Access::texel) << d.name << " is read as a texel buffer but declared otherwise";
+    EXPECT_EQ(t["name"].string, std::string(d.name) + "_texels");
+    const bool unsigned_element = d.element.front() == 'u';
+    EXPECT_EQ(t["type"].string, unsigned_element ? "usamplerBuffer" : "samplerBuffer") << d.name;
   }
   EXPECT_EQ(seen.size(), decl->bindings.size()) << "declared bindings missing from the SPIR-V";
 }

@@ -1,5 +1,5 @@
 // The resource declaration of every shader (shaders/passes/<name>.pass): the
-// storage buffers it binds and the specialization constants it reads. The
+// buffers it binds and the specialization constants it reads. The
 // same X-macro file becomes the shader's GLSL declarations (include/pass.glsl)
 // and, here, a table, so the host binds buffers and sets constants by name
 // and never by position. The table is generated at build time (one per
@@ -13,7 +13,9 @@
 
 namespace dn::shaders {
 
-enum class Access : uint8_t { read, write, read_write };
+// texel: read through a uniform texel buffer view of the element's format
+// (shaders/include/pass.glsl), not as a storage buffer.
+enum class Access : uint8_t { read, write, read_write, texel };
 // An unbound optional binding is bound to a context-wide placeholder buffer;
 // the shader must not touch it then (a specialization constant decides).
 enum class Need : uint8_t { required, optional };

@@ -1,0 +1,21 @@
+#version 450
+// bench_gather_texel (bench/gather_bench.cpp): the same 5x5 sum as
+// bench_gather_buffer, read through a texel binding (pass.glsl: an RGBA32F
+// uniform texel buffer view of the same kind of buffer). Not used by any pipeline.
+#extension GL_GOOGLE_include_directive : require
+#include "grid2d.glsl"
+#include "pass.glsl"
+#include "passes/bench_gather_texel.pass"
+
+void main() {
+  const uvec2 p = dn_pixel();
+  if (!dn_in_grid(p)) return;
+  const ivec2 last = ivec2(dn_grid.size) - 1;
+  vec4 sum = vec4(0.0);
+  for (int dy = -2; dy <= 2; ++dy)
+    for (int dx = -2; dx <= 2; ++dx) {
+      ivec2 q = clamp(ivec2(p) + ivec2(dx, dy), ivec2(0), last);
+      sum += source_at(dn_grid_index(uvec2(q), dn_grid.size));
+    }
+  result.data[dn_grid_index(p, dn_grid.size)] = sum;
+}
