@@ -7,6 +7,7 @@
 // Resources: passes/svgf_reproject.pass (binding 0 FrameConstants); the
 // buffer layouts are described there.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
@@ -40,26 +41,31 @@ bool dn_fill_source(ivec2 q, out vec3 value) {
 // the highlight's surroundings and cuts its peak), then widened to p's own
 // current value d and by `widen` on both sides. False when no pixel of the
 // 5x5 window is foreground (then nothing is clipped).
-bool clip_box(ivec2 pos, vec3 d, float widen, out vec3 lo, out vec3 hi) {
+bool clip_box(ivec2 pos, vec3 d, float widen, bool needed, out vec3 lo, out vec3 hi) {
   vec3 pre_lo = vec3(1e38), pre_hi = vec3(-1e38), raw_lo = d, raw_hi = d;
   bool any = false;
-  for (int yy = -2; yy <= 2; ++yy)
-    for (int xx = -2; xx <= 2; ++xx) {
-      ivec2 q = pos + ivec2(xx, yy);
-      if (!dn_inside(q, frame.size.xy)) continue;
-      uint qi = uint(q.y) * frame.size.x + uint(q.x);
-      vec4 v = neighbourhood_at(qi);
-      if (v.w != 0.0) {
-        pre_lo = min(pre_lo, v.rgb);
-        pre_hi = max(pre_hi, v.rgb);
-        any = true;
-      }
-      if (abs(xx) <= 1 && abs(yy) <= 1 && (xx != 0 || yy != 0)) {
-        vec3 dq = dn_svgf_current(qi);
-        raw_lo = min(raw_lo, dq);
-        raw_hi = max(raw_hi, dq);
-      }
+  // Loops of no iterations where the box is not needed, not ifs: llvmpipe
+  // runs an if's body whatever its condition, and a loop's once, masked
+  // (svgf_variance.comp). min and max do not depend on the order.
+  int window = needed ? 25 : 0;
+  [[dont_unroll]] for (int o = 0; o < window; ++o) {
+    ivec2 q = pos + ivec2(o % 5 - 2, o / 5 - 2);
+    if (!dn_inside(q, frame.size.xy)) continue;
+    vec4 v = neighbourhood_at(uint(q.y) * frame.size.x + uint(q.x));
+    if (v.w != 0.0) {
+      pre_lo = min(pre_lo, v.rgb);
+      pre_hi = max(pre_hi, v.rgb);
+      any = true;
     }
+  }
+  int raw = needed ? 9 : 0;
+  [[dont_unroll]] for (int o = 0; o < raw; ++o) {
+    ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
+    if (o == 4 || !dn_inside(q, frame.size.xy)) continue;
+    vec3 dq = dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x));
+    raw_lo = min(raw_lo, dq);
+    raw_hi = max(raw_hi, dq);
+  }
   vec3 nlo = max(pre_lo, raw_lo), nhi = min(pre_hi, raw_hi);
   bvec3 overlap = lessThanEqual(nlo, nhi);
   lo = min(mix(raw_lo, nlo, overlap), d) - vec3(widen);
@@ -74,15 +80,16 @@ bool clip_box(ivec2 pos, vec3 d, float widen, out vec3 lo, out vec3 hi) {
 // frames, and at 1 spp a penumbra or sparse indirect light often shows five
 // alike in a row: its own sigma then says "quiet" and the next sample
 // contradicts it (still-camera temporal error 1.3-2x, docs/results.md).
-float history_sigma(ivec2 prev, vec2 own) {
+// Read only where `needed` (a loop of no iterations elsewhere: clip_box).
+float history_sigma(ivec2 prev, vec2 own, bool needed) {
   float sigma = dn_moments_sigma(own);
-  for (int yy = -1; yy <= 1; ++yy)
-    for (int xx = -1; xx <= 1; ++xx) {
-      ivec2 q = prev + ivec2(xx, yy);
-      if (!dn_inside(q, frame.size.xy)) continue;
-      uvec4 bits = prev_aux_at(uint(q.y) * frame.size.x + uint(q.x));
-      if (uintBitsToFloat(bits.z) > 0.0) sigma = max(sigma, dn_moments_sigma(uintBitsToFloat(bits.xy)));
-    }
+  int taps = needed ? 9 : 0;
+  [[dont_unroll]] for (int o = 0; o < taps; ++o) {
+    ivec2 q = prev + ivec2(o % 3 - 1, o / 3 - 1);
+    if (!dn_inside(q, frame.size.xy)) continue;
+    uvec4 bits = prev_aux_at(uint(q.y) * frame.size.x + uint(q.x));
+    if (uintBitsToFloat(bits.z) > 0.0) sigma = max(sigma, dn_moments_sigma(uintBitsToFloat(bits.xy)));
+  }
   return sigma;
 }
 
@@ -93,17 +100,18 @@ float history_sigma(ivec2 prev, vec2 own) {
 // sparse bright sample (1-spp indirect light) does not, and rejecting on it
 // made the history of every such pixel restart over and over (still-camera
 // temporal error 2-8x, docs/results.md).
-bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma) {
-  if (!dn_history_contradicted(lp, lh, sigma) || !dn_history_contradicted(l, lh, sigma)) return false;
+// Tested only where `tested` (a loop of no iterations elsewhere: clip_box).
+bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma, bool tested) {
+  bool test = tested && dn_history_contradicted(lp, lh, sigma) && dn_history_contradicted(l, lh, sigma);
   int agree = 0;
-  for (int yy = -1; yy <= 1; ++yy)
-    for (int xx = -1; xx <= 1; ++xx) {
-      ivec2 q = pos + ivec2(xx, yy);
-      if ((xx == 0 && yy == 0) || !dn_inside(q, frame.size.xy)) continue;
-      float lq = dn_luminance(dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x)));
-      if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, sigma)) ++agree;
-    }
-  return agree >= DN_REJECT_NEIGHBOURS;
+  int neighbours = test ? 9 : 0;
+  [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
+    ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
+    if (o == 4 || !dn_inside(q, frame.size.xy)) continue;
+    float lq = dn_luminance(dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x)));
+    if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, sigma)) ++agree;
+  }
+  return test && agree >= DN_REJECT_NEIGHBOURS;
 }
 
 // Whether p's history is clipped: sanitized roughness below clip_roughness
@@ -190,20 +198,24 @@ void main() {
     add_tap(origin + ivec2(1, 0), weights.y, z, n, grad, sc, sm, sl, sw);
     add_tap(origin + ivec2(0, 1), weights.z, z, n, grad, sc, sm, sl, sw);
     add_tap(origin + ivec2(1, 1), weights.w, z, n, grad, sc, sm, sl, sw);
-    if (sw < DN_MIN_TAP_WEIGHT && !MASKED) {
-      // Falcor's fallback: equal weights over the valid taps of the 3x3 box
-      // around the pixel that contains p_prev. Not with MASKED: there most
-      // pixels without history simply had no sample yet, and taking their
-      // neighbours' would fill them from neighbours (paper 004 §5: missing
-      // values are never overwritten from neighbours).
+    // Falcor's fallback: equal weights over the valid taps of the 3x3 box
+    // around the pixel that contains p_prev. Not with MASKED: there most
+    // pixels without history simply had no sample yet, and taking their
+    // neighbours' would fill them from neighbours (paper 004 §5: missing
+    // values are never overwritten from neighbours). A loop of no taps
+    // elsewhere, not an if: llvmpipe runs an if's body whatever its
+    // condition, and a loop's once masked (svgf_variance.comp).
+    bool fallback = sw < DN_MIN_TAP_WEIGHT && !MASKED;
+    if (fallback) {
       sc = vec3(0.0);
       sm = vec2(0.0);
       sl = 0.0;
       sw = 0.0;
-      ivec2 centre = ivec2(floor(dn_previous_position(p, size.x, mv)));
-      for (int yy = -1; yy <= 1; ++yy)
-        for (int xx = -1; xx <= 1; ++xx) add_tap(centre + ivec2(xx, yy), 1.0, z, n, grad, sc, sm, sl, sw);
     }
+    ivec2 centre = ivec2(floor(dn_previous_position(p, size.x, mv)));
+    int box_taps = fallback ? 9 : 0;
+    [[dont_unroll]] for (int o = 0; o < box_taps; ++o)
+      add_tap(centre + ivec2(o % 3 - 1, o / 3 - 1), 1.0, z, n, grad, sc, sm, sl, sw);
     if (sw > 0.0) {
       valid = true;
       prev = sc / sw;
@@ -213,31 +225,29 @@ void main() {
   }
   // Clipped signals (highlights and reflections): reject a history the
   // current frame contradicts, else clip it to the current neighbourhood.
-  if (valid && clipped_here(p)) {
+  if (CLIP) {
+    bool clip = valid && clipped_here(p);
     vec4 pre = neighbourhood_at(p);
     ivec2 prev_pixel = ivec2(floor(dn_previous_position(p, size.x, mv)));
-    float sigma = -1.0;  // history_sigma, read once and only where needed
     // Not with REFLECTION: that history follows the reflection, and the
     // thesis clips it without rejecting (scene 6 glossy temporal error
     // 0.00379 with rejection, 0.00310 without; RMSE within 0.1 %).
     // p's own sigma first: the 3x3 one is never smaller, so a history p's
     // own moments do not contradict is kept without reading the other eight.
-    if (!REFLECTION && pre.w > 0.0) {
-      float own = dn_moments_sigma(prev_m), lp = dn_luminance(pre.rgb), lh = dn_luminance(prev);
-      if (dn_history_contradicted(lp, lh, own) && dn_history_contradicted(l, lh, own)) {
-        sigma = history_sigma(prev_pixel, prev_m);
-        valid = !history_rejected(pos, l, lp, lh, sigma);
-      }
-    }
+    float own = dn_moments_sigma(prev_m), lp = dn_luminance(pre.rgb), lh = dn_luminance(prev);
+    bool test = clip && !REFLECTION && pre.w > 0.0 && dn_history_contradicted(lp, lh, own) &&
+                dn_history_contradicted(l, lh, own);
     // A static pixel's surface and its reflections have not moved, so its
     // history is clipped only beyond its noise: the 1-spp box misses the mean
     // of sparse or two-valued light often (still-camera temporal error
     // 1.1-2.3x without this, docs/results.md); a change of the light itself
     // beyond the noise is still clipped or rejected.
     float still = dn_stillness(mv);
-    if (still > 0.0 && sigma < 0.0) sigma = history_sigma(prev_pixel, prev_m);
+    float sigma = history_sigma(prev_pixel, prev_m, test || (clip && still > 0.0));
+    if (history_rejected(pos, l, lp, lh, sigma, test)) valid = false;
     vec3 lo, hi;
-    if (valid && clip_box(pos, d, still * max(sigma, 0.0), lo, hi)) {
+    bool boxed = clip_box(pos, d, still > 0.0 ? still * sigma : 0.0, clip && valid, lo, hi);
+    if (clip && valid && boxed) {
       vec3 clipped = dn_clip_to_box(prev, lo, hi);
       // A clipped history's luminance moments restart from its clipped
       // colour: the old ones still hold the light the clip removed.
