@@ -230,17 +230,8 @@ bool filterable(dn::gpu::Context& ctx, VkFormat format) {
   return p.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
 }
 
-std::vector<float> read_floats(const dn::gpu::Buffer& b) {
-  std::vector<float> out(b.size() / 4);
-  b.read({reinterpret_cast<uint8_t*>(out.data()), b.size()});
-  return out;
-}
-
 void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
-  std::mt19937 rng(w * 31 + h);
-  std::uniform_real_distribution<float> dist(0.0f, 4.0f);
-  std::vector<float> rgba(size_t{w} * h * 4);
-  for (auto& v : rgba) v = dist(rng);
+  const std::vector<float> rgba = dn::bench::random_rgba(w, h);
   const uint64_t bytes = rgba.size() * 4;
 
   // Buffer fetch.
@@ -265,7 +256,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
         dn::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
       });
-  const auto from_buffer = read_floats(result);
+  const auto from_buffer = dn::bench::read_floats(result);
 
   std::optional<double> image_ms[2];
   double max_diff = NAN;
@@ -279,7 +270,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
         ctx, image_result, reps, [&](VkCommandBuffer cmd) { image.record_dispatch(cmd); },
         [&](VkCommandBuffer cmd) { image.record_upload(cmd); });
     if (f == 0) {
-      const auto from_image = read_floats(image_result);
+      const auto from_image = dn::bench::read_floats(image_result);
       max_diff = 0.0;
       for (uint32_t y = 0; y + 1 < h; ++y)
         for (uint32_t x = 0; x + 1 < w; ++x)
@@ -305,34 +296,13 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
 int main(int argc, char** argv) {
   dn::bench::KernelBenchOptions options;
   options.reps = 30;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      if (dn::bench::parse_kernel_bench_option(argc, argv, i, options)) continue;
-      std::fprintf(stderr, "usage: %s [--device SEL] [--size WxH]... [--reps N]\n", argv[0]);
-      return 2;
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bilinear_bench: %s\n", e.what());
-    return 2;
-  }
+  if (!dn::bench::parse_kernel_bench_args(argc, argv, "bilinear_bench", options)) return 2;
   if (options.sizes.empty()) options.sizes = {{640, 360}, {1280, 720}, {1920, 1080}};
-  try {
-    dn::gpu::ContextOptions co;
-    co.device = options.device;
-    dn::gpu::Context ctx(co);
+  return dn::bench::run_on_device("bilinear_bench", options, [&](dn::gpu::Context& ctx) {
     std::printf("device: %s; median device ms of %d dispatches, one bilinear fetch per pixel\n\n",
                 ctx.name().c_str(), options.reps);
     std::printf("| size | buffer fp32 (bilinear.glsl) | image RGBA32F | image RGBA16F | max diff fp32 |\n");
     std::printf("| --- | --- | --- | --- | --- |\n");
     for (auto [w, h] : options.sizes) run(ctx, w, h, options.reps);
-    if (ctx.validation_enabled() && ctx.validation_message_count() > 0) {
-      std::fprintf(stderr, "%llu validation messages\n",
-                   static_cast<unsigned long long>(ctx.validation_message_count()));
-      return 1;
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bilinear_bench: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

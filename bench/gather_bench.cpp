@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -36,17 +35,8 @@ dn::gpu::GridPush grid_of(uint32_t w, uint32_t h) {
   return g;
 }
 
-std::vector<float> read_floats(const dn::gpu::Buffer& b) {
-  std::vector<float> out(b.size() / 4);
-  b.read({reinterpret_cast<uint8_t*>(out.data()), b.size()});
-  return out;
-}
-
 void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
-  std::mt19937 rng(w * 31 + h);
-  std::uniform_real_distribution<float> dist(0.0f, 4.0f);
-  std::vector<float> rgba(size_t{w} * h * 4);
-  for (auto& v : rgba) v = dist(rng);
+  const std::vector<float> rgba = dn::bench::random_rgba(w, h);
   const uint64_t bytes = rgba.size() * 4;
   dn::gpu::Buffer source(ctx, bytes, dn::gpu::BufferKind::StorageUpload, "source");
   source.write({reinterpret_cast<const uint8_t*>(rgba.data()), bytes});
@@ -73,7 +63,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
     VkDescriptorSet set = pool.allocate(*kernel, uniform.handle(), storage);
     const double ms = dn::bench::time_dispatches(
         ctx, result, reps, [&](VkCommandBuffer cmd) { kernel->record_dispatch(cmd, set, grid_of(w, h)); }, upload);
-    out = read_floats(result);
+    out = dn::bench::read_floats(result);
     return ms;
   };
   std::vector<float> from_buffer, from_texels;
@@ -91,34 +81,13 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
 int main(int argc, char** argv) {
   dn::bench::KernelBenchOptions options;
   options.reps = 30;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      if (dn::bench::parse_kernel_bench_option(argc, argv, i, options)) continue;
-      std::fprintf(stderr, "usage: %s [--device SEL] [--size WxH]... [--reps N]\n", argv[0]);
-      return 2;
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "gather_bench: %s\n", e.what());
-    return 2;
-  }
+  if (!dn::bench::parse_kernel_bench_args(argc, argv, "gather_bench", options)) return 2;
   if (options.sizes.empty()) options.sizes = {{640, 360}, {1280, 720}};
-  try {
-    dn::gpu::ContextOptions co;
-    co.device = options.device;
-    dn::gpu::Context ctx(co);
+  return dn::bench::run_on_device("gather_bench", options, [&](dn::gpu::Context& ctx) {
     std::printf("device: %s; median device ms of %d dispatches, a 5x5 vec4 neighbourhood per pixel\n\n",
                 ctx.name().c_str(), options.reps);
     std::printf("| size | storage buffer | uniform texel buffer | texel / buffer | max diff |\n");
     std::printf("| --- | --- | --- | --- | --- |\n");
     for (auto [w, h] : options.sizes) run(ctx, w, h, options.reps);
-    if (ctx.validation_enabled() && ctx.validation_message_count() > 0) {
-      std::fprintf(stderr, "%llu validation messages\n",
-                   static_cast<unsigned long long>(ctx.validation_message_count()));
-      return 1;
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "gather_bench: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -43,6 +44,60 @@ inline bool parse_kernel_bench_option(int argc, char** argv, int& i, KernelBench
     o.reps = std::max(1, std::atoi(v.c_str()));
   }
   return true;
+}
+
+// Parses a benchmark's command line when it takes only the common options;
+// false (after printing the usage or the error) on anything else.
+inline bool parse_kernel_bench_args(int argc, char** argv, const char* name, KernelBenchOptions& o) {
+  try {
+    for (int i = 1; i < argc; ++i) {
+      if (parse_kernel_bench_option(argc, argv, i, o)) continue;
+      std::fprintf(stderr, "usage: %s [--device SEL] [--size WxH]... [--reps N]\n", argv[0]);
+      return false;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return false;
+  }
+  return true;
+}
+
+// Creates the context on options.device, runs `body` (which prints the
+// table) and returns the process's exit code: 1 on an exception or any
+// validation message, 0 otherwise. `name` prefixes the error.
+inline int run_on_device(const char* name, const KernelBenchOptions& options,
+                         const std::function<void(dn::gpu::Context&)>& body) {
+  try {
+    dn::gpu::ContextOptions co;
+    co.device = options.device;
+    dn::gpu::Context ctx(co);
+    body(ctx);
+    if (ctx.validation_enabled() && ctx.validation_message_count() > 0) {
+      std::fprintf(stderr, "%llu validation messages\n",
+                   static_cast<unsigned long long>(ctx.validation_message_count()));
+      return 1;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return 1;
+  }
+  return 0;
+}
+
+// A buffer's contents as floats (after its readback).
+inline std::vector<float> read_floats(const dn::gpu::Buffer& b) {
+  std::vector<float> out(b.size() / 4);
+  b.read({reinterpret_cast<uint8_t*>(out.data()), b.size()});
+  return out;
+}
+
+// A w x h RGBA fp32 grid of values uniform in [0, 4), the same for a size.
+inline std::vector<float> random_rgba(uint32_t w, uint32_t h) {
+  std::mt19937 rng(w * 31 + h);
+  std::uniform_real_distribution<float> dist(0.0f, 4.0f);
+  std::vector<float> rgba(size_t{w} * h * 4);
+  for (auto& v : rgba) v = dist(rng);
+  return rgba;
 }
 
 inline double median(std::vector<double> v) {

@@ -154,24 +154,12 @@ int main(int argc, char** argv) {
   }
   if (options.sizes.empty()) options.sizes = {{640, 360}, {1280, 720}};
   if (radii.empty()) radii = {6, 20};
-  try {
-    dn::gpu::ContextOptions co;
-    co.device = options.device;
-    dn::gpu::Context ctx(co);
+  return dn::bench::run_on_device("stat_gather_bench", options, [&](dn::gpu::Context& ctx) {
     std::printf("device: %s; median device ms of %d dispatches of stat's gather, 8x8 workgroups\n\n",
                 ctx.name().c_str(), options.reps);
     std::printf("| size | radius | plain loads ms | shared tile ms | max diff | mean weight sum |\n");
     std::printf("| --- | --- | --- | --- | --- | --- |\n");
     for (auto [w, h] : options.sizes)
       for (int r : radii) run(ctx, w, h, r, options.reps);
-    if (ctx.validation_enabled() && ctx.validation_message_count() > 0) {
-      std::fprintf(stderr, "%llu validation messages\n",
-                   static_cast<unsigned long long>(ctx.validation_message_count()));
-      return 1;
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "stat_gather_bench: %s\n", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }
