@@ -43,6 +43,7 @@
 #include "passes/svgf_variance.pass"
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
+
 const int WIN = BLOCK + 6;
 
 // The samples the temporal colour averages (variance_of_mean): its first
@@ -119,7 +120,9 @@ void main() {
   // leaves a loop after one masked iteration once no lane is in it, so
   // without young pixels this costs one row of the window, not eight. The
   // rows are not unrolled, so which taps a row gives a block pixel is
-  // decided per row (the same taps in the same order: bit-identical sums).
+  // decided per row: the same taps in the same order, but the output is no
+  // longer bit-identical to the unrolled window's (last-bit differences in
+  // the compiled arithmetic; the CPU-reference comparisons are unchanged).
   int rows = any_act ? WIN : 0;
   {
     [[dont_unroll]] for (int r = 0; r < rows; ++r) {
