@@ -30,6 +30,13 @@
 // (length kept). Depth, dz and the (octahedral, unit) normal come from the
 // guide written by svgf_reproject.
 //
+// SIGNALS 2 (split diffuse and specular, svgf_chain's joint chain): both
+// signals in one pass, each exactly as it would be filtered alone (its own
+// src, variance, luminance weights, temporal length and history), sharing the
+// guide's loads and the geometric terms of every tap, as NRD filters diffuse
+// and specular together; SECOND_GUIDE gives the second its own guide (and
+// geometric weights). CLASS_EDGES and SPATIAL_BANDWIDTH are the last signal's.
+//
 // Register blocking: one invocation filters a BLOCK x BLOCK set of pixels
 // spaced STEP apart, base + STEP * (i, j). Their taps form one
 // (BLOCK + 4)^2 window on the same STEP lattice, and each window pixel is
@@ -51,18 +58,31 @@
 #include "pass.glsl"
 #include "passes/svgf_atrous.pass"
 
-// DISPLAY_FILL's sources: foreground pixels with a normal and data.
-bool dn_fill_source(ivec2 q, out vec3 value) {
-  uint qi = uint(q.y) * frame.size.x + uint(q.x);
-  vec4 s = src_at(qi);
-  value = s.rgb;
-  return uintBitsToFloat(guide_at(qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
-}
-#include "ring_fill.glsl"
+// DISPLAY_FILL's sources: foreground pixels with a normal and data, of the
+// signal dn_fill_signal (set before each ring search).
+int dn_fill_signal = 0;
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 #define R KERNEL_RADIUS
+#define NS SIGNALS
 const int WIN = BLOCK + 2 * KERNEL_RADIUS;
+
+// Signal s's buffers and its guide's index (0: the shared guide). Called with
+// s a constant of an unrolled loop, so each selection is resolved at compile
+// time (llvmpipe would otherwise load both sides).
+vec4 signal_src(int s, uint i) { return s == 0 ? src_at(i) : src2_at(i); }
+vec4 signal_temporal(int s, uint i) { return s == 0 ? temporal_at(i) : temporal2_at(i); }
+int guide_of(int s) { return SECOND_GUIDE && s == 1 ? 1 : 0; }
+uvec4 guide_load(int g, uint i) { return g == 0 ? guide_at(i) : guide2_at(i); }
+bool last_signal(int s) { return s == NS - 1; }
+
+bool dn_fill_source(ivec2 q, out vec3 value) {
+  uint qi = uint(q.y) * frame.size.x + uint(q.x);
+  vec4 s = NS == 1 || dn_fill_signal == 0 ? src_at(qi) : src2_at(qi);
+  value = s.rgb;
+  return uintBitsToFloat(guide_load(guide_of(dn_fill_signal), qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
+}
+#include "ring_fill.glsl"
 
 // The kernel's tap weight at offset i (-R..R) relative to the centre's.
 float kernel_tap(int i) {
@@ -91,67 +111,75 @@ void main() {
   float min_age = DN_PARAM_VALUE(progressive, luminance_min_age);
   float ramp_in = DN_PARAM_VALUE(progressive, luminance_ramp_in);
 
-  // Block pixels: centre data.
-  float cz[B * B], cl[B * B], ipz[B * B], ipl[B * B];
-  vec3 cn[B * B];
-  bool act[B * B];
-  vec3 sc[B * B];
-  float sv[B * B], sw[B * B];
-  uint ccls[B * B];  // CLASS_EDGES: p's guide .w
-  float isig[B * B];  // SPATIAL_BANDWIDTH: 1 / (2 sigma_p^2), 0 without
+  // Block pixels' centre data: per guide g at [g * B * B + k] (geometry),
+  // per signal s at [s * B * B + k] (colour and weights).
+  float cz[NS * B * B], ipz[NS * B * B];
+  vec3 cn[NS * B * B];
+  bool act[NS * B * B];
+  uint ccls[NS * B * B];  // CLASS_EDGES: p's guide .w
+  float cl[NS * B * B], ipl[NS * B * B];
+  vec3 sc[NS * B * B];
+  float sv[NS * B * B], sw[NS * B * B];
+  float isig[B * B];  // SPATIAL_BANDWIDTH (last signal): 1 / (2 sigma_p^2), 0 without
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
       int k = j * B + i;
       ivec2 p = base + STEP * ivec2(i, j);
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
-      uvec4 gd = guide_at(pi);
-      ccls[k] = gd.w;
-      cz[k] = uintBitsToFloat(gd.x);
-      act[k] = p.x < size.x && p.y < size.y && cz[k] > 0.0;
-      cn[k] = dn_svgf_unpack_normal(gd.y);
-      vec4 cs = src_at(pi);
-      // A pixel without data takes its neighbours' (no luminance weight: it
-      // has no luminance) and adds nothing of its own.
-      bool has_data = cs.w != DN_SVGF_NO_DATA;
-      cl[k] = dn_luminance(cs.rgb);
-      sc[k] = has_data ? cs.rgb : vec3(0.0);  // p itself, weight 1
-      sv[k] = has_data ? cs.w : 0.0;
-      sw[k] = has_data ? 1.0 : 0.0;
-      ipz[k] = 0.0;
-      ipl[k] = 0.0;
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        if (s > 0 && guide_of(s) == 0) continue;
+        int gk = guide_of(s) * B * B + k;
+        uvec4 gd = guide_load(guide_of(s), pi);
+        ccls[gk] = gd.w;
+        cz[gk] = uintBitsToFloat(gd.x);
+        act[gk] = p.x < size.x && p.y < size.y && cz[gk] > 0.0;
+        cn[gk] = dn_svgf_unpack_normal(gd.y);
+        ipz[gk] = act[gk] ? 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8)) : 0.0;
+      }
       isig[k] = 0.0;
       if (SPATIAL_BANDWIDTH) {
         float sigma = bandwidth.data[pi];
         isig[k] = sigma > 0.0 ? 0.5 / (sigma * sigma) : 0.0;
       }
-      if (act[k]) {
-        const float g[3] = float[3](0.25, 0.5, 0.25);
-        float gv = 0.0, gw = 0.0;
-        for (int yy = -1; yy <= 1; ++yy) {
-          for (int xx = -1; xx <= 1; ++xx) {
-            ivec2 q = p + ivec2(xx, yy);
-            if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-            // HDR step rule: a neighbour's variance counts only where its
-            // own noise explains the luminance step to p.
-            vec4 sq = src_at(uint(q.y) * uint(size.x) + uint(q.x));
-            bool same = sq.w != DN_SVGF_NO_DATA &&
-                        ((xx == 0 && yy == 0) || abs(cl[k] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w));
-            float kk = same ? g[xx + 1] * g[yy + 1] : 0.0;
-            gv += kk * sq.w;
-            gw += kk;
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        int sk = s * B * B + k, gk = guide_of(s) * B * B + k;
+        vec4 cs = signal_src(s, pi);
+        // A pixel without data takes its neighbours' (no luminance weight: it
+        // has no luminance) and adds nothing of its own.
+        bool has_data = cs.w != DN_SVGF_NO_DATA;
+        cl[sk] = dn_luminance(cs.rgb);
+        sc[sk] = has_data ? cs.rgb : vec3(0.0);  // p itself, weight 1
+        sv[sk] = has_data ? cs.w : 0.0;
+        sw[sk] = has_data ? 1.0 : 0.0;
+        ipl[sk] = 0.0;
+        if (act[gk]) {
+          const float g[3] = float[3](0.25, 0.5, 0.25);
+          float gv = 0.0, gw = 0.0;
+          for (int yy = -1; yy <= 1; ++yy) {
+            for (int xx = -1; xx <= 1; ++xx) {
+              ivec2 q = p + ivec2(xx, yy);
+              if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+              // HDR step rule: a neighbour's variance counts only where its
+              // own noise explains the luminance step to p.
+              vec4 sq = signal_src(s, uint(q.y) * uint(size.x) + uint(q.x));
+              bool same = sq.w != DN_SVGF_NO_DATA &&
+                          ((xx == 0 && yy == 0) || abs(cl[sk] - dn_luminance(sq.rgb)) <= DN_SVGF_STEP_SIGMAS * sqrt(sq.w));
+              float kk = same ? g[xx + 1] * g[yy + 1] : 0.0;
+              gv += kk * sq.w;
+              gw += kk;
+            }
           }
+          float len = signal_temporal(s, pi).z;
+          float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
+          // luminance_ramp_in r: the age gate's weight comes in over r samples,
+          // bandwidth x 2^r, ..., 2 (switched on at once, the display jumps).
+          if (AGE_GATED_LUMINANCE && min_age > 0.0) widen *= exp2(clamp(min_age + ramp_in - len, 0.0, ramp_in));
+          float gvar = gw > 0.0 ? gv / gw : 0.0;
+          ipl[sk] = LUMINANCE_VARIANCE ? 1.0 / (widen * (sigma_l * gvar + eps_l))
+                                       : 1.0 / (phi_c * widen * sqrt(gvar + DN_SVGF_VARIANCE_EPS));
+          if (!has_data || (AGE_GATED_LUMINANCE && len < min_age)) ipl[sk] = 0.0;
         }
-        float len = temporal_at(pi).z;
-        float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
-        // luminance_ramp_in r: the age gate's weight comes in over r samples,
-        // bandwidth x 2^r, ..., 2 (switched on at once, the display jumps).
-        if (AGE_GATED_LUMINANCE && min_age > 0.0) widen *= exp2(clamp(min_age + ramp_in - len, 0.0, ramp_in));
-        float gvar = gw > 0.0 ? gv / gw : 0.0;
-        ipl[k] = LUMINANCE_VARIANCE ? 1.0 / (widen * (sigma_l * gvar + eps_l))
-                                    : 1.0 / (phi_c * widen * sqrt(gvar + DN_SVGF_VARIANCE_EPS));
-        if (!has_data || (AGE_GATED_LUMINANCE && len < min_age)) ipl[k] = 0.0;
-        ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
       }
     }
   }
@@ -162,13 +190,26 @@ void main() {
       ivec2 qc = clamp(q, ivec2(0), size - 1);
       bool inside = q == qc;
       uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-      uvec4 gq = guide_at(qi);
-      vec4 s = src_at(qi);
-      float zq = uintBitsToFloat(gq.x);
-      bool tap_ok = inside && zq > 0.0 && s.w != DN_SVGF_NO_DATA;
-      uint qcls = gq.w;
-      vec3 nq = dn_svgf_unpack_normal(gq.y);
-      float lq = dn_luminance(s.rgb);
+      // The tap's geometry per guide, loaded and decoded once for every
+      // signal and block pixel that takes it.
+      float zq[2];
+      vec3 nq[2];
+      uint qcls[2];
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        if (s > 0 && guide_of(s) == 0) continue;
+        uvec4 gq = guide_load(guide_of(s), qi);
+        zq[guide_of(s)] = uintBitsToFloat(gq.x);
+        nq[guide_of(s)] = dn_svgf_unpack_normal(gq.y);
+        qcls[guide_of(s)] = gq.w;
+      }
+      vec4 sq[NS];
+      float lq[NS];
+      bool tap_ok[NS];
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        sq[s] = signal_src(s, qi);
+        lq[s] = dn_luminance(sq[s].rgb);
+        tap_ok[s] = inside && zq[guide_of(s)] > 0.0 && sq[s].w != DN_SVGF_NO_DATA;
+      }
       [[unroll]] for (int j = 0; j < B; ++j) {
         int dy = r - j - R;
         if (dy < -R || dy > R) continue;
@@ -177,46 +218,66 @@ void main() {
           if (dx < -R || dx > R) continue;
           int k = j * B + i;
           if (dx == 0 && dy == 0) continue;  // p itself: added above
-          float cos_n = dot(cn[k], nq);
-          float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(dx * dx + dy * dy));
-          float w_l = abs(cl[k] - lq) * ipl[k];
-          if (SPATIAL_BANDWIDTH) w_l += float(dx * dx + dy * dy) * isig[k];
-          float w = kernel_tap(dx) * kernel_tap(dy) *
-                    exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-          w = (act[k] && tap_ok && cos_n > 0.0 && (!CLASS_EDGES || qcls == ccls[k])) ? w : 0.0;
-          sc[k] += w * s.rgb;
-          sv[k] += propagate ? w * w * s.w : 0.0;
-          sw[k] += w;
+          [[unroll]] for (int s = 0; s < NS; ++s) {
+            int g = guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
+            // The geometric terms are the same expressions for every signal
+            // of a guide (computed once), so each signal's weights are
+            // bit-identical to filtering it alone.
+            float cos_n = dot(cn[gk], nq[g]);
+            float w_z = abs(cz[gk] - zq[g]) * ipz[gk] * inversesqrt(float(dx * dx + dy * dy));
+            float w_l = abs(cl[sk] - lq[s]) * ipl[sk];
+            if (SPATIAL_BANDWIDTH && last_signal(s)) w_l += float(dx * dx + dy * dy) * isig[k];
+            float w = kernel_tap(dx) * kernel_tap(dy) *
+                      exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+            bool same_class = !(CLASS_EDGES && last_signal(s)) || qcls[g] == ccls[gk];
+            w = (act[gk] && tap_ok[s] && cos_n > 0.0 && same_class) ? w : 0.0;
+            sc[sk] += w * sq[s].rgb;
+            sv[sk] += propagate ? w * w * sq[s].w : 0.0;
+            sw[sk] += w;
+          }
         }
       }
     }
   }
 
-  uint fill_mask = 0u;  // DISPLAY_FILL: the block pixels still without data
-  [[unroll]] for (int j = 0; j < B; ++j) {
-    [[unroll]] for (int i = 0; i < B; ++i) {
-      int k = j * B + i;
-      ivec2 p = base + STEP * ivec2(i, j);
-      if (p.x >= size.x || p.y >= size.y) continue;
-      uint pi = uint(p.y) * uint(size.x) + uint(p.x);
-      // Still no data where neither p nor any tap has any.
-      vec4 result = sw[k] > 0.0 ? vec4(sc[k] / sw[k], propagate ? sv[k] / (sw[k] * sw[k]) : sv[k])
-                                : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
-      if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask |= 1u << uint(k);
-      dst.data[pi] = result;
-      if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
-          (!AGE_GATED_LUMINANCE || temporal_at(pi).z >= min_age))
-        colour_history.data[pi].rgb = result.rgb;
+  uint fill_mask[NS];  // DISPLAY_FILL: per signal, the block pixels still without data
+  [[unroll]] for (int s = 0; s < NS; ++s) {
+    fill_mask[s] = 0u;
+    [[unroll]] for (int j = 0; j < B; ++j) {
+      [[unroll]] for (int i = 0; i < B; ++i) {
+        int k = j * B + i, sk = s * B * B + k;
+        ivec2 p = base + STEP * ivec2(i, j);
+        if (p.x >= size.x || p.y >= size.y) continue;
+        uint pi = uint(p.y) * uint(size.x) + uint(p.x);
+        // Still no data where neither p nor any tap has any.
+        vec4 result = sw[sk] > 0.0 ? vec4(sc[sk] / sw[sk], propagate ? sv[sk] / (sw[sk] * sw[sk]) : sv[sk])
+                                   : vec4(0.0, 0.0, 0.0, DN_SVGF_NO_DATA);
+        if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask[s] |= 1u << uint(k);
+        if (s == 0) dst.data[pi] = result;
+        else dst2.data[pi] = result;
+        if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
+            (!AGE_GATED_LUMINANCE || signal_temporal(s, pi).z >= min_age)) {
+          if (s == 0) colour_history.data[pi].rgb = result.rgb;
+          else colour_history2.data[pi].rgb = result.rgb;
+        }
+      }
     }
   }
   // DISPLAY_FILL, outside the unrolled block: the ring search is long and
   // rare, and unrolled once per block pixel it made this pass 13x slower.
-  if (DISPLAY_FILL && fill_mask != 0u) {
-    [[dont_unroll]] for (int k = 0; k < B * B; ++k) {
-      if ((fill_mask & (1u << uint(k))) == 0u) continue;
-      ivec2 p = base + STEP * ivec2(k % B, k / B);
-      vec3 fill;
-      if (dn_ring_fill(p, uvec2(size), fill)) dst.data[uint(p.y) * uint(size.x) + uint(p.x)] = vec4(fill, 0.0);
+  if (DISPLAY_FILL) {
+    [[dont_unroll]] for (int s = 0; s < NS; ++s) {
+      if (fill_mask[s] == 0u) continue;
+      dn_fill_signal = s;
+      [[dont_unroll]] for (int k = 0; k < B * B; ++k) {
+        if ((fill_mask[s] & (1u << uint(k))) == 0u) continue;
+        ivec2 p = base + STEP * ivec2(k % B, k / B);
+        vec3 fill;
+        if (!dn_ring_fill(p, uvec2(size), fill)) continue;
+        uint pi = uint(p.y) * uint(size.x) + uint(p.x);
+        if (s == 0) dst.data[pi] = vec4(fill, 0.0);
+        else dst2.data[pi] = vec4(fill, 0.0);
+      }
     }
   }
 }

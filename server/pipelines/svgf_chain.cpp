@@ -39,12 +39,14 @@ constexpr uint32_t kAtrousBlock = 4;
 // svgf_variance register block: kVarianceBlock^2 pixels per invocation.
 constexpr uint32_t kVarianceBlock = 2;
 
-// Illumination ping-pong: the first signal alternates a and b; the second
-// alternates c and whichever of a/b the first did not end in, so the first
-// signal's result survives until svgf_remodulate.
+// Illumination ping-pong of the first signal (a, b) and of the second (c, d).
 constexpr const char* kIllumA = "svgf_illum_a";
 constexpr const char* kIllumB = "svgf_illum_b";
 constexpr const char* kIllumC = "svgf_illum_c";
+constexpr const char* kIllumD = "svgf_illum_d";
+// The first signal's guide and temporal; the second's temporal, and its
+// guide when it has its own features, are these names + its suffix (both
+// signals' are read by the joint a-trous passes).
 constexpr const char* kGuide = "svgf_guide";
 constexpr const char* kTemporal = "svgf_temporal";
 constexpr const char* kTaaHistory = "svgf_taa";
@@ -148,11 +150,22 @@ void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask)
   }
 }
 
-// One reproject / variance / a-trous chain; returns the buffer holding its
-// final illumination.
-std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index,
-                      std::string current, std::string other) {
+// The scratch buffers of signal `index`.
+struct SignalBuffers {
+  std::string guide, temporal;
+  std::string illum, other;  // the a-trous ping-pong: illum holds the reprojected signal
+};
+SignalBuffers signal_buffers(const SvgfVariant& v, size_t index) {
+  if (index == 0) return {kGuide, kTemporal, kIllumA, kIllumB};
   const SvgfSignal& s = v.signals[index];
+  return {s.features ? kGuide + s.suffix : kGuide, kTemporal + s.suffix, kIllumC, kIllumD};
+}
+
+// Signal `index`'s reprojection and variance: its temporal colour and
+// variance in its illum buffer, its temporal moments and length.
+void add_temporal(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
+  const SvgfSignal& s = v.signals[index];
+  const SignalBuffers buffers = signal_buffers(v, index);
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
   // Features: the signal's own (fp32 buffers), the filled sparse G-buffer
@@ -172,16 +185,16 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .bind("motion", "motion")
       .bind("prev_colour", colour)
       .bind("prev_aux", aux)
-      .bind("illum", current)
-      .bind("guide", kGuide)
-      .bind("temporal", kTemporal)
+      .bind("illum", buffers.illum)
+      .bind("guide", buffers.guide)
+      .bind("temporal", buffers.temporal)
       .set("SIGNAL_HALF", signal_half(config, v, s))
       .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
       .set("NORMAL_HALF", normal_half)
       .set("DEPTH_HALF", depth_half)
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("DEMODULATE", demodulate)
-      .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first chain's guide
+      .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first signal's guide
       .set("SUBTRACT_EMISSION", s.subtract_emission)
       .set("READ_HISTORY", s.reads_history)
       .set("SPECULAR_ALPHA", s.specular_alpha);
@@ -198,9 +211,9 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   reproject.pixels_per_invocation = 1;
 
   PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
-  variance.bind("guide", kGuide)
-      .bind("temporal", kTemporal)
-      .bind("illum", current)
+  variance.bind("guide", buffers.guide)
+      .bind("temporal", buffers.temporal)
+      .bind("illum", buffers.illum)
       .bind("colour_history", colour)
       .bind("aux_history", aux)
       .set("BLOCK", kVarianceBlock)
@@ -208,32 +221,49 @@ std::string add_chain(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate);
   variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                          ((config.height + kVarianceBlock - 1) / kVarianceBlock);
+}
 
+// The a-trous iterations, every signal in the same passes (the joint chain:
+// the guide's loads and geometric weights shared); returns the buffer
+// holding each signal's final illumination.
+std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
+  std::vector<SignalBuffers> buffers;
+  for (size_t i = 0; i < v.signals.size(); ++i) buffers.push_back(signal_buffers(v, i));
+  const bool two = v.signals.size() > 1;
+  const SvgfSignal& last = v.signals.back();
   const uint32_t tap = std::min(v.feedback_tap, v.iterations ? v.iterations - 1 : 0u);
   for (uint32_t i = 0; i < v.iterations; ++i) {
     const uint32_t level = step_level(v.steps, i, v.iterations);
-    PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i) + s.suffix, "svgf_atrous");
-    atrous.bind("guide", kGuide)
-        .bind("src", current)
-        .bind("dst", other)
-        .bind("temporal", kTemporal)
+    PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i), "svgf_atrous");
+    atrous.bind("guide", buffers[0].guide)
+        .bind("src", buffers[0].illum)
+        .bind("dst", buffers[0].other)
+        .bind("temporal", buffers[0].temporal)
         .set("STEP", 1u << level)
         .set("FEEDBACK", i == tap)
         .set("BLOCK", kAtrousBlock)
-        .set("CLASS_EDGES", s.motion == MotionSource::Reflection)
+        .set("CLASS_EDGES", last.motion == MotionSource::Reflection)
         .set("KERNEL_RADIUS", v.kernel == AtrousKernel::B3_5x5 ? 2u : 1u)
         .set("LUMINANCE_VARIANCE", v.luminance_weight == LuminanceWeight::Variance)
         .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff)
-        .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations);
-    if (i == tap) atrous.bind("colour_history", colour);
+        .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations)
+        .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
+    if (i == tap) atrous.bind("colour_history", v.signals[0].history + "_colour");
+    if (two) {
+      atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other).bind("temporal2", buffers[1].temporal);
+      if (i == tap) atrous.bind("colour_history2", v.signals[1].history + "_colour");
+      if (buffers[1].guide != buffers[0].guide) atrous.bind("guide2", buffers[1].guide).set("SECOND_GUIDE", 1u);
+    }
     if (i == tap && v.validity_mask) bind_validity_mask(config, *v.validity_mask, atrous);
-    if (!s.spatial_bandwidth.empty()) atrous.bind("bandwidth", s.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
+    if (!last.spatial_bandwidth.empty()) atrous.bind("bandwidth", last.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
     // Grid of shaders/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
     atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
-    std::swap(current, other);
+    for (SignalBuffers& b : buffers) std::swap(b.illum, b.other);
   }
-  return current;
+  std::vector<std::string> results;
+  for (const SignalBuffers& b : buffers) results.push_back(b.illum);
+  return results;
 }
 
 }  // namespace
@@ -267,6 +297,10 @@ void check_supported(const SvgfVariant& v) {
     reject("svgf_remodulate combines one or two signals, not " + std::to_string(v.signals.size()));
   if (v.signals[0].modulator.empty())
     reject("the first signal needs a modulator: svgf_remodulate multiplies it by one");
+  for (size_t i = 0; i + 1 < v.signals.size(); ++i)
+    if (v.signals[i].motion == MotionSource::Reflection || !v.signals[i].spatial_bandwidth.empty())
+      reject("signal " + v.signals[i].input + ": reflection motion and a spatial bandwidth are the last signal's only "
+             "(the joint a-trous passes apply their class edges and bandwidth to it)");
   for (const SvgfSignal& s : v.signals) {
     if (s.input.empty() || s.history.empty()) reject("a signal needs an input plane and a history name");
     if (s.motion == MotionSource::Reflection && s.reflection_motion.empty())
@@ -316,9 +350,10 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   }
   g.add_scratch(kIllumA, kIlluminationBytes);
   if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
-  if (v.signals.size() > 1) g.add_scratch(kIllumC, kIlluminationBytes);
-  // Guide and temporal are shared by the signals: each chain's variance pass
-  // has read temporal before the next chain's reprojection rewrites it.
+  if (v.signals.size() > 1) {
+    g.add_scratch(kIllumC, kIlluminationBytes);
+    if (v.iterations > 0) g.add_scratch(kIllumD, kIlluminationBytes);
+  }
   if (v.sparse_gbuffer) {
     const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
     g.add_scratch_elements(kGbufferPyramid, elements, 16);
@@ -326,8 +361,13 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_scratch(kFilledDepth, 4);
     g.add_scratch(kFilledNormal, 12);
   }
-  g.add_scratch(kGuide, kGuideBytes);
-  g.add_scratch(kTemporal, kTemporalBytes);
+  // One guide and temporal per signal (the joint a-trous passes read both),
+  // except that a second signal without features of its own shares the guide.
+  for (size_t i = 0; i < v.signals.size(); ++i) {
+    const SignalBuffers b = signal_buffers(v, i);
+    if (i == 0 || b.guide != kGuide) g.add_scratch(b.guide, kGuideBytes);
+    g.add_scratch(b.temporal, kTemporalBytes);
+  }
   const bool clips = v.clip && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; });
   if (clips) {
     g.add_scratch(kClipPartial, kClipBytes);
@@ -342,9 +382,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
   }
   if (v.sparse_gbuffer) add_gbuffer_fill(g, config, *v.validity_mask);
-  std::vector<std::string> results;
-  results.push_back(add_chain(g, config, v, 0, kIllumA, kIllumB));
-  if (v.signals.size() > 1) results.push_back(add_chain(g, config, v, 1, kIllumC, results[0] == kIllumA ? kIllumB : kIllumA));
+  for (size_t i = 0; i < v.signals.size(); ++i) add_temporal(g, config, v, i);
+  const std::vector<std::string> results = add_atrous(g, config, v);
 
   // With TAA, svgf_remodulate writes the current colour to the temporal
   // scratch and the reprojected TAA history to the guide scratch (both free

@@ -1,6 +1,8 @@
 // The SVGF pass chain as a reusable builder (docs/pipelines.md, "svgf in
-// detail"): per signal svgf_reproject -> svgf_variance -> svgf_atrous_<i>,
-// then svgf_remodulate and, with TAA, svgf_taa. What varies between
+// detail"): per signal svgf_reproject -> svgf_variance, then the a-trous
+// iterations svgf_atrous_<i>, which filter every signal (split diffuse and
+// specular: the joint chain) in the same passes, then svgf_remodulate and,
+// with TAA, svgf_taa. What varies between
 // pipelines is data, an SvgfVariant: the signals (each with its modulator and
 // motion source), the a-trous kernel, step order and luminance weight, the
 // feedback tap, a validity mask, TAA and emission; per signal its motion

@@ -468,7 +468,7 @@ TEST_F(ReflectTest, MirrorMatchThresholdRejectsDistantMatches) {
     const CapturedRun run = run_captured(ctx(), pointers(seq), {{"mirror_match_threshold", threshold}});
     const std::vector<float> got = run.captured("reflect_motion", "reflect_motion");
     const std::vector<float> vm = run.captured("reflect_prepare", "reflect_virtual_motion");
-    const std::vector<float> temporal = run.captured("svgf_reproject_specular", "svgf_temporal");
+    const std::vector<float> temporal = run.captured("svgf_reproject_specular", "svgf_temporal_specular");
     const Fields prev = fields_of(a.fb), cur = fields_of(b.fb);
     int kept = 0, rejected = 0, disagree = 0;
     for (int y = 0; y < h; ++y)
@@ -649,7 +649,7 @@ TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
     const CapturedRun session = run_captured(ctx(), pointers(seq), {{"specular_history", history}});
     const std::vector<float> mod = session.captured("reflect_prepare", "reflect_modulator");
     const std::vector<float> out = session.captured("svgf_reproject_specular", "svgf_illum_c");
-    const std::vector<float> temporal = session.captured("svgf_reproject_specular", "svgf_temporal");
+    const std::vector<float> temporal = session.captured("svgf_reproject_specular", "svgf_temporal_specular");
     int foreground = 0, fresh = 0;
     for (size_t i = 0; i < size_t(w) * h; ++i) {
       if (!(r.fb.depth[i] > 0.0f)) continue;
@@ -763,7 +763,7 @@ TEST_F(ReflectTest, FootprintBandwidthNarrowsOnlyGlossyPixels) {
   const int w = 64, h = 36;
   const std::vector<Rendered> seq = render_sequence(1, 2, 2, 1, w, h);
   const Rendered& r = seq.front();
-  const std::string atrous = "svgf_atrous_0_specular";
+  const std::string atrous = "svgf_atrous_0";  // the joint pass: specular is its second signal (src2, dst2)
   {
     const double omega = 0.5;
     const CapturedRun on = run_captured(ctx(), pointers(seq), {{"footprint_omega", omega}});
@@ -784,8 +784,8 @@ TEST_F(ReflectTest, FootprintBandwidthNarrowsOnlyGlossyPixels) {
   }
   const CapturedRun off = run_captured(ctx(), pointers(seq));
   const CapturedRun floor = run_captured(ctx(), pointers(seq), {{"footprint_omega", 1e-4}});
-  const std::string src = bound(*floor.graph, atrous, 2), dst = bound(*floor.graph, atrous, 3);
-  ASSERT_EQ(src, bound(*off.graph, atrous, 2));
+  const std::string src = bound(*floor.graph, atrous, 8), dst = bound(*floor.graph, atrous, 9);
+  ASSERT_EQ(src, bound(*off.graph, atrous, 8));
   const std::vector<float> in = floor.captured(atrous, src), got = floor.captured(atrous, dst);
   const std::vector<float> without = off.captured(atrous, dst);
   const std::vector<float> features = floor.captured("reflect_prepare", "reflect_features");

@@ -499,6 +499,43 @@ TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
   }
 }
 
+// The joint chain filters diffuse and specular in the same a-trous passes
+// with separate luminance weights and variances: a different specular input
+// leaves every diffuse result bit for bit as it was (and changes the
+// specular ones), over frames with history.
+TEST_F(SvgfTest, JointAtrousKeepsTheSignalsApart) {
+  const int w = 48, h = 32, iterations = 3;
+  const std::vector<protocol::Parameter> params = {{"atrous_iterations", iterations}};
+  auto a = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, params));
+  auto b = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, params));
+  auto* ga = dynamic_cast<pipelines::GraphPipeline*>(a.get());
+  auto* gb = dynamic_cast<pipelines::GraphPipeline*>(b.get());
+  ASSERT_TRUE(ga && gb);
+  ga->set_capture(true);
+  gb->set_capture(true);
+  SvgfSceneGen scene(w, h, 5, 0.8f, 0.5f, 0.3f, 0.9f, 0.003);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 4.0f);
+  for (int t = 0; t < 4; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const SvgfScene s = scene.frame(t);
+    std::vector<float> specular_a(3 * w * h), specular_b(3 * w * h);
+    for (size_t i = 0; i < specular_a.size(); ++i) {
+      specular_a[i] = 0.5f * s.radiance[i];
+      specular_b[i] = u(rng);
+    }
+    run(*a, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &specular_a));
+    run(*b, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &specular_b));
+    for (int i = 0; i < iterations; ++i) {
+      const std::string pass = "svgf_atrous_" + std::to_string(i);
+      const std::string diffuse = i % 2 == 0 ? "svgf_illum_b" : "svgf_illum_a";
+      const std::string specular = i % 2 == 0 ? "svgf_illum_d" : "svgf_illum_c";
+      EXPECT_EQ(ga->captured(pass, diffuse), gb->captured(pass, diffuse)) << pass;
+      EXPECT_NE(ga->captured(pass, specular), gb->captured(pass, specular)) << pass;
+    }
+  }
+}
+
 TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
   auto pipe = pipelines::create(ctx(), svgf_split_config(32, 32, Format::F32, Format::F32, {{"atrous_iterations", 2}}));
   SvgfSceneGen scene(32, 32, 3, 1, 1, 0, 0.1f);
@@ -508,11 +545,10 @@ TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
       &timings);
   std::vector<std::string> names;
   for (const auto& t : timings) names.push_back(t.name);
+  // One joint chain: both signals' a-trous iterations are the same passes.
   EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject_diffuse", "svgf_variance_diffuse",
-                                             "svgf_atrous_0_diffuse", "svgf_atrous_1_diffuse",
-                                             "svgf_reproject_specular", "svgf_variance_specular",
-                                             "svgf_atrous_0_specular", "svgf_atrous_1_specular", "svgf_remodulate",
-                                             "svgf_taa", "download"}));
+                                             "svgf_reproject_specular", "svgf_variance_specular", "svgf_atrous_0",
+                                             "svgf_atrous_1", "svgf_remodulate", "svgf_taa", "download"}));
 }
 
 TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
@@ -522,12 +558,13 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 12 (TAA), scratch 5*16
-  // (3 illumination, guide, temporal), output 12 = 228 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 228 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 76 + 80 + 6 = 192 B/px.
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 12 (TAA), scratch 7*16
+  // (4 illumination: a ping-pong per signal, the shared guide, 2 temporal: the joint a-trous passes
+  // read both signals'), output 12 = 260 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 260 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+6+2+4 + 76 + 112 + 6 = 224 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 192 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 224 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
