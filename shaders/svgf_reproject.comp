@@ -40,7 +40,9 @@ bool dn_fill_source(ivec2 q, out vec3 value) {
 // range where they do not: a small highlight's blur widens the first beyond
 // the highlight's surroundings and cuts its peak), then widened to p's own
 // current value d and by `widen` on both sides. False when no pixel of the
-// 5x5 window is foreground (then nothing is clipped).
+// 5x5 window is foreground (then nothing is clipped). The raw neighbours
+// come from svgf_clip_prefilter's current signal (dn_svgf_current's values,
+// one texel fetch each), as do history_rejected's.
 bool clip_box(ivec2 pos, vec3 d, float widen, bool needed, out vec3 lo, out vec3 hi) {
   vec3 pre_lo = vec3(1e38), pre_hi = vec3(-1e38), raw_lo = d, raw_hi = d;
   bool any = false;
@@ -62,7 +64,7 @@ bool clip_box(ivec2 pos, vec3 d, float widen, bool needed, out vec3 lo, out vec3
   [[dont_unroll]] for (int o = 0; o < raw; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (o == 4 || !dn_inside(q, frame.size.xy)) continue;
-    vec3 dq = dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x));
+    vec3 dq = current_at(uint(q.y) * frame.size.x + uint(q.x)).rgb;
     raw_lo = min(raw_lo, dq);
     raw_hi = max(raw_hi, dq);
   }
@@ -108,7 +110,7 @@ bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma, bool 
   [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (o == 4 || !dn_inside(q, frame.size.xy)) continue;
-    float lq = dn_luminance(dn_svgf_current(uint(q.y) * frame.size.x + uint(q.x)));
+    float lq = dn_luminance(current_at(uint(q.y) * frame.size.x + uint(q.x)).rgb);
     if ((lq > lh) == (l > lh) && dn_history_contradicted(lq, lh, sigma)) ++agree;
   }
   return test && agree >= DN_REJECT_NEIGHBOURS;

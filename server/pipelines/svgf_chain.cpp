@@ -51,9 +51,11 @@ constexpr const char* kGuide = "svgf_guide";
 constexpr const char* kTemporal = "svgf_temporal";
 constexpr const char* kTaaHistory = "svgf_taa";
 // History clipping scratch, per pixel, shared by the clipped signals (each
-// chain's reprojection reads it before the next chain's prefilter rewrites
-// it): the horizontal pass's vec4(sum w c, sum w) and the box source
+// signal's reprojection reads it before the next signal's prefilter
+// rewrites it): the demodulated current signal vec4(rgb, foreground), the
+// horizontal pass's vec4(sum w c, sum w) and the box source
 // vec4(prefiltered rgb, foreground), fp32.
+constexpr const char* kClipCurrent = "svgf_clip_current";
 constexpr const char* kClipPartial = "svgf_clip_partial";
 constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
 constexpr uint64_t kClipBytes = 16;
@@ -79,26 +81,33 @@ uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const Sv
   return v.extra_samples ? 0u : is_half(channel_format(config, s.channel));
 }
 
-// The two passes of the separable 7x7 prefilter history clipping takes its box from.
+// The passes of the separable 7x7 prefilter history clipping takes its box
+// from: the demodulated current signal once per pixel, rows, columns.
 void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s,
                         bool demodulate) {
-  PassSpec& rows = g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter");
-  rows.bind("signal", signal_buffer(v, s))
+  PassSpec& current = g.add_pass("svgf_clip_current" + s.suffix, "svgf_clip_prefilter");
+  current.bind("signal", signal_buffer(v, s))
       .bind("depth", "depth")
-      .bind("dst", kClipPartial)
+      .bind("dst", kClipCurrent)
+      .set("MODE", 0u)
       .set("SIGNAL_HALF", signal_half(config, v, s))
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("DEMODULATE", demodulate)
       .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
       .set("SUBTRACT_EMISSION", s.subtract_emission);
-  if (demodulate) rows.bind("modulator", s.modulator.buffer);
+  if (demodulate) current.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
-    rows.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
-  rows.pixels_per_invocation = 1;
+    current.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  current.pixels_per_invocation = 1;
+  g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter")
+      .bind("src", kClipCurrent)
+      .bind("dst", kClipPartial)
+      .set("MODE", 1u)
+      .pixels_per_invocation = 1;
   g.add_pass("svgf_clip_prefilter_y" + s.suffix, "svgf_clip_prefilter")
       .bind("src", kClipPartial)
       .bind("dst", kClipNeighbourhood)
-      .set("VERTICAL", 1u)
+      .set("MODE", 2u)
       .pixels_per_invocation = 1;
 }
 
@@ -203,6 +212,7 @@ void add_temporal(GraphSpec& g, const SessionConfig& config, const SvgfVariant& 
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)
     reproject.bind("neighbourhood", kClipNeighbourhood)
+        .bind("current", kClipCurrent)
         .bind("roughness", "roughness")
         .set("CLIP", 1u)
         .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)));
@@ -370,6 +380,7 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   }
   const bool clips = v.clip && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; });
   if (clips) {
+    g.add_scratch(kClipCurrent, kClipBytes);
     g.add_scratch(kClipPartial, kClipBytes);
     g.add_scratch(kClipNeighbourhood, kClipBytes);
   }
