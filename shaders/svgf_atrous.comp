@@ -57,6 +57,7 @@
 #include "reproject.glsl"
 #include "pass.glsl"
 #include "passes/svgf_atrous.pass"
+#include "svgf_joint.glsl"
 
 // DISPLAY_FILL's sources: foreground pixels with a normal and data, of the
 // signal dn_fill_signal (set before each ring search).
@@ -64,23 +65,16 @@ int dn_fill_signal = 0;
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 #define R KERNEL_RADIUS
-#define NS SIGNALS
 const int WIN = BLOCK + 2 * KERNEL_RADIUS;
 
-// Signal s's buffers and its guide's index (0: the shared guide). Called with
-// s a constant of an unrolled loop, so each selection is resolved at compile
-// time (llvmpipe would otherwise load both sides).
+// Signal s's illumination in (svgf_joint.glsl's rule: s a loop constant).
 vec4 signal_src(int s, uint i) { return s == 0 ? src_at(i) : src2_at(i); }
-vec4 signal_temporal(int s, uint i) { return s == 0 ? temporal_at(i) : temporal2_at(i); }
-int guide_of(int s) { return SECOND_GUIDE && s == 1 ? 1 : 0; }
-uvec4 guide_load(int g, uint i) { return g == 0 ? guide_at(i) : guide2_at(i); }
-bool last_signal(int s) { return s == NS - 1; }
 
 bool dn_fill_source(ivec2 q, out vec3 value) {
   uint qi = uint(q.y) * frame.size.x + uint(q.x);
   vec4 s = NS == 1 || dn_fill_signal == 0 ? src_at(qi) : src2_at(qi);
   value = s.rgb;
-  return uintBitsToFloat(guide_load(guide_of(dn_fill_signal), qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
+  return uintBitsToFloat(dn_guide_load(dn_guide_of(dn_fill_signal), qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
 }
 #include "ring_fill.glsl"
 
@@ -128,9 +122,9 @@ void main() {
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
       [[unroll]] for (int s = 0; s < NS; ++s) {
-        if (s > 0 && guide_of(s) == 0) continue;
-        int gk = guide_of(s) * B * B + k;
-        uvec4 gd = guide_load(guide_of(s), pi);
+        if (s > 0 && dn_guide_of(s) == 0) continue;
+        int gk = dn_guide_of(s) * B * B + k;
+        uvec4 gd = dn_guide_load(dn_guide_of(s), pi);
         ccls[gk] = gd.w;
         cz[gk] = uintBitsToFloat(gd.x);
         act[gk] = p.x < size.x && p.y < size.y && cz[gk] > 0.0;
@@ -143,7 +137,7 @@ void main() {
         isig[k] = sigma > 0.0 ? 0.5 / (sigma * sigma) : 0.0;
       }
       [[unroll]] for (int s = 0; s < NS; ++s) {
-        int sk = s * B * B + k, gk = guide_of(s) * B * B + k;
+        int sk = s * B * B + k, gk = dn_guide_of(s) * B * B + k;
         vec4 cs = signal_src(s, pi);
         // A pixel without data takes its neighbours' (no luminance weight: it
         // has no luminance) and adds nothing of its own.
@@ -170,7 +164,7 @@ void main() {
               gw += kk;
             }
           }
-          float len = signal_temporal(s, pi).z;
+          float len = dn_temporal_load(s, pi).z;
           float widen = ramp ? 8.0 - min(7.0, max(len - 1.0, 0.0)) : 1.0;
           // luminance_ramp_in r: the age gate's weight comes in over r samples,
           // bandwidth x 2^r, ..., 2 (switched on at once, the display jumps).
@@ -196,11 +190,11 @@ void main() {
       vec3 nq[2];
       uint qcls[2];
       [[unroll]] for (int s = 0; s < NS; ++s) {
-        if (s > 0 && guide_of(s) == 0) continue;
-        uvec4 gq = guide_load(guide_of(s), qi);
-        zq[guide_of(s)] = uintBitsToFloat(gq.x);
-        nq[guide_of(s)] = dn_svgf_unpack_normal(gq.y);
-        qcls[guide_of(s)] = gq.w;
+        if (s > 0 && dn_guide_of(s) == 0) continue;
+        uvec4 gq = dn_guide_load(dn_guide_of(s), qi);
+        zq[dn_guide_of(s)] = uintBitsToFloat(gq.x);
+        nq[dn_guide_of(s)] = dn_svgf_unpack_normal(gq.y);
+        qcls[dn_guide_of(s)] = gq.w;
       }
       vec4 sq[NS];
       float lq[NS];
@@ -208,7 +202,7 @@ void main() {
       [[unroll]] for (int s = 0; s < NS; ++s) {
         sq[s] = signal_src(s, qi);
         lq[s] = dn_luminance(sq[s].rgb);
-        tap_ok[s] = inside && zq[guide_of(s)] > 0.0 && sq[s].w != DN_SVGF_NO_DATA;
+        tap_ok[s] = inside && zq[dn_guide_of(s)] > 0.0 && sq[s].w != DN_SVGF_NO_DATA;
       }
       [[unroll]] for (int j = 0; j < B; ++j) {
         int dy = r - j - R;
@@ -219,17 +213,17 @@ void main() {
           int k = j * B + i;
           if (dx == 0 && dy == 0) continue;  // p itself: added above
           [[unroll]] for (int s = 0; s < NS; ++s) {
-            int g = guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
+            int g = dn_guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
             // The geometric terms are the same expressions for every signal
             // of a guide (computed once), so each signal's weights are
             // bit-identical to filtering it alone.
             float cos_n = dot(cn[gk], nq[g]);
             float w_z = abs(cz[gk] - zq[g]) * ipz[gk] * inversesqrt(float(dx * dx + dy * dy));
             float w_l = abs(cl[sk] - lq[s]) * ipl[sk];
-            if (SPATIAL_BANDWIDTH && last_signal(s)) w_l += float(dx * dx + dy * dy) * isig[k];
+            if (SPATIAL_BANDWIDTH && dn_last_signal(s)) w_l += float(dx * dx + dy * dy) * isig[k];
             float w = kernel_tap(dx) * kernel_tap(dy) *
                       exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-            bool same_class = !(CLASS_EDGES && last_signal(s)) || qcls[g] == ccls[gk];
+            bool same_class = !(CLASS_EDGES && dn_last_signal(s)) || qcls[g] == ccls[gk];
             w = (act[gk] && tap_ok[s] && cos_n > 0.0 && same_class) ? w : 0.0;
             sc[sk] += w * sq[s].rgb;
             sv[sk] += propagate ? w * w * sq[s].w : 0.0;
@@ -256,7 +250,7 @@ void main() {
         if (s == 0) dst.data[pi] = result;
         else dst2.data[pi] = result;
         if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
-            (!AGE_GATED_LUMINANCE || signal_temporal(s, pi).z >= min_age)) {
+            (!AGE_GATED_LUMINANCE || dn_temporal_load(s, pi).z >= min_age)) {
           if (s == 0) colour_history.data[pi].rgb = result.rgb;
           else colour_history2.data[pi].rgb = result.rgb;
         }

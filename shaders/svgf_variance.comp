@@ -27,6 +27,11 @@
 // len) (the feedback a-trous iteration later replaces .rgb) and aux
 // uvec4(m1, m2, depth or 0 without normal, packed normal or 0).
 //
+// SIGNALS 2 (the joint chain, svgf_joint.glsl): split diffuse and specular
+// in one pass, each exactly as alone (its own moments, luminance weights,
+// length and histories), sharing the guide's loads and the estimate's
+// geometric terms unless SECOND_GUIDE.
+//
 // Register blocking as in svgf_atrous.comp: one invocation handles the
 // BLOCK x BLOCK pixels base + (i, j), base = BLOCK * (ix, iy) over a
 // ceil(W / BLOCK) x ceil(H / BLOCK) grid, and loads their (BLOCK + 6)^2
@@ -41,6 +46,7 @@
 #include "svgf_guards.glsl"
 #include "pass.glsl"
 #include "passes/svgf_variance.pass"
+#include "svgf_joint.glsl"
 
 #define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
 
@@ -49,11 +55,14 @@ const int WIN = BLOCK + 6;
 // The samples the temporal colour averages (variance_of_mean): its first
 // 1/alpha frames are a true mean of `len` samples, after that an exponential
 // average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
-float samples_averaged(float len) {
+// Signal s's alpha: reflect's alpha_specular for the last with SPECULAR_ALPHA.
+float samples_averaged(float len, int s) {
   if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
-  float a = DN_SVGF_ALPHA_COLOUR;
+  float a = DN_SVGF_ALPHA_OF(SPECULAR_ALPHA && dn_last_signal(s));
   return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
 }
+
+vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.data[i].rgb; }
 
 void main() {
   ivec2 size = ivec2(frame.size.xy);
@@ -65,11 +74,13 @@ void main() {
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
-  float cz[B * B], cl[B * B], ipz[B * B], len[B * B], var[B * B], sw[B * B];
-  vec3 cn[B * B];
-  vec2 sm[B * B];
-  bool inside[B * B], act[B * B];
-  bool isolated[B * B];  // every 3x3 foreground neighbour below half of p's luminance
+  // Per guide g at [g * B * B + k]: geometry; per signal s at [s * B * B + k].
+  float cz[NS * B * B], ipz[NS * B * B];
+  vec3 cn[NS * B * B];
+  float cl[NS * B * B], len[NS * B * B], var[NS * B * B], sw[NS * B * B];
+  vec2 sm[NS * B * B];
+  bool inside[B * B], act[NS * B * B];
+  bool isolated[NS * B * B];  // every 3x3 foreground neighbour below half of p's luminance
   bool any_act = false;
   [[unroll]] for (int j = 0; j < B; ++j) {
     [[unroll]] for (int i = 0; i < B; ++i) {
@@ -78,38 +89,55 @@ void main() {
       inside[k] = p.x < size.x && p.y < size.y;
       ivec2 pc = min(p, size - 1);
       uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
-      uvec4 gd = guide_at(pi);
-      vec4 t = temporal_at(pi);
-      float gz = uintBitsToFloat(gd.x);
-      len[k] = t.z;
-      // No data (a foreground pixel of length 0: only a MASKED reprojection
-      // makes one): no history depth, so the next frame reprojects nothing from it.
-      bool no_data = gz != 0.0 && t.z == 0.0;
-      if (inside[k]) {
-        colour_history.data[pi] = vec4(illum.data[pi].rgb, t.z);
-        aux_history.data[pi] = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gd.y);
+      uvec4 gds[2];
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        if (s > 0 && dn_guide_of(s) == 0) continue;
+        int g = dn_guide_of(s), gk = g * B * B + k;
+        gds[g] = dn_guide_load(g, pi);
+        cz[gk] = uintBitsToFloat(gds[g].x);
+        cn[gk] = dn_svgf_unpack_normal(gds[g].y);
+        ipz[gk] = 1.0 / (phi_z * max(uintBitsToFloat(gds[g].z), 1e-8));
       }
-      // background 0; len >= 4: from the moments; else the 7x7 estimate
-      // (without a normal no neighbour is taken: act false, own moments);
-      // no data: DN_SVGF_NO_DATA.
-      var[k] = gz == 0.0 ? 0.0 : no_data ? DN_SVGF_NO_DATA : max(0.0, t.y - t.x * t.x);
-      act[k] = SPATIAL_ESTIMATE && inside[k] && gz > 0.0 && t.z < 4.0 && !no_data;
-      any_act = any_act || act[k];
-      cz[k] = gz;
-      cn[k] = dn_svgf_unpack_normal(gd.y);
-      cl[k] = t.w;
-      ipz[k] = 1.0 / (phi_z * max(uintBitsToFloat(gd.z), 1e-8));
-      sm[k] = t.xy;  // p itself, weight 1
-      sw[k] = 1.0;
-      isolated[k] = true;
-      // A loop of no iterations where p is not young, not an if: see below.
-      int neighbours = act[k] ? 9 : 0;
-      [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
-        int xx = o % 3 - 1, yy = o / 3 - 1;
-        ivec2 q = p + ivec2(xx, yy);
-        if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
-        uint qi = uint(q.y) * uint(size.x) + uint(q.x);
-        if (uintBitsToFloat(guide_at(qi).x) > 0.0 && temporal_at(qi).w >= 0.5 * t.w) isolated[k] = false;
+      [[unroll]] for (int s = 0; s < NS; ++s) {
+        int g = dn_guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
+        uvec4 gd = gds[g];
+        vec4 t = dn_temporal_load(s, pi);
+        float gz = cz[gk];
+        len[sk] = t.z;
+        // No data (a foreground pixel of length 0: only a MASKED reprojection
+        // makes one): no history depth, so the next frame reprojects nothing from it.
+        bool no_data = gz != 0.0 && t.z == 0.0;
+        if (inside[k]) {
+          vec4 colour = vec4(signal_colour(s, pi), t.z);
+          uvec4 aux = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gd.y);
+          if (s == 0) {
+            colour_history.data[pi] = colour;
+            aux_history.data[pi] = aux;
+          } else {
+            colour_history2.data[pi] = colour;
+            aux_history2.data[pi] = aux;
+          }
+        }
+        // background 0; len >= 4: from the moments; else the 7x7 estimate
+        // (without a normal no neighbour is taken: act false, own moments);
+        // no data: DN_SVGF_NO_DATA.
+        var[sk] = gz == 0.0 ? 0.0 : no_data ? DN_SVGF_NO_DATA : max(0.0, t.y - t.x * t.x);
+        act[sk] = SPATIAL_ESTIMATE && inside[k] && gz > 0.0 && t.z < 4.0 && !no_data;
+        any_act = any_act || act[sk];
+        cl[sk] = t.w;
+        sm[sk] = t.xy;  // p itself, weight 1
+        sw[sk] = 1.0;
+        isolated[sk] = true;
+        // A loop of no iterations where p is not young, not an if: see below.
+        int neighbours = act[sk] ? 9 : 0;
+        [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
+          int xx = o % 3 - 1, yy = o / 3 - 1;
+          ivec2 q = p + ivec2(xx, yy);
+          if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+          uint qi = uint(q.y) * uint(size.x) + uint(q.x);
+          if (uintBitsToFloat(dn_guide_load(g, qi).x) > 0.0 && dn_temporal_load(s, qi).w >= 0.5 * t.w)
+            isolated[sk] = false;
+        }
       }
     }
   }
@@ -130,11 +158,21 @@ void main() {
         ivec2 q = base + ivec2(c - 3, r - 3);
         ivec2 qc = clamp(q, ivec2(0), size - 1);
         uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-        uvec2 gq = guide_at(qi).xy;
-        vec4 tq = temporal_at(qi);
-        float zq = uintBitsToFloat(gq.x);
-        bool tap_ok = q == qc && zq > 0.0;
-        vec3 nq = dn_svgf_unpack_normal(gq.y);
+        // The tap's geometry per guide, loaded and decoded once for every
+        // signal and block pixel that takes it.
+        float zq[2];
+        vec3 nq[2];
+        bool tap_ok[2];
+        [[unroll]] for (int s = 0; s < NS; ++s) {
+          if (s > 0 && dn_guide_of(s) == 0) continue;
+          int g = dn_guide_of(s);
+          uvec2 gq = dn_guide_load(g, qi).xy;
+          zq[g] = uintBitsToFloat(gq.x);
+          tap_ok[g] = q == qc && zq[g] > 0.0;
+          nq[g] = dn_svgf_unpack_normal(gq.y);
+        }
+        vec4 tq[NS];
+        [[unroll]] for (int s = 0; s < NS; ++s) tq[s] = dn_temporal_load(s, qi);
         [[unroll]] for (int j = 0; j < B; ++j) {
           int dy = r - j - 3;
           bool row_tap = dy >= -3 && dy <= 3;
@@ -143,31 +181,41 @@ void main() {
             if (dx < -3 || dx > 3) continue;
             int k = j * B + i;
             bool tap = row_tap && !(dx == 0 && dy == 0);  // p itself: added above
-            float cos_n = dot(cn[k], nq);
-            float w_z = abs(cz[k] - zq) * ipz[k] * inversesqrt(float(max(dx * dx + dy * dy, 1)));
-            float relative_to = isolated[k] ? max(cl[k], tq.w) : min(cl[k], tq.w);
-            float w_l = abs(cl[k] - tq.w) / (phi_c * relative_to + DN_SVGF_LUMINANCE_EPS);
-            float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-            w = (tap && act[k] && tap_ok && cos_n > 0.0) ? w : 0.0;
-            sm[k] += w * tq.xy;
-            sw[k] += w;
+            [[unroll]] for (int s = 0; s < NS; ++s) {
+              int g = dn_guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
+              // The same expressions for every signal of a guide: the
+              // geometric terms are computed once, and each signal's
+              // weights are bit for bit its weights alone.
+              float cos_n = dot(cn[gk], nq[g]);
+              float w_z = abs(cz[gk] - zq[g]) * ipz[gk] * inversesqrt(float(max(dx * dx + dy * dy, 1)));
+              float relative_to = isolated[sk] ? max(cl[sk], tq[s].w) : min(cl[sk], tq[s].w);
+              float w_l = abs(cl[sk] - tq[s].w) / (phi_c * relative_to + DN_SVGF_LUMINANCE_EPS);
+              float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+              w = (tap && act[sk] && tap_ok[g] && cos_n > 0.0) ? w : 0.0;
+              sm[sk] += w * tq[s].xy;
+              sw[sk] += w;
+            }
           }
         }
       }
     }
   }
-  [[unroll]] for (int j = 0; j < B; ++j) {
-    [[unroll]] for (int i = 0; i < B; ++i) {
-      int k = j * B + i;
-      if (!inside[k]) continue;
-      ivec2 p = base + ivec2(i, j);
-      uint pi = uint(p.y) * uint(size.x) + uint(p.x);
-      float v = var[k];
-      if (SPATIAL_ESTIMATE && cz[k] != 0.0 && len[k] < 4.0 && v != DN_SVGF_NO_DATA) {
-        vec2 m = sm[k] / sw[k];
-        v = max(0.0, m.y - m.x * m.x) * 4.0 / len[k];
+  [[unroll]] for (int s = 0; s < NS; ++s) {
+    [[unroll]] for (int j = 0; j < B; ++j) {
+      [[unroll]] for (int i = 0; i < B; ++i) {
+        int k = j * B + i, sk = s * B * B + k, gk = dn_guide_of(s) * B * B + k;
+        if (!inside[k]) continue;
+        ivec2 p = base + ivec2(i, j);
+        uint pi = uint(p.y) * uint(size.x) + uint(p.x);
+        float v = var[sk];
+        if (SPATIAL_ESTIMATE && cz[gk] != 0.0 && len[sk] < 4.0 && v != DN_SVGF_NO_DATA) {
+          vec2 m = sm[sk] / sw[sk];
+          v = max(0.0, m.y - m.x * m.x) * 4.0 / len[sk];
+        }
+        v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[sk], s);
+        if (s == 0) illum.data[pi].w = v;
+        else illum2.data[pi].w = v;
       }
-      illum.data[pi].w = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[k]);
     }
   }
 }

@@ -170,9 +170,9 @@ SignalBuffers signal_buffers(const SvgfVariant& v, size_t index) {
   return {s.features ? kGuide + s.suffix : kGuide, kTemporal + s.suffix, kIllumC, kIllumD};
 }
 
-// Signal `index`'s reprojection and variance: its temporal colour and
-// variance in its illum buffer, its temporal moments and length.
-void add_temporal(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
+// Signal `index`'s reprojection (and history clipping): its temporal colour
+// in its illum buffer, its temporal moments and length.
+void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
   const SvgfSignal& s = v.signals[index];
   const SignalBuffers buffers = signal_buffers(v, index);
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
@@ -219,16 +219,31 @@ void add_temporal(GraphSpec& g, const SessionConfig& config, const SvgfVariant& 
   if (s.motion == MotionSource::Reflection) reproject.bind("reflection", s.reflection_motion).set("REFLECTION", 1u);
   if (v.validity_mask) bind_validity_mask(config, *v.validity_mask, reproject);
   reproject.pixels_per_invocation = 1;
+}
 
-  PassSpec& variance = g.add_pass("svgf_variance" + s.suffix, "svgf_variance");
-  variance.bind("guide", buffers.guide)
-      .bind("temporal", buffers.temporal)
-      .bind("illum", buffers.illum)
-      .bind("colour_history", colour)
-      .bind("aux_history", aux)
+// The variance of every signal in one pass (the joint chain: the guide's
+// loads and the 7x7 estimate's geometric weights shared), which also writes
+// each signal's history for the next frame.
+void add_variance(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
+  const SignalBuffers first = signal_buffers(v, 0);
+  PassSpec& variance = g.add_pass("svgf_variance", "svgf_variance");
+  variance.bind("guide", first.guide)
+      .bind("temporal", first.temporal)
+      .bind("illum", first.illum)
+      .bind("colour_history", v.signals[0].history + "_colour")
+      .bind("aux_history", v.signals[0].history + "_aux")
       .set("BLOCK", kVarianceBlock)
-      .set("SPECULAR_ALPHA", s.specular_alpha)
-      .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate);
+      .set("SPECULAR_ALPHA", v.signals.back().specular_alpha)
+      .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate)
+      .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
+  if (v.signals.size() > 1) {
+    const SignalBuffers second = signal_buffers(v, 1);
+    variance.bind("temporal2", second.temporal)
+        .bind("illum2", second.illum)
+        .bind("colour_history2", v.signals[1].history + "_colour")
+        .bind("aux_history2", v.signals[1].history + "_aux");
+    if (second.guide != first.guide) variance.bind("guide2", second.guide).set("SECOND_GUIDE", 1u);
+  }
   variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                          ((config.height + kVarianceBlock - 1) / kVarianceBlock);
 }
@@ -308,9 +323,10 @@ void check_supported(const SvgfVariant& v) {
   if (v.signals[0].modulator.empty())
     reject("the first signal needs a modulator: svgf_remodulate multiplies it by one");
   for (size_t i = 0; i + 1 < v.signals.size(); ++i)
-    if (v.signals[i].motion == MotionSource::Reflection || !v.signals[i].spatial_bandwidth.empty())
-      reject("signal " + v.signals[i].input + ": reflection motion and a spatial bandwidth are the last signal's only "
-             "(the joint a-trous passes apply their class edges and bandwidth to it)");
+    if (v.signals[i].motion == MotionSource::Reflection || !v.signals[i].spatial_bandwidth.empty() ||
+        v.signals[i].specular_alpha)
+      reject("signal " + v.signals[i].input + ": reflection motion, a spatial bandwidth and the specular alpha are "
+             "the last signal's only (the joint variance and a-trous passes apply them to it)");
   for (const SvgfSignal& s : v.signals) {
     if (s.input.empty() || s.history.empty()) reject("a signal needs an input plane and a history name");
     if (s.motion == MotionSource::Reflection && s.reflection_motion.empty())
@@ -393,7 +409,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
   }
   if (v.sparse_gbuffer) add_gbuffer_fill(g, config, *v.validity_mask);
-  for (size_t i = 0; i < v.signals.size(); ++i) add_temporal(g, config, v, i);
+  for (size_t i = 0; i < v.signals.size(); ++i) add_reprojection(g, config, v, i);
+  add_variance(g, config, v);
   const std::vector<std::string> results = add_atrous(g, config, v);
 
   // With TAA, svgf_remodulate writes the current colour to the temporal

@@ -22,7 +22,8 @@ const float DN_SVGF_NO_DATA = -1.0;
 // The floor of a chain's temporal blend weight: svgf's alpha_colour, or
 // reflect's alpha_specular on its specular chain (SPECULAR_ALPHA, a
 // specialization constant of svgf_reproject and svgf_variance).
-#define DN_SVGF_ALPHA_COLOUR (SPECULAR_ALPHA ? DN_PARAM_VALUE(reflect, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
+#define DN_SVGF_ALPHA_OF(specular) ((specular) ? DN_PARAM_VALUE(reflect, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
+#define DN_SVGF_ALPHA_COLOUR DN_SVGF_ALPHA_OF(SPECULAR_ALPHA)
 // HDR step rule of the a-trous variance prefilter: a neighbour's variance
 // counts for p only when |l_p - l_q| <= DN_SVGF_STEP_SIGMAS * sqrt(v_q), so a
 // bright pixel's variance does not open a dark neighbour's luminance

@@ -499,11 +499,12 @@ TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
   }
 }
 
-// The joint chain filters diffuse and specular in the same a-trous passes
-// with separate luminance weights and variances: a different specular input
-// leaves every diffuse result bit for bit as it was (and changes the
-// specular ones), over frames with history.
-TEST_F(SvgfTest, JointAtrousKeepsTheSignalsApart) {
+// The joint chain filters diffuse and specular in the same variance and
+// a-trous passes with separate luminance weights and variances: a different
+// specular input leaves every diffuse result (variance, each iteration, the
+// histories the passes write) bit for bit as it was and changes the specular
+// ones, over frames with history.
+TEST_F(SvgfTest, JointChainKeepsTheSignalsApart) {
   const int w = 48, h = 32, iterations = 3;
   const std::vector<protocol::Parameter> params = {{"atrous_iterations", iterations}};
   auto a = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, params));
@@ -526,6 +527,10 @@ TEST_F(SvgfTest, JointAtrousKeepsTheSignalsApart) {
     }
     run(*a, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &specular_a));
     run(*b, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &specular_b));
+    for (const char* buffer : {"svgf_illum_a", "svgf_colour", "svgf_aux"})
+      EXPECT_EQ(ga->captured("svgf_variance", buffer), gb->captured("svgf_variance", buffer)) << buffer;
+    for (const char* buffer : {"svgf_illum_c", "svgf_spec_colour", "svgf_spec_aux"})
+      EXPECT_NE(ga->captured("svgf_variance", buffer), gb->captured("svgf_variance", buffer)) << buffer;
     for (int i = 0; i < iterations; ++i) {
       const std::string pass = "svgf_atrous_" + std::to_string(i);
       const std::string diffuse = i % 2 == 0 ? "svgf_illum_b" : "svgf_illum_a";
@@ -545,10 +550,10 @@ TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
       &timings);
   std::vector<std::string> names;
   for (const auto& t : timings) names.push_back(t.name);
-  // One joint chain: both signals' a-trous iterations are the same passes.
-  EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject_diffuse", "svgf_variance_diffuse",
-                                             "svgf_reproject_specular", "svgf_variance_specular", "svgf_atrous_0",
-                                             "svgf_atrous_1", "svgf_remodulate", "svgf_taa", "download"}));
+  // One joint chain: both signals' variance and a-trous iterations are the same passes.
+  EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject_diffuse", "svgf_reproject_specular",
+                                             "svgf_variance", "svgf_atrous_0", "svgf_atrous_1", "svgf_remodulate",
+                                             "svgf_taa", "download"}));
 }
 
 TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
