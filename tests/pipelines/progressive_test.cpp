@@ -527,6 +527,55 @@ std::vector<std::array<double, 4>> pull_push_reference(int w, int h, const std::
 // garbage; the chain reads them filled by the pull-push pyramid. A size no
 // power of 3 divides, a background corner, a 10x10 block without any sample
 // (filled from two levels up) and scattered samples elsewhere.
+// Split signals below one sample per pixel go through the joint chain's
+// masked paths (no-data pixels, the feedback mask, the last iteration's ring
+// fill) per signal: diffuse with a zero specular gives the radiance session's
+// output. One a-trous iteration of the 3x3 kernel at 1/16 spp leaves most
+// pixels of the first frames without data, so the ring fill runs for both
+// signals.
+TEST_F(ProgressiveTest, SplitWithZeroSpecularEqualsRadianceBelowOneSpp) {
+  const int w = 48, h = 32, n = w * h;
+  const std::vector<protocol::Parameter> params = {{"atrous_iterations", 1}};
+  auto radiance_config = progressive_config(w, h, params, /*masked=*/true);
+  auto split_config = radiance_config;
+  split_config.channels[0] = {ChannelId::Diffuse, Format::F32};
+  split_config.channels.insert(split_config.channels.begin() + 1, {ChannelId::Specular, Format::F32});
+  ASSERT_FALSE(pipelines::validate(split_config).has_value());
+  auto radiance_pipe = pipelines::create(ctx(), radiance_config);
+  auto split_pipe = pipelines::create(ctx(), split_config);
+  SvgfSceneGen scene(w, h, 13, 0.8f, 0.5f, 0.3f, 0.9f, 0.003);
+  const std::vector<float> zero(3 * n, 0.0f);
+  int filled = 0;  // first frame: output where neither p nor a 3x3 neighbour had a sample
+  for (int t = 0; t < 5; ++t) {
+    SCOPED_TRACE(testing::Message() << "frame " << t);
+    const SvgfScene s = scene.frame(t);
+    std::vector<float> count(n);
+    for (int i = 0; i < n; ++i) count[i] = ((i % w) + 4 * (i / w) + t) % 16 == 0 ? 1.0f : 0.0f;
+    test::HostFrame radiance = host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false);
+    test::HostFrame split = host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &zero);
+    radiance.add(ChannelId::SampleCount, Format::F32, count);
+    split.add(ChannelId::SampleCount, Format::F32, count);
+    const auto want = run(*radiance_pipe, radiance);
+    const auto got = run(*split_pipe, split);
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < got.size(); ++i)
+      ASSERT_NEAR(got[i], want[i], 1e-5 * std::max(1.0f, std::fabs(want[i]))) << i;
+    if (t > 0) continue;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        bool sampled = false;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int qx = x + dx, qy = y + dy;
+            if (qx >= 0 && qy >= 0 && qx < w && qy < h && count[qy * w + qx] > 0.0f) sampled = true;
+          }
+        const size_t i = size_t(y) * w + x;
+        if (!sampled && s.depth[i] > 0.0f && want[3 * i] + want[3 * i + 1] + want[3 * i + 2] > 0.0f) ++filled;
+      }
+  }
+  EXPECT_GT(filled, n / 10);
+}
+
 TEST_F(ProgressiveTest, SparseGbufferIsFilledByThePyramidAndSampledPixelsKeepTheirOwn) {
   const int w = 37, h = 23, n = w * h;
   std::vector<float> depth(n), normal(3 * n), count(n), radiance(3 * n, 0.5f), albedo(3 * n, 0.5f), motion(2 * n, 0.0f);
