@@ -80,7 +80,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 12u);
+  ASSERT_EQ(sa.size(), 14u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
@@ -89,6 +89,8 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   EXPECT_EQ(sa[5], (gpu::SpecConstant{5, 0}));  // SPATIAL_BANDWIDTH's default
   EXPECT_EQ(sa[6], (gpu::SpecConstant{6, 2}));  // KERNEL_RADIUS's default: svgf's 5x5
   for (uint32_t id = 7; id <= 11; ++id) EXPECT_EQ(sa[id], (gpu::SpecConstant{id, 0}));  // progressive's switches off
+  EXPECT_EQ(sa[12], (gpu::SpecConstant{12, 1}));  // SIGNALS' default: one signal
+  EXPECT_EQ(sa[13], (gpu::SpecConstant{13, 0}));  // SECOND_GUIDE's default
 }
 
 // Every configuration the tests use builds a graph that passes check().
