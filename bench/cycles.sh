@@ -167,6 +167,12 @@ for row in "${rows[@]}"; do
   rm -rf "$dir"
   mkdir -p "$dir"
   echo "cycles: $label"
+  # One untimed frame in a session of its own first, as bench/speed_error.sh
+  # does: llvmpipe compiles a kernel at its first dispatch, inside that frame's
+  # device time, and the server keeps compiled kernels for later sessions. A
+  # pipeline that cannot run fails here too; the measured run reports why.
+  "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
+    --input "$input" --start 0 --end 0 > /dev/null 2>&1 || true
   status=0
   "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
     --input "$input" --start 0 --end "$last" --output "$dir/frame_%04d.exr" -r "$ref" "${nc_args[@]}" \
