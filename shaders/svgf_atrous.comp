@@ -67,12 +67,12 @@ int dn_fill_signal = 0;
 #define R KERNEL_RADIUS
 const int WIN = BLOCK + 2 * KERNEL_RADIUS;
 
-// Signal s's illumination in (svgf_joint.glsl's rule: s a loop constant).
-vec4 signal_src(int s, uint i) { return s == 0 ? src_at(i) : src2_at(i); }
+// Signal s's illumination in (svgf_joint.glsl's rule: s a loop constant, or NS 1).
+vec4 signal_src(int s, uint i) { return s == 0 || NS == 1 ? src_at(i) : src2_at(i); }
 
 bool dn_fill_source(ivec2 q, out vec3 value) {
   uint qi = uint(q.y) * frame.size.x + uint(q.x);
-  vec4 s = NS == 1 || dn_fill_signal == 0 ? src_at(qi) : src2_at(qi);
+  vec4 s = signal_src(dn_fill_signal, qi);
   value = s.rgb;
   return uintBitsToFloat(dn_guide_load(dn_guide_of(dn_fill_signal), qi).x) > 0.0 && s.w != DN_SVGF_NO_DATA;
 }

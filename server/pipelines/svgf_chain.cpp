@@ -170,6 +170,13 @@ SignalBuffers signal_buffers(const SvgfVariant& v, size_t index) {
   return {s.features ? kGuide + s.suffix : kGuide, kTemporal + s.suffix, kIllumC, kIllumD};
 }
 
+// The joint passes' second-signal geometry (svgf_joint.glsl): its temporal
+// scratch and, when it is not the first's, its own guide (SECOND_GUIDE).
+void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const SignalBuffers& second) {
+  pass.bind("temporal2", second.temporal);
+  if (second.guide != first.guide) pass.bind("guide2", second.guide).set("SECOND_GUIDE", 1u);
+}
+
 // Signal `index`'s reprojection (and history clipping): its temporal colour
 // in its illum buffer, its temporal moments and length.
 void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
@@ -238,11 +245,10 @@ void add_variance(GraphSpec& g, const SessionConfig& config, const SvgfVariant& 
       .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
   if (v.signals.size() > 1) {
     const SignalBuffers second = signal_buffers(v, 1);
-    variance.bind("temporal2", second.temporal)
-        .bind("illum2", second.illum)
+    variance.bind("illum2", second.illum)
         .bind("colour_history2", v.signals[1].history + "_colour")
         .bind("aux_history2", v.signals[1].history + "_aux");
-    if (second.guide != first.guide) variance.bind("guide2", second.guide).set("SECOND_GUIDE", 1u);
+    bind_second_geometry(variance, first, second);
   }
   variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
                          ((config.height + kVarianceBlock - 1) / kVarianceBlock);
@@ -275,9 +281,9 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
         .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
     if (i == tap) atrous.bind("colour_history", v.signals[0].history + "_colour");
     if (two) {
-      atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other).bind("temporal2", buffers[1].temporal);
+      atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other);
       if (i == tap) atrous.bind("colour_history2", v.signals[1].history + "_colour");
-      if (buffers[1].guide != buffers[0].guide) atrous.bind("guide2", buffers[1].guide).set("SECOND_GUIDE", 1u);
+      bind_second_geometry(atrous, buffers[0], buffers[1]);
     }
     if (i == tap && v.validity_mask) bind_validity_mask(config, *v.validity_mask, atrous);
     if (!last.spatial_bandwidth.empty()) atrous.bind("bandwidth", last.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);

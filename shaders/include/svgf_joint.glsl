@@ -13,7 +13,8 @@
 // Signal s's guide: 0 the shared one, 1 guide2.
 int dn_guide_of(int s) { return SECOND_GUIDE && s == 1 ? 1 : 0; }
 uvec4 dn_guide_load(int g, uint i) { return g == 0 ? guide_at(i) : guide2_at(i); }
-vec4 dn_temporal_load(int s, uint i) { return s == 0 ? temporal_at(i) : temporal2_at(i); }
+// NS == 1 also resolves a run-time s: one signal never touches its unbound second buffers.
+vec4 dn_temporal_load(int s, uint i) { return s == 0 || NS == 1 ? temporal_at(i) : temporal2_at(i); }
 // Whether s is the last signal (the one SPECULAR_ALPHA, CLASS_EDGES and
 // SPATIAL_BANDWIDTH refer to: reflect's specular).
 bool dn_last_signal(int s) { return s == NS - 1; }
