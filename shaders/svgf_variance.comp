@@ -32,10 +32,8 @@
 // length and histories), sharing the guide's loads and the estimate's
 // geometric terms unless SECOND_GUIDE.
 //
-// Register blocking as in svgf_atrous.comp: one invocation handles the
-// BLOCK x BLOCK pixels base + (i, j), base = BLOCK * (ix, iy) over a
-// ceil(W / BLOCK) x ceil(H / BLOCK) grid, and loads their (BLOCK + 6)^2
-// window once when any of them needs the 7x7 estimate.
+// One invocation per pixel: a young pixel reads its own 7x7 taps (sharing a
+// block's window between its pixels cost more than it saved: see main).
 //
 // Resources: passes/svgf_variance.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -47,10 +45,6 @@
 #include "pass.glsl"
 #include "passes/svgf_variance.pass"
 #include "svgf_joint.glsl"
-
-#define B BLOCK  // a macro, not a const alias: the SPIR-V keeps the declared name BLOCK
-
-const int WIN = BLOCK + 6;
 
 // The samples the temporal colour averages (variance_of_mean): its first
 // 1/alpha frames are a true mean of `len` samples, after that an exponential
@@ -66,156 +60,123 @@ vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.d
 
 void main() {
   ivec2 size = ivec2(frame.size.xy);
-  int nx = (size.x + B - 1) / B;
-  uint inv = dn_invocation_index();
-  ivec2 base = B * ivec2(int(inv % uint(nx)), int(inv / uint(nx)));
-  if (base.y >= size.y) return;
+  uint pi = dn_invocation_index();
+  if (pi >= uint(size.x) * uint(size.y)) return;
+  ivec2 p = ivec2(int(pi % uint(size.x)), int(pi / uint(size.x)));
 
   float phi_n = DN_PARAM_VALUE(svgf, phi_normal);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * 3.0;
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
-  // Per guide g at [g * B * B + k]: geometry; per signal s at [s * B * B + k].
-  float cz[NS * B * B], ipz[NS * B * B];
-  vec3 cn[NS * B * B];
-  float cl[NS * B * B], len[NS * B * B], var[NS * B * B], sw[NS * B * B];
-  vec2 sm[NS * B * B];
-  bool inside[B * B], act[NS * B * B];
-  bool isolated[NS * B * B];  // every 3x3 foreground neighbour below half of p's luminance
-  bool any_act = false;
-  [[unroll]] for (int j = 0; j < B; ++j) {
-    [[unroll]] for (int i = 0; i < B; ++i) {
-      int k = j * B + i;
-      ivec2 p = base + ivec2(i, j);
-      inside[k] = p.x < size.x && p.y < size.y;
-      ivec2 pc = min(p, size - 1);
-      uint pi = uint(pc.y) * uint(size.x) + uint(pc.x);
-      uvec4 gds[2];
-      [[unroll]] for (int s = 0; s < NS; ++s) {
-        if (s > 0 && dn_guide_of(s) == 0) continue;
-        int g = dn_guide_of(s), gk = g * B * B + k;
-        gds[g] = dn_guide_load(g, pi);
-        cz[gk] = uintBitsToFloat(gds[g].x);
-        cn[gk] = dn_svgf_unpack_normal(gds[g].y);
-        ipz[gk] = 1.0 / (phi_z * max(uintBitsToFloat(gds[g].z), 1e-8));
-      }
-      [[unroll]] for (int s = 0; s < NS; ++s) {
-        int g = dn_guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
-        uvec4 gd = gds[g];
-        vec4 t = dn_temporal_load(s, pi);
-        float gz = cz[gk];
-        len[sk] = t.z;
-        // No data (a foreground pixel of length 0: only a MASKED reprojection
-        // makes one): no history depth, so the next frame reprojects nothing from it.
-        bool no_data = gz != 0.0 && t.z == 0.0;
-        if (inside[k]) {
-          vec4 colour = vec4(signal_colour(s, pi), t.z);
-          uvec4 aux = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gd.y);
-          if (s == 0) {
-            colour_history.data[pi] = colour;
-            aux_history.data[pi] = aux;
-          } else {
-            colour_history2.data[pi] = colour;
-            aux_history2.data[pi] = aux;
-          }
-        }
-        // background 0; len >= 4: from the moments; else the 7x7 estimate
-        // (without a normal no neighbour is taken: act false, own moments);
-        // no data: DN_SVGF_NO_DATA.
-        var[sk] = gz == 0.0 ? 0.0 : no_data ? DN_SVGF_NO_DATA : max(0.0, t.y - t.x * t.x);
-        act[sk] = SPATIAL_ESTIMATE && inside[k] && gz > 0.0 && t.z < 4.0 && !no_data;
-        any_act = any_act || act[sk];
-        cl[sk] = t.w;
-        sm[sk] = t.xy;  // p itself, weight 1
-        sw[sk] = 1.0;
-        isolated[sk] = true;
-        // A loop of no iterations where p is not young, not an if: see below.
-        int neighbours = act[sk] ? 9 : 0;
-        [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
-          int xx = o % 3 - 1, yy = o / 3 - 1;
-          ivec2 q = p + ivec2(xx, yy);
-          if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
-          uint qi = uint(q.y) * uint(size.x) + uint(q.x);
-          if (uintBitsToFloat(dn_guide_load(g, qi).x) > 0.0 && dn_temporal_load(s, qi).w >= 0.5 * t.w)
-            isolated[sk] = false;
-        }
-      }
+  // Per guide g: geometry; per signal s: moments, weights and flags.
+  float cz[2], ipz[2];
+  vec3 cn[2];
+  float cl[NS], len[NS], var[NS];
+  bool act[NS];
+  bool isolated[NS];  // every 3x3 foreground neighbour below half of p's luminance
+  uvec4 gds[2];
+  [[unroll]] for (int s = 0; s < NS; ++s) {
+    if (s > 0 && dn_guide_of(s) == 0) continue;
+    int g = dn_guide_of(s);
+    gds[g] = dn_guide_load(g, pi);
+    cz[g] = uintBitsToFloat(gds[g].x);
+    cn[g] = dn_svgf_unpack_normal(gds[g].y);
+    ipz[g] = 1.0 / (phi_z * max(uintBitsToFloat(gds[g].z), 1e-8));
+  }
+  // Signal s's sums of the 7x7 estimate (p itself with weight 1): moments at
+  // .xy (s 0) or .zw (s 1), weights at [s]. Vectors, not arrays: see below.
+  vec4 moments;
+  vec2 weights = vec2(1.0);
+  [[unroll]] for (int s = 0; s < NS; ++s) {
+    int g = dn_guide_of(s);
+    vec4 t = dn_temporal_load(s, pi);
+    float gz = cz[g];
+    len[s] = t.z;
+    // No data (a foreground pixel of length 0: only a MASKED reprojection
+    // makes one): no history depth, so the next frame reprojects nothing from it.
+    bool no_data = gz != 0.0 && t.z == 0.0;
+    vec4 colour = vec4(signal_colour(s, pi), t.z);
+    uvec4 aux = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gds[g].y);
+    if (s == 0) {
+      colour_history.data[pi] = colour;
+      aux_history.data[pi] = aux;
+      moments.xy = t.xy;
+    } else {
+      colour_history2.data[pi] = colour;
+      aux_history2.data[pi] = aux;
+      moments.zw = t.xy;
+    }
+    // background 0; len >= 4: from the moments; else the 7x7 estimate
+    // (without a normal no neighbour is taken: act false, own moments);
+    // no data: DN_SVGF_NO_DATA.
+    var[s] = gz == 0.0 ? 0.0 : no_data ? DN_SVGF_NO_DATA : max(0.0, t.y - t.x * t.x);
+    act[s] = SPATIAL_ESTIMATE && gz > 0.0 && t.z < 4.0 && !no_data;
+    cl[s] = t.w;
+    isolated[s] = true;
+    // A loop of no iterations where p is not young, not an if: see below.
+    int neighbours = act[s] ? 9 : 0;
+    [[dont_unroll]] for (int o = 0; o < neighbours; ++o) {
+      int xx = o % 3 - 1, yy = o / 3 - 1;
+      ivec2 q = p + ivec2(xx, yy);
+      if ((xx == 0 && yy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;
+      uint qi = uint(q.y) * uint(size.x) + uint(q.x);
+      if (uintBitsToFloat(dn_guide_load(g, qi).x) > 0.0 && dn_temporal_load(s, qi).w >= 0.5 * t.w)
+        isolated[s] = false;
     }
   }
-  // The 7x7 estimate, row by row in a loop of no rows where no block pixel
-  // is young. llvmpipe (Mesa 22.3) runs the body of an if whatever its
-  // condition, with the lanes masked (measured: the window behind an
-  // always-false uniform if cost 18.2 ms at 640x360, removed 2.5 ms), but it
-  // leaves a loop after one masked iteration once no lane is in it, so
-  // without young pixels this costs one row of the window, not eight. The
-  // rows are not unrolled, so which taps a row gives a block pixel is
-  // decided per row: the same taps in the same order, but the output is no
-  // longer bit-identical to the unrolled window's (last-bit differences in
-  // the compiled arithmetic; the CPU-reference comparisons are unchanged).
-  int rows = any_act ? WIN : 0;
-  {
-    [[dont_unroll]] for (int r = 0; r < rows; ++r) {
-      [[unroll]] for (int c = 0; c < WIN; ++c) {
-        ivec2 q = base + ivec2(c - 3, r - 3);
-        ivec2 qc = clamp(q, ivec2(0), size - 1);
-        uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
-        // The tap's geometry per guide, loaded and decoded once for every
-        // signal and block pixel that takes it.
-        float zq[2];
-        vec3 nq[2];
-        bool tap_ok[2];
-        [[unroll]] for (int s = 0; s < NS; ++s) {
-          if (s > 0 && dn_guide_of(s) == 0) continue;
-          int g = dn_guide_of(s);
-          uvec2 gq = dn_guide_load(g, qi).xy;
-          zq[g] = uintBitsToFloat(gq.x);
-          tap_ok[g] = q == qc && zq[g] > 0.0;
-          nq[g] = dn_svgf_unpack_normal(gq.y);
-        }
-        vec4 tq[NS];
-        [[unroll]] for (int s = 0; s < NS; ++s) tq[s] = dn_temporal_load(s, qi);
-        [[unroll]] for (int j = 0; j < B; ++j) {
-          int dy = r - j - 3;
-          bool row_tap = dy >= -3 && dy <= 3;
-          [[unroll]] for (int i = 0; i < B; ++i) {
-            int dx = c - i - 3;
-            if (dx < -3 || dx > 3) continue;
-            int k = j * B + i;
-            bool tap = row_tap && !(dx == 0 && dy == 0);  // p itself: added above
-            [[unroll]] for (int s = 0; s < NS; ++s) {
-              int g = dn_guide_of(s), gk = g * B * B + k, sk = s * B * B + k;
-              // The same expressions for every signal of a guide: the
-              // geometric terms are computed once, and each signal's
-              // weights are bit for bit its weights alone.
-              float cos_n = dot(cn[gk], nq[g]);
-              float w_z = abs(cz[gk] - zq[g]) * ipz[gk] * inversesqrt(float(max(dx * dx + dy * dy, 1)));
-              float relative_to = isolated[sk] ? max(cl[sk], tq[s].w) : min(cl[sk], tq[s].w);
-              float w_l = abs(cl[sk] - tq[s].w) / (phi_c * relative_to + DN_SVGF_LUMINANCE_EPS);
-              float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
-              w = (tap && act[sk] && tap_ok[g] && cos_n > 0.0) ? w : 0.0;
-              sm[sk] += w * tq[s].xy;
-              sw[sk] += w;
-            }
-          }
-        }
-      }
+  // The 7x7 estimate, one tap per iteration of a loop of no iterations where
+  // p is not young. llvmpipe (Mesa 22.3) runs the body of an if whatever its
+  // condition, with the lanes masked, but leaves a loop after one masked
+  // iteration once no lane is in it, so without young pixels this costs one
+  // tap. The taps are visited row by row, p itself skipped. (Measured at
+  // 640x360 without young pixels: 4.4 ms; the 2x2 block sharing one window,
+  // its rows in such a loop and its sums in arrays, 12.2 ms; without the
+  // estimate 1.9 ms: docs/pipelines.md, cost model.)
+  bool young = act[0] || act[NS - 1];
+  int taps = young ? 49 : 0;
+  [[dont_unroll]] for (int t = 0; t < taps; ++t) {
+    int dx = t % 7 - 3, dy = t / 7 - 3;
+    ivec2 q = p + ivec2(dx, dy);
+    ivec2 qc = clamp(q, ivec2(0), size - 1);
+    uint qi = uint(qc.y) * uint(size.x) + uint(qc.x);
+    bool tap = !(dx == 0 && dy == 0);  // p itself: added above
+    float dist = inversesqrt(float(max(dx * dx + dy * dy, 1)));
+    // The tap's geometry per guide, loaded and decoded once for every signal of it.
+    float zq[2];
+    vec3 nq[2];
+    bool tap_ok[2];
+    [[unroll]] for (int s = 0; s < NS; ++s) {
+      if (s > 0 && dn_guide_of(s) == 0) continue;
+      int g = dn_guide_of(s);
+      uvec2 gq = dn_guide_load(g, qi).xy;
+      zq[g] = uintBitsToFloat(gq.x);
+      tap_ok[g] = q == qc && zq[g] > 0.0;
+      nq[g] = dn_svgf_unpack_normal(gq.y);
+    }
+    [[unroll]] for (int s = 0; s < NS; ++s) {
+      int g = dn_guide_of(s);
+      vec4 tq = dn_temporal_load(s, qi);
+      // The same expressions for every signal of a guide: the geometric
+      // terms are computed once, and each signal's weights are bit for bit
+      // its weights alone.
+      float cos_n = dot(cn[g], nq[g]);
+      float w_z = abs(cz[g] - zq[g]) * ipz[g] * dist;
+      float relative_to = isolated[s] ? max(cl[s], tq.w) : min(cl[s], tq.w);
+      float w_l = abs(cl[s] - tq.w) / (phi_c * relative_to + DN_SVGF_LUMINANCE_EPS);
+      float w = exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+      w = (tap && act[s] && tap_ok[g] && cos_n > 0.0) ? w : 0.0;
+      if (s == 0) moments.xy += w * tq.xy;
+      else moments.zw += w * tq.xy;
+      weights[s] += w;
     }
   }
   [[unroll]] for (int s = 0; s < NS; ++s) {
-    [[unroll]] for (int j = 0; j < B; ++j) {
-      [[unroll]] for (int i = 0; i < B; ++i) {
-        int k = j * B + i, sk = s * B * B + k, gk = dn_guide_of(s) * B * B + k;
-        if (!inside[k]) continue;
-        ivec2 p = base + ivec2(i, j);
-        uint pi = uint(p.y) * uint(size.x) + uint(p.x);
-        float v = var[sk];
-        if (SPATIAL_ESTIMATE && cz[gk] != 0.0 && len[sk] < 4.0 && v != DN_SVGF_NO_DATA) {
-          vec2 m = sm[sk] / sw[sk];
-          v = max(0.0, m.y - m.x * m.x) * 4.0 / len[sk];
-        }
-        v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[sk], s);
-        if (s == 0) illum.data[pi].w = v;
-        else illum2.data[pi].w = v;
-      }
+    float v = var[s];
+    if (SPATIAL_ESTIMATE && cz[dn_guide_of(s)] != 0.0 && len[s] < 4.0 && v != DN_SVGF_NO_DATA) {
+      vec2 m = (s == 0 ? moments.xy : moments.zw) / weights[s];
+      v = max(0.0, m.y - m.x * m.x) * 4.0 / len[s];
     }
+    v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[s], s);
+    if (s == 0) illum.data[pi].w = v;
+    else illum2.data[pi].w = v;
   }
 }

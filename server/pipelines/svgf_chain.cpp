@@ -36,8 +36,6 @@ constexpr uint64_t kGuideBytes = 16;
 constexpr uint64_t kTemporalBytes = 16;
 // a-trous register block: one invocation filters kAtrousBlock^2 pixels.
 constexpr uint32_t kAtrousBlock = 4;
-// svgf_variance register block: kVarianceBlock^2 pixels per invocation.
-constexpr uint32_t kVarianceBlock = 2;
 
 // Illumination ping-pong of the first signal (a, b) and of the second (c, d).
 constexpr const char* kIllumA = "svgf_illum_a";
@@ -239,10 +237,10 @@ void add_variance(GraphSpec& g, const SessionConfig& config, const SvgfVariant& 
       .bind("illum", first.illum)
       .bind("colour_history", v.signals[0].history + "_colour")
       .bind("aux_history", v.signals[0].history + "_aux")
-      .set("BLOCK", kVarianceBlock)
       .set("SPECULAR_ALPHA", v.signals.back().specular_alpha)
       .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate)
       .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
+  variance.pixels_per_invocation = 1;
   if (v.signals.size() > 1) {
     const SignalBuffers second = signal_buffers(v, 1);
     variance.bind("illum2", second.illum)
@@ -250,8 +248,6 @@ void add_variance(GraphSpec& g, const SessionConfig& config, const SvgfVariant& 
         .bind("aux_history2", v.signals[1].history + "_aux");
     bind_second_geometry(variance, first, second);
   }
-  variance.invocations = uint64_t{(config.width + kVarianceBlock - 1) / kVarianceBlock} *
-                         ((config.height + kVarianceBlock - 1) / kVarianceBlock);
 }
 
 // The a-trous iterations, every signal in the same passes (the joint chain:
