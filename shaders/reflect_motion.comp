@@ -28,10 +28,10 @@ vec4 pa, pb;  // p's features
 float distance_to(ivec2 q) {
   if (!dn_inside(q, frame.size.xy)) return DN_REFLECT_INVALID;
   uint qi = uint(q.y) * frame.size.x + uint(q.x);
-  vec4 qa = prev_features.data[2u * qi];
+  vec4 qa = prev_features_at(2u * qi);
   if (qa.w != pa.w) return DN_REFLECT_INVALID;
   if (pa.w == DN_REFLECT_MIRROR) return dn_reflect_hit_distance(pa.xyz, qa.xyz);
-  vec4 qb = prev_features.data[2u * qi + 1u];
+  vec4 qb = prev_features_at(2u * qi + 1u);
   if (!dn_reflect_ray_exists(qb.w)) return DN_REFLECT_INVALID;
   return dn_reflect_ray_distance(pa.xyz, pb.xyz, pb.w, qa.xyz, qb.xyz, qb.w);
 }
@@ -117,12 +117,12 @@ vec2 refine_subpixel() {
 bool mirror_match_kept(ivec2 q, float d) {
   float threshold = DN_PARAM_VALUE(reflect, mirror_match_threshold);
   if (!(threshold > 0.0)) return true;
-  vec3 wq = prev_features.data[2u * (uint(q.y) * frame.size.x + uint(q.x))].xyz;
+  vec3 wq = prev_features_at(2u * (uint(q.y) * frame.size.x + uint(q.x))).xyz;
   float spacing = DN_REFLECT_INVALID;
   for (int k = 0; k < 4; ++k) {
     ivec2 r = q + SMALL[k];
     if (!dn_inside(r, frame.size.xy)) continue;
-    vec4 a = prev_features.data[2u * (uint(r.y) * frame.size.x + uint(r.x))];
+    vec4 a = prev_features_at(2u * (uint(r.y) * frame.size.x + uint(r.x)));
     if (a.w == DN_REFLECT_MIRROR) spacing = min(spacing, dn_reflect_hit_distance(wq, a.xyz));
   }
   return !(spacing < DN_REFLECT_INVALID) || d <= threshold * spacing;
@@ -133,8 +133,8 @@ void main() {
   if (p >= frame.size.z) return;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-  pa = features.data[2u * p];
-  pb = features.data[2u * p + 1u];
+  pa = features_at(2u * p);
+  pb = features_at(2u * p + 1u);
   bool searched = pa.w != DN_REFLECT_NONE && (pa.w == DN_REFLECT_MIRROR || dn_reflect_ray_exists(pb.w)) &&
                   (frame.size.w & DN_FLAG_RESET) == 0u;
   float match = DN_REFLECT_NO_MATCH;
