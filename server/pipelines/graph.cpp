@@ -180,7 +180,8 @@ void GraphSpec::check() const {
       if (ref.slot == Slot::Previous && b->role != BufferRole::History)
         throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
                                " to the previous copy of " + ref.buffer + ", which is not History");
-      const bool writes = pass.declaration().bindings[i].access != shaders::Access::read;
+      const shaders::Access access = pass.declaration().bindings[i].access;
+      const bool writes = access == shaders::Access::write || access == shaders::Access::read_write;
       if (writes && (b->role == BufferRole::Input || b->role == BufferRole::Shared || b->role == BufferRole::Constant))
         throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
                                " (written) to read-only buffer " + ref.buffer);

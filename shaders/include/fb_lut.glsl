@@ -8,7 +8,7 @@
 //
 // Using the lookup: declare the table before including this file, as a
 // binding named fb_lut with element vec2 in the pass declaration
-// (passes/<pass>.pass: DN_BINDING(n, fb_lut, vec2, read, required)).
+// (passes/<pass>.pass: DN_BINDING(n, fb_lut, vec2, texel, required)).
 // Defining DN_FB_LUT_NO_LOOKUP leaves out the lookup (the generator does).
 #ifndef DN_FB_LUT_GLSL
 #define DN_FB_LUT_GLSL
@@ -44,8 +44,8 @@ vec2 dn_fb_lut(float cos_o, float alpha) {
   float tx = x - float(i0);
   float ty = y - float(j0);
   uint base = j0 * n + i0;
-  vec2 lo = mix(fb_lut.data[base], fb_lut.data[base + 1u], tx);
-  vec2 hi = mix(fb_lut.data[base + n], fb_lut.data[base + n + 1u], tx);
+  vec2 lo = mix(fb_lut_at(base), fb_lut_at(base + 1u), tx);
+  vec2 hi = mix(fb_lut_at(base + n), fb_lut_at(base + n + 1u), tx);
   return mix(lo, hi, ty);
 }
 #endif  // DN_FB_LUT_NO_LOOKUP

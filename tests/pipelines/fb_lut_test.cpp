@@ -25,6 +25,7 @@
 #include "gpu/compute.hpp"
 #include "gpu_test_env.hpp"
 #include "pipelines/fb_lut.hpp"
+#include "pipelines/pass.hpp"
 
 namespace dn {
 namespace {
@@ -86,12 +87,8 @@ class FbLutTest : public test::GpuTest {
   // dn_fb_lut(cos, α) on the device for each point (fb_lut_probe.comp).
   std::vector<float> probe(const std::vector<float>& points) {
     const uint32_t count = static_cast<uint32_t>(points.size() / 2);
-    gpu::KernelDesc desc;
-    desc.name = "fb_lut_probe";
-    desc.spirv = shaders::get("fb_lut_probe");
-    desc.storage_buffers = 3;
-    desc.spec_constants = {{0, 64}};
-    auto kernel = ctx().kernels().get(desc);
+    // The declaration's bindings (the table is a texel binding), constant 0 the workgroup size.
+    auto kernel = ctx().kernels().get(pipelines::kernel_desc(*shaders::declaration("fb_lut_probe"), {{0, 64}}));
 
     gpu::Buffer uniform(ctx(), 16, gpu::BufferKind::Constants, "probe:constants");
     const uint32_t constants[4] = {count, 0, 0, 0};
