@@ -85,6 +85,16 @@ float kernel_tap(int i) {
   return R == 2 ? b3[i + 2] : b1[i + 1];
 }
 
+// The normal weight max(0, cos)^phi_normal as exp2(normal_log2) *
+// normal_power (cos > 0; the caller zeroes the weight elsewhere): the first
+// without NORMAL_POWER, the second, k squarings, with it.
+float normal_log2(float cos_n, float phi_n) { return NORMAL_POWER >= 0 ? 0.0 : phi_n * log2(max(cos_n, 1e-37)); }
+float normal_power(float cos_n) {
+  float c = max(cos_n, 0.0);
+  [[unroll]] for (int i = 0; i < max(NORMAL_POWER, 0); ++i) c *= c;
+  return NORMAL_POWER >= 0 ? c : 1.0;
+}
+
 void main() {
   ivec2 size = ivec2(frame.size.xy);
   int span = STEP * B;
@@ -222,7 +232,7 @@ void main() {
             float w_l = abs(cl[sk] - lq[s]) * ipl[sk];
             if (SPATIAL_BANDWIDTH && dn_last_signal(s)) w_l += float(dx * dx + dy * dy) * isig[k];
             float w = kernel_tap(dx) * kernel_tap(dy) *
-                      exp2(phi_n * log2(max(cos_n, 1e-37)) - (w_z + w_l) * 1.4426950408889634);
+                      exp2(normal_log2(cos_n, phi_n) - (w_z + w_l) * 1.4426950408889634) * normal_power(cos_n);
             bool same_class = !(CLASS_EDGES && dn_last_signal(s)) || qcls[g] == ccls[gk];
             w = (act[gk] && tap_ok[s] && cos_n > 0.0 && same_class) ? w : 0.0;
             sc[sk] += w * sq[s].rgb;

@@ -274,7 +274,8 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
         .set("LUMINANCE_VARIANCE", v.luminance_weight == LuminanceWeight::Variance)
         .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff)
         .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations)
-        .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
+        .set("SIGNALS", static_cast<uint32_t>(v.signals.size()))
+        .set("NORMAL_POWER", static_cast<uint32_t>(v.normal_power));
     if (i == tap) atrous.bind("colour_history", v.signals[0].history + "_colour");
     if (two) {
       atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other);
@@ -294,6 +295,12 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
 }
 
 }  // namespace
+
+int32_t normal_power_of(float phi_normal) {
+  for (int32_t k = 0; k <= kMaxNormalPower; ++k)
+    if (phi_normal == static_cast<float>(1u << k)) return k;
+  return -1;
+}
 
 uint32_t step_level(StepOrder order, uint32_t i, uint32_t n) {
   switch (order) {
@@ -315,6 +322,7 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   v.roughness = has_channel(config, protocol::ChannelId::Roughness);
   v.clip = p.svgf_clip_roughness > 0.0f && v.roughness;
   v.extra_samples = extra_samples(config);
+  v.normal_power = normal_power_of(p.svgf_phi_normal);
   return v;
 }
 

@@ -108,6 +108,10 @@ struct SvgfVariant {
   bool emission = false;             // add the Emission plane back after filtering
   bool roughness = false;            // the session has a Roughness plane (an input)
   bool clip = false;                 // clip the signals marked clip where roughness < clip_roughness (needs roughness)
+  // k when phi_normal is exactly 2^k (k = 0..kMaxNormalPower), else -1: the
+  // a-trous normal weight max(0, cos)^phi_normal by k squarings instead of
+  // exp2(phi_normal * log2(cos)) (svgf_atrous.pass, NORMAL_POWER).
+  int32_t normal_power = -1;
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (rgb fp32, add_svgf_buffers adds
   // it) for a pass of the caller's that writes Output (reflect's median; with
@@ -118,6 +122,11 @@ struct SvgfVariant {
   // signals are mixed before their chains and the displayed frame resolved.
   uint32_t extra_samples = 0;
 };
+
+// The largest k of SvgfVariant::normal_power (phi_normal's range ends at 1024).
+inline constexpr int32_t kMaxNormalPower = 10;
+// k when phi_normal == 2^k exactly, k in 0..kMaxNormalPower, else -1.
+int32_t normal_power_of(float phi_normal);
 
 // The a-trous step exponent of iteration i of n: step 2^level.
 uint32_t step_level(StepOrder order, uint32_t i, uint32_t n);

@@ -80,7 +80,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 14u);
+  ASSERT_EQ(sa.size(), 15u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
@@ -91,6 +91,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   for (uint32_t id = 7; id <= 11; ++id) EXPECT_EQ(sa[id], (gpu::SpecConstant{id, 0}));  // progressive's switches off
   EXPECT_EQ(sa[12], (gpu::SpecConstant{12, 1}));  // SIGNALS' default: one signal
   EXPECT_EQ(sa[13], (gpu::SpecConstant{13, 0}));  // SECOND_GUIDE's default
+  EXPECT_EQ(sa[14], (gpu::SpecConstant{14, 0xffffffffu}));  // NORMAL_POWER's default: -1, exp2(phi log2 cos)
 }
 
 // Every configuration the tests use builds a graph that passes check().

@@ -84,6 +84,10 @@ INSTANTIATE_TEST_SUITE_P(
         Variant{"uv_params", 80, 50, Format::F32, Format::F32, MotionConvention::UvToPrevious, false,
                 {{"alpha_colour", 0.2}, {"alpha_moments", 0.3}, {"max_history", 8}, {"phi_colour", 4},
                  {"phi_normal", 32}, {"phi_depth", 2}, {"atrous_iterations", 3}, {"feedback_tap", 2}}},
+        // phi_normal not a power of two: the a-trous normal weight by
+        // exp2(phi log2 cos), not by squaring (svgf_atrous.pass, NORMAL_POWER).
+        Variant{"phi_normal_100", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
+                {{"phi_normal", 100}}},
         // The final TAA blend (taa_alpha > 0): moving camera, reset at frame 5.
         Variant{"taa", 128, 72, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
                 {{"taa_alpha", 0.1}}},

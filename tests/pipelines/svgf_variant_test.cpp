@@ -3,6 +3,7 @@
 // declared by the pipelines that bind them.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -101,6 +102,18 @@ TEST(SvgfVariant, StepOrders) {
   EXPECT_EQ(steps(pipelines::StepOrder::FinestFirst, 1), (std::vector<uint32_t>{1}));
   EXPECT_EQ(steps(pipelines::StepOrder::Increasing, 4), (std::vector<uint32_t>{1, 2, 4, 8}));
   EXPECT_EQ(steps(pipelines::StepOrder::Decreasing, 3), (std::vector<uint32_t>{4, 2, 1}));
+}
+
+// NORMAL_POWER: exact powers of two in phi_normal's range only.
+TEST(SvgfVariant, NormalPowerOnlyForExactPowersOfTwo) {
+  EXPECT_EQ(pipelines::normal_power_of(1.0f), 0);
+  EXPECT_EQ(pipelines::normal_power_of(64.0f), 6);    // progressive's default
+  EXPECT_EQ(pipelines::normal_power_of(128.0f), 7);   // svgf's default
+  EXPECT_EQ(pipelines::normal_power_of(1024.0f), 10);
+  EXPECT_EQ(pipelines::normal_power_of(100.0f), -1);
+  EXPECT_EQ(pipelines::normal_power_of(std::nextafter(128.0f, 0.0f)), -1);
+  EXPECT_EQ(pipelines::normal_power_of(2048.0f), -1);
+  EXPECT_EQ(pipelines::normal_power_of(0.5f), -1);
 }
 
 class SvgfVariantDevice : public test::GpuTest {};
