@@ -60,7 +60,7 @@ vec3 median_of_9(vec3 v[9]) {
 }
 
 vec3 filtered(uint p) {
-  vec3 c = DN_LOAD3(src, false, p);
+  vec3 c = src_at(p).rgb;
   if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 colours[9];
@@ -73,7 +73,7 @@ vec3 filtered(uint p) {
     colours[k] = vec3(0.0);
     if (taken[k]) {
       if (features.data[2u * qi].w != DN_REFLECT_NONE) return c;
-      colours[k] = DN_LOAD3(src, false, qi) - emitted(qi);
+      colours[k] = src_at(qi).rgb - emitted(qi);
       ++count;
     }
   }

@@ -110,5 +110,10 @@ void main() {
     if (has_b) taa_prepare(p0 + 1u, b);
     return;
   }
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  if (TO_DISPLAY) {
+    display.data[p0] = vec4(a, 0.0);
+    if (has_b) display.data[p0 + 1u] = vec4(b, 0.0);
+  } else {
+    DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  }
 }

@@ -53,5 +53,10 @@ void main() {
   vec3 a = blend(p0);
   vec3 b = vec3(0.0);
   if (has_b) b = blend(p0 + 1u);
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  if (TO_DISPLAY) {
+    display.data[p0] = vec4(a, 0.0);
+    if (has_b) display.data[p0 + 1u] = vec4(b, 0.0);
+  } else {
+    DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  }
 }

@@ -26,8 +26,9 @@ constexpr uint64_t kTaaHistoryBytes = 12;
 // copy (read by svgf_remodulate, rewritten by svgf_taa).
 constexpr const char* kTaaLag = "svgf_taa_lag";
 constexpr uint64_t kTaaLagBytes = 4;
-// SvgfVariant::display: the displayed frame, rgb fp32.
-constexpr uint64_t kDisplayBytes = 12;
+// SvgfVariant::display: the displayed frame, vec4(rgb, 0) fp32 (a texel
+// for the caller's neighbourhood reads: reflect_median).
+constexpr uint64_t kDisplayBytes = 16;
 // Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
 constexpr uint64_t kIlluminationBytes = 16;
 // Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
@@ -430,17 +431,21 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   const Modulator& first = v.signals[0].modulator;
   // Output, or a scratch frame for the caller's pass or the resolve.
   const bool direct = v.display.empty() && !v.extra_samples;
-  const std::string result = !v.display.empty() ? v.display : v.extra_samples ? kSupersampleDisplay : "output";
+  const std::string result = v.extra_samples ? kSupersampleDisplay : "output";
   const uint32_t result_half = direct ? is_half(config.output_format) : 0u;
+  // The last pass's frame: Output (or the resolve's), or the caller's display.
+  auto bind_result = [&](PassSpec& pass) {
+    if (v.display.empty()) pass.bind("result", result).set("OUTPUT_HALF", result_half);
+    else pass.bind("display", v.display).set("TO_DISPLAY", 1u);
+  };
   PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
   remodulate.bind("illum", results[0])
       .bind("albedo", first.buffer)
-      .bind("result", result)
       .set("ALBEDO_HALF", modulator_half(config, first))
       .set("HAS_EMISSION", v.emission)
-      .set("OUTPUT_HALF", result_half)
       .set("HAS_SPECULAR", v.signals.size() > 1)
       .set("TAA", v.taa);
+  if (!v.taa) bind_result(remodulate);
   if (v.emission)
     remodulate.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (v.signals.size() > 1) {
@@ -464,11 +469,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
 
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
-    taa.bind("current", kTemporal)
-        .bind("previous", kGuide)
-        .bind("result", result)
-        .bind("history", kTaaHistory)
-        .set("OUTPUT_HALF", result_half);
+    taa.bind("current", kTemporal).bind("previous", kGuide).bind("history", kTaaHistory);
+    bind_result(taa);
     if (v.display_lag) taa.bind("lag", kTaaLag).set("DISPLAY_LAG", 1u);
   }
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
