@@ -27,10 +27,7 @@ vec3 remodulate(uint p) {
   return c;
 }
 
-vec3 taa_history_at(ivec2 q) {
-  uint i = 3u * (uint(q.y) * frame.size.x + uint(q.x));
-  return vec3(taa_history.data[i], taa_history.data[i + 1u], taa_history.data[i + 2u]);
-}
+vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + uint(q.x)); }
 
 // The weight of the current frame in svgf_taa's blend: taa_alpha where the
 // pixel moves (1, no blend, when 0), at most taa_static_alpha where it is
@@ -79,11 +76,12 @@ void taa_prepare(uint p, vec3 c) {
     ivec2 taps[4] = ivec2[4](origin, origin + ivec2(1, 0), origin + ivec2(0, 1), origin + ivec2(1, 1));
     for (int k = 0; k < 4; ++k) {
       if (!dn_inside(taps[k], size)) continue;
-      s += weights[k] * taa_history_at(taps[k]);
+      vec4 h = taa_history_of(taps[k]);
+      s += weights[k] * h.rgb;
       sw += weights[k];
       if (DISPLAY_LAG && weights[k] > heaviest) {
         heaviest = weights[k];
-        prev_lag = taa_lag.data[uint(taps[k].y) * size.x + uint(taps[k].x)];
+        prev_lag = h.a;
       }
     }
     if (sw >= DN_MIN_TAP_WEIGHT) {

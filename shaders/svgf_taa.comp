@@ -37,10 +37,7 @@ vec3 blend(uint p) {
     if (DISPLAY_LAG) prev = mix(prev, reprojected.rgb, max(reprojected.a, 0.0));
     out_c = mix(prev, c.rgb, c.a);
   }
-  if (DISPLAY_LAG) lag.data[p] = previous_at(p).a;
-  history.data[3u * p] = out_c.r;
-  history.data[3u * p + 1u] = out_c.g;
-  history.data[3u * p + 2u] = out_c.b;
+  history.data[p] = vec4(out_c, DISPLAY_LAG ? previous_at(p).a : 0.0);
   return out_c;
 }
 

@@ -19,13 +19,10 @@ using protocol::ChannelId;
 // octahedral snorm16x2 normal).
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
-// TAA: the previous final output, rgb fp32, one persistent copy (read by
+// TAA: the previous final output and, with SvgfVariant::display_lag, the
+// lag state: vec4(rgb, lag) fp32, one persistent copy (read as texels by
 // svgf_remodulate, rewritten by svgf_taa after it).
-constexpr uint64_t kTaaHistoryBytes = 12;
-// SvgfVariant::display_lag: the lag state per pixel, fp32, one persistent
-// copy (read by svgf_remodulate, rewritten by svgf_taa).
-constexpr const char* kTaaLag = "svgf_taa_lag";
-constexpr uint64_t kTaaLagBytes = 4;
+constexpr uint64_t kTaaHistoryBytes = 16;
 // SvgfVariant::display: the displayed frame, vec4(rgb, 0) fp32 (a texel
 // for the caller's neighbourhood reads: reflect_median).
 constexpr uint64_t kDisplayBytes = 16;
@@ -377,7 +374,6 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
   }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
-  if (v.display_lag) g.add_persistent(kTaaLag, kTaaLagBytes);
   if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
   if (v.extra_samples) {
     std::vector<std::string> inputs;
@@ -465,13 +461,13 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)))
         .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.display_lag)
-    remodulate.bind("colour_history", v.signals[0].history + "_colour").bind("taa_lag", kTaaLag).set("DISPLAY_LAG", 1u);
+    remodulate.bind("colour_history", v.signals[0].history + "_colour").set("DISPLAY_LAG", 1u);
 
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
     taa.bind("current", kTemporal).bind("previous", kGuide).bind("history", kTaaHistory);
     bind_result(taa);
-    if (v.display_lag) taa.bind("lag", kTaaLag).set("DISPLAY_LAG", 1u);
+    if (v.display_lag) taa.set("DISPLAY_LAG", 1u);
   }
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
 }

@@ -397,11 +397,11 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 12 (the TAA blend's, fp32 rgb), scratch 4*16
-  // (2 illumination, guide, temporal), output 12 = 168 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 168 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+2+4 + 44 + 64 + 6 = 138 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 138 + pipelines::GraphSpec::kConstantBytes);
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the TAA blend's, fp32 vec4(rgb, lag)), scratch 4*16
+  // (2 illumination, guide, temporal), output 12 = 172 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+2+4 + 48 + 64 + 6 = 142 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 142 + pipelines::GraphSpec::kConstantBytes);
   // Without the TAA blend (taa_alpha and taa_static_alpha 0): 156 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
             64u * 48 * 156 + pipelines::GraphSpec::kConstantBytes);
@@ -567,13 +567,13 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 12 (TAA), scratch 7*16
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 16 (TAA), scratch 7*16
   // (4 illumination: a ping-pong per signal, the shared guide, 2 temporal: the joint a-trous passes
-  // read both signals'), output 12 = 260 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 260 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 76 + 112 + 6 = 224 B/px.
+  // read both signals'), output 12 = 264 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 264 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+6+2+4 + 80 + 112 + 6 = 228 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 224 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 228 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -701,7 +701,7 @@ TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
   EXPECT_EQ(pass_names(*on, frame(0)), with);
   EXPECT_EQ(pass_names(*base, frame(0)), with);
   EXPECT_EQ(on->device_bytes(), base->device_bytes());
-  EXPECT_EQ(base->device_bytes(), off->device_bytes() + round_up4_bytes(uint64_t{w} * h * 12));
+  EXPECT_EQ(base->device_bytes(), off->device_bytes() + round_up4_bytes(uint64_t{w} * h * 16));
   for (int t = 1; t < 5; ++t) EXPECT_EQ(run(*off, frame(t)), run(*base, frame(t))) << "frame " << t;
 }
 
@@ -712,11 +712,11 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // 156 B/px without TAA + 12 B/px of TAA history.
+  // 156 B/px without TAA + 16 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 168 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 138 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 142 + pipelines::GraphSpec::kConstantBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the
