@@ -5,7 +5,8 @@
 // reprojected previous final output is clamped per RGB channel to the
 // min/max of the current colour over the 3x3 neighbourhood (the taps inside
 // the image) and out = mix(clamped, current, a); elsewhere out = current.
-// out goes to Output (session format) and to the TAA history (fp32).
+// out goes to Output (session format; with TO_DISPLAY to the caller's vec4
+// display frame) and to the TAA history, vec4(out, lag state) fp32.
 // DISPLAY_LAG: the clamped value gives way to the unclamped one by
 // max(previous.a, 0) (svgf_remodulate's display_lag), and previous.a is kept
 // for the next frame. One invocation per pixel pair.

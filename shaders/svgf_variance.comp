@@ -84,7 +84,7 @@ void main() {
   }
   // Signal s's sums of the 7x7 estimate (p itself with weight 1): moments at
   // .xy (s 0) or .zw (s 1), weights at [s]. Vectors, not arrays: see below.
-  vec4 moments;
+  vec4 moments = vec4(0.0);
   vec2 weights = vec2(1.0);
   [[unroll]] for (int s = 0; s < NS; ++s) {
     int g = dn_guide_of(s);

@@ -671,15 +671,22 @@ TEST_F(ReflectTest, WithoutSpecularHistoryTheSpecularSignalIsTheCurrentFrame) {
 // of rank count / 2 among the window's colours minus emission in the output
 // without it, plus the pixel's emission; elsewhere the same; every history
 // buffer is bit-identical with the median on or off.
-TEST_F(ReflectTest, FireflyMedianChangesTheDisplayedFrameOnly) {
+// With TAA (the default) svgf_taa writes the displayed frame the median
+// reads; without it svgf_remodulate does (both TO_DISPLAY).
+class ReflectMedianTest : public ReflectTest, public testing::WithParamInterface<bool> {};
+
+TEST_P(ReflectMedianTest, FireflyMedianChangesTheDisplayedFrameOnly) {
   const int w = 64, h = 36;
   const std::vector<Rendered> seq = render_sequence(1, 1, 4, 2, w, h);
+  const bool taa = GetParam();
   struct Run {
     std::vector<float> out, features;
     std::map<std::string, std::vector<uint8_t>> history;
   };
   auto run_with = [&](double median) {
-    const CapturedRun captured = run_captured(ctx(), pointers(seq), {{"firefly_median", median}});
+    std::vector<protocol::Parameter> params = {{"firefly_median", median}};
+    if (!taa) params.push_back({"taa_static_alpha", 0.0});
+    const CapturedRun captured = run_captured(ctx(), pointers(seq), params);
     const pipelines::GraphPipeline* graph = captured.graph;
     Run r;
     r.out = captured.out;
@@ -743,6 +750,9 @@ TEST_F(ReflectTest, FireflyMedianChangesTheDisplayedFrameOnly) {
   EXPECT_GT(filtered, w * h / 10);
   EXPECT_GT(changed, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(Taa, ReflectMedianTest, testing::Bool(),
+                         [](const testing::TestParamInfo<bool>& info) { return info.param ? "with_taa" : "without_taa"; });
 
 
 // A pass's buffer bound at `binding` (1-based, the .pass file's numbering).
