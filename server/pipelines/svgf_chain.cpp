@@ -273,7 +273,8 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
         .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff)
         .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations)
         .set("SIGNALS", static_cast<uint32_t>(v.signals.size()))
-        .set("NORMAL_POWER", static_cast<uint32_t>(v.normal_power));
+        .set("NORMAL_POWER", static_cast<uint32_t>(v.normal_power))
+        .set("LUMINANCE_RAMP", v.luminance_ramp);
     if (i == tap) atrous.bind("colour_history", v.signals[0].history + "_colour");
     if (two) {
       atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other);
@@ -321,6 +322,7 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   v.clip = p.svgf_clip_roughness > 0.0f && v.roughness;
   v.extra_samples = extra_samples(config);
   v.normal_power = normal_power_of(p.svgf_phi_normal);
+  v.luminance_ramp = p.svgf_luminance_ramp != 0.0f;
   return v;
 }
 

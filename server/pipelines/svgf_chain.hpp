@@ -112,6 +112,7 @@ struct SvgfVariant {
   // a-trous normal weight max(0, cos)^phi_normal by k squarings instead of
   // exp2(phi_normal * log2(cos)) (svgf_atrous.pass, NORMAL_POWER).
   int32_t normal_power = -1;
+  bool luminance_ramp = false;       // luminance_ramp != 0 (svgf_atrous.pass, LUMINANCE_RAMP)
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (rgb fp32, add_svgf_buffers adds
   // it) for a pass of the caller's that writes Output (reflect's median; with

@@ -80,7 +80,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   b.set("STEP", 2);
   const auto sa = a.specialization(64), sb = b.specialization(64);
   EXPECT_EQ(sa, sb);  // BLOCK's default is 4
-  ASSERT_EQ(sa.size(), 15u);
+  ASSERT_EQ(sa.size(), 16u);
   EXPECT_EQ(sa[0], (gpu::SpecConstant{0, 64}));
   EXPECT_EQ(sa[1], (gpu::SpecConstant{1, 2}));
   EXPECT_EQ(sa[2], (gpu::SpecConstant{2, 0}));
@@ -92,6 +92,7 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   EXPECT_EQ(sa[12], (gpu::SpecConstant{12, 1}));  // SIGNALS' default: one signal
   EXPECT_EQ(sa[13], (gpu::SpecConstant{13, 0}));  // SECOND_GUIDE's default
   EXPECT_EQ(sa[14], (gpu::SpecConstant{14, 0xffffffffu}));  // NORMAL_POWER's default: -1, exp2(phi log2 cos)
+  EXPECT_EQ(sa[15], (gpu::SpecConstant{15, 0}));  // LUMINANCE_RAMP's default
 }
 
 // Every configuration the tests use builds a graph that passes check().
