@@ -114,7 +114,7 @@ struct SvgfVariant {
   int32_t normal_power = -1;
   bool luminance_ramp = false;       // luminance_ramp != 0 (svgf_atrous.pass, LUMINANCE_RAMP)
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
-  // displayed frame to this scratch buffer (rgb fp32, add_svgf_buffers adds
+  // displayed frame to this scratch buffer (vec4(rgb, 0) fp32, read as texels; add_svgf_buffers adds
   // it) for a pass of the caller's that writes Output (reflect's median; with
   // extra samples, the caller's pass writes kSupersampleDisplay instead and
   // adds supersample_resolve).
