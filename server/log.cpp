@@ -6,6 +6,8 @@
 #include <ctime>
 #include <mutex>
 
+#include "server/log_value.hpp"
+
 namespace dn::log {
 namespace {
 
@@ -20,42 +22,6 @@ const char* level_name(Level l) {
     case Level::Error: return "error";
   }
   return "?";
-}
-
-// Quotes a value when it holds spaces, quotes, '=' or control characters so
-// lines stay parseable, and escapes every control character (\n, \r, \t,
-// else \xHH): a client's string (its name, a field it sent) can never end a
-// line, start a forged one or drive the terminal.
-bool is_control(char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }
-
-void append_value(std::string& out, std::string_view v) {
-  bool quote = v.empty();
-  for (char c : v)
-    if (c == ' ' || c == '"' || c == '=' || c == '\\' || is_control(c)) quote = true;
-  if (!quote) {
-    out += v;
-    return;
-  }
-  out += '"';
-  for (char c : v) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\r') {
-      out += "\\r";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else if (is_control(c)) {
-      char hex[5];
-      std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-      out += hex;
-    } else {
-      out += c;
-    }
-  }
-  out += '"';
 }
 
 }  // namespace
