@@ -4,6 +4,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -58,7 +59,8 @@ const char* const kUsage =
     "                     with --out also copied to DIR/ref_%04d.exr\n"
     "  --reference2       with --reference, also a second reference with an independent seed\n"
     "                     (cache ref2_%04d.exr; with --out copied to DIR/ref2_%04d.exr)\n"
-    "  --cache DIR        reference cache (default out/cache)\n"
+    "  --cache DIR        reference cache (default $XDG_CACHE_HOME/dnrender, else\n"
+    "                     ~/.cache/dnrender; never the current directory)\n"
     "  --server URL       stream frames to dnserver (tcp://HOST:PORT or unix:///path), write\n"
     "                     DIR/denoised_%04d.exr when --out is given\n"
     "  --pipeline P       server pipeline for --server (svgf, svgf-fb, ...)\n"
@@ -164,6 +166,8 @@ std::string frame_file(const std::string& dir, const char* pattern, int frame) {
 }
 
 void make_references(const Scene& scene, const CliOptions& o) {
+  const std::string cache =
+      o.cache.empty() ? default_cache_dir(std::getenv("XDG_CACHE_HOME"), std::getenv("HOME")) : o.cache;
   for (int f = o.first; f < o.first + o.frames; ++f)
     for (int index = 1; index <= (o.reference2 ? 2 : 1); ++index) {
       ReferenceRequest rq;
@@ -175,7 +179,7 @@ void make_references(const Scene& scene, const CliOptions& o) {
       rq.seed = o.render.seed;
       rq.index = index;
       rq.threads = o.render.threads;
-      rq.cache_dir = o.cache;
+      rq.cache_dir = cache;
       const auto t0 = std::chrono::steady_clock::now();
       bool rendered = false;
       const std::string path = ensure_reference(scene, rq, rendered);

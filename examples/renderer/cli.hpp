@@ -23,7 +23,7 @@ struct CliOptions {
   std::string out;                  // frames to DIR/frame_%04d.exr
   std::optional<int> reference_spp;
   bool reference2 = false;          // also the second, independent reference (ref2_%04d.exr)
-  std::string cache = "out/cache";
+  std::string cache;                // --cache; empty: default_cache_dir() ($XDG_CACHE_HOME/dnrender)
   std::string server, pipeline;
   int in_flight = 2;
   double reconnect_for_s = 30.0;    // after a lost server connection, how long to keep reconnecting

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 #include "dn/image/exr_io.hpp"
 #include "render.hpp"
@@ -16,6 +17,12 @@ std::string reference_path(const std::string& cache_dir, int scene_id, int width
   std::snprintf(name, sizeof name, "%s_%dx%d_spp%d_v%d/%s_%04d.exr", scene_name(scene_id).c_str(), width, height, spp,
                 kReferenceVersion, index == 1 ? "ref" : "ref2", frame);
   return (std::filesystem::path(cache_dir) / name).string();
+}
+
+std::string default_cache_dir(const char* xdg_cache_home, const char* home) {
+  if (xdg_cache_home && *xdg_cache_home) return (std::filesystem::path(xdg_cache_home) / "dnrender").string();
+  if (home && *home) return (std::filesystem::path(home) / ".cache" / "dnrender").string();
+  throw std::runtime_error("no reference cache: neither $XDG_CACHE_HOME nor $HOME is set; give --cache DIR");
 }
 
 uint32_t reference_seed(uint32_t seed, int index) {

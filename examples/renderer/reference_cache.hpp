@@ -35,8 +35,13 @@ struct ReferenceRequest {
   uint32_t seed = 1;
   int index = 1;  // 1: the reference; 2: the second, independent one
   int threads = 0;
-  std::string cache_dir = "out/cache";
+  std::string cache_dir;
 };
+
+// Where references go without --cache: $XDG_CACHE_HOME/dnrender, else
+// $HOME/.cache/dnrender (the XDG default), never the current directory.
+// Throws std::runtime_error when neither variable is set (null or empty).
+std::string default_cache_dir(const char* xdg_cache_home, const char* home);
 
 // Returns the reference's path; `rendered` says whether it was rendered now (false: reused).
 std::string ensure_reference(const Scene& scene, const ReferenceRequest& request, bool& rendered);

@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
 #include "cli.hpp"
+#include "reference_cache.hpp"
 #include "dn/protocol/channels.hpp"
 #include "scenes.hpp"
 #include "stream.hpp"
@@ -60,6 +62,42 @@ TEST(RendererCli, SecondReferenceIsCopiedToOut) {
             0);
   for (const char* name : {"ref_0000.exr", "ref2_0000.exr", "ref_0001.exr", "ref2_0001.exr", "frame_0001.exr"})
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / name)) << name;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RendererCli, DefaultReferenceCacheFollowsXdg) {
+  EXPECT_EQ(default_cache_dir("/x/cache", "/home/u"), "/x/cache/dnrender");
+  EXPECT_EQ(default_cache_dir(nullptr, "/home/u"), "/home/u/.cache/dnrender");
+  EXPECT_EQ(default_cache_dir("", "/home/u"), "/home/u/.cache/dnrender");  // empty counts as unset (XDG spec)
+  try {
+    default_cache_dir(nullptr, "");
+    ADD_FAILURE() << "no cache directory without $XDG_CACHE_HOME and $HOME";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("--cache"), std::string::npos) << e.what();
+  }
+}
+
+// Without --cache, references go to $XDG_CACHE_HOME/dnrender: nothing is
+// written into the current directory, only the copies into --out.
+TEST(RendererCli, ReferencesWithoutCacheLeaveTheCurrentDirectoryAlone) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dn_renderer_xdg_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const auto cwd = dir / "cwd", xdg = dir / "xdg", out = dir / "seq";
+  std::filesystem::create_directories(cwd);
+  const auto previous_cwd = std::filesystem::current_path();
+  const char* previous_xdg = std::getenv("XDG_CACHE_HOME");
+  const std::string saved_xdg = previous_xdg ? previous_xdg : "";
+  std::filesystem::current_path(cwd);
+  ::setenv("XDG_CACHE_HOME", xdg.c_str(), 1);
+  const int status = run_cli(parse_cli({"--scene", "2", "--width", "16", "--height", "9", "--frames", "1", "--reference",
+                                        "2", "--out", out.string(), "--quiet"}));
+  std::filesystem::current_path(previous_cwd);
+  if (previous_xdg) ::setenv("XDG_CACHE_HOME", saved_xdg.c_str(), 1);
+  else ::unsetenv("XDG_CACHE_HOME");
+  ASSERT_EQ(status, 0);
+  EXPECT_TRUE(std::filesystem::is_empty(cwd)) << "dnrender wrote into the current directory";
+  EXPECT_TRUE(std::filesystem::exists(reference_path((xdg / "dnrender").string(), 2, 16, 9, 0, 2)));
+  EXPECT_TRUE(std::filesystem::exists(out / "ref_0000.exr"));
   std::filesystem::remove_all(dir);
 }
 
