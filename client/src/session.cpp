@@ -117,9 +117,10 @@ const std::string& Session::watch_url() const {
   return info_.watch_url ? *info_.watch_url : kNone;
 }
 
+std::string Session::watch_server() const { return watch_url().empty() ? state_->endpoint() : watch_url(); }
+
 std::string Session::watch_command() const {
-  const std::string& server = watch_url().empty() ? state_->endpoint() : watch_url();
-  std::string cmd = "dn watch --server " + server + " --session " + std::to_string(info_.session_id);
+  std::string cmd = "dn watch --server " + watch_server() + " --session " + std::to_string(info_.session_id);
   if (!watch_key().empty()) cmd += " --key " + watch_key();
   return cmd;
 }

@@ -12,6 +12,7 @@
 #include "camera_recovery.hpp"
 #include "commands.hpp"
 #include "dn/client/client.hpp"
+#include "dn/client/watch_file.hpp"
 #include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
 #include "frame_range.hpp"
@@ -72,6 +73,8 @@ const std::vector<Args::Spec> kSpecs = {
     {"summary", "", true, false, "write the mean metrics and timings as a two-line TSV to FILE", "FILE"},
     {"warmup", "", true, false,
      "denoise the first N frames but leave them out of the means (metrics, timings, temporal error)", "N"},
+    {"watch-key-file", "", true, false,
+     "write the session's watch key and id to FILE (mode 0600) for dn watch / dn preview --key-file FILE", "FILE"},
     {"quiet", "-q", false, false, "no per-frame output", ""},
     {"help", "-h", false, false, "this help", ""},
 };
@@ -303,9 +306,10 @@ int run_denoise(const std::vector<std::string>& argv) {
       rethrow_parameter_error_as_usage(e);
     }
   }();
-  if (!quiet)
-    std::fprintf(stderr, "dn: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
-                 static_cast<unsigned long long>(session.id()), session.watch_command().c_str());
+  // The watch key reaches watchers through a file or the environment, never a command line.
+  const std::string watch_key_file = args.get_or("watch-key-file", "");
+  if (!watch_key_file.empty()) client::write_watch_file(watch_key_file, {session.watch_key(), session.id()});
+  if (!quiet) std::fputs(client::owner_hints("dn", session, watch_key_file).c_str(), stderr);
 
   // The summary's temporal error needs the frames too.
   const bool want_output = output || png || reference || args.has("summary");

@@ -32,8 +32,10 @@ int run_watch(const std::vector<std::string>& argv) {
   Args args("watch", kSpecs);
   args.parse(argv);
   if (args.has("help")) {
-    std::printf("usage: dn watch [--server URL] --session ID --key KEY --output 'w/frame_%%04d.png' [--count N]\n"
-                "       dn watch [--server URL] --session ID --key KEY --tev 127.0.0.1:14158 [--output ...]\n\n"
+    std::printf("usage: DN_WATCH_KEY=KEY dn watch [--server URL] --session ID --output 'w/frame_%%04d.png' [--count N]\n"
+                "       dn watch [--server URL] --key-file FILE --tev 127.0.0.1:14158 [--output ...]\n\n"
+                "The watch key comes from $DN_WATCH_KEY or --key-file (mode 0600; the session id too when\n"
+                "the owner wrote it): a --key on the command line is readable by every local user.\n"
                 "--tev shows each frame in tev as image 'dn session ID' (float R, G, B: the HDR values).\n"
                 "Exits 0 when it has written --count frames or when the session ends (its owner\n"
                 "closed it or went away), 1 when the connection fails or the server refuses, or\n"
@@ -42,7 +44,7 @@ int run_watch(const std::vector<std::string>& argv) {
                 args.usage().c_str());
     return 0;
   }
-  const WatchTarget target = watch_target(args);
+  const WatchTarget target = watch_target(args, "watch");
   const std::string output = args.get_or("output", "");
   std::optional<tev::Address> tev_address;
   if (auto t = args.get("tev")) tev_address = tev::parse_address(*t);

@@ -1,6 +1,7 @@
 // What every watching command (dn watch, dn preview) shares: the session to
-// attach to (--session ID, --key KEY or $DN_WATCH_KEY), the connection
-// options, the display options, and the normal end of a watch.
+// attach to (--session ID; the key from $DN_WATCH_KEY, --key-file FILE or
+// --key KEY), the connection options, the display options, and the normal end
+// of a watch.
 #pragma once
 
 #include <cstdint>
@@ -9,21 +10,31 @@
 
 #include "args.hpp"
 #include "dn/client/client.hpp"
+#include "dn/client/watch_file.hpp"
 #include "dn/image/metrics.hpp"
 
 namespace dn::cli {
 
 struct WatchTarget {
-  uint64_t session_id = 0;
-  std::string key;  // the session's watch key (protocol 1.6)
+  uint64_t session_id = 0;  // 0: none yet (only where the caller allows it)
+  std::string key;          // the session's watch key (protocol 1.6)
+  std::string key_file;     // --key-file, as given: an owner rewrites it for each session
 };
 
-// --server, --session, --key, then `own`, then --token-file, --tonemap,
-// --exposure, --timeout, --quiet, --help.
+// --server, --session, --key-file, --key, then `own`, then --token-file,
+// --tonemap, --exposure, --timeout, --quiet, --help.
 std::vector<Args::Spec> watch_specs(std::vector<Args::Spec> own);
 
-// --session and --key, checked; UsageError naming the option otherwise.
-WatchTarget watch_target(const Args& args);
+// --session (else the session the key file names) and the key, checked;
+// UsageError naming the option otherwise. A key given with --key is visible
+// to every local user (ps): `command` ("watch") warns about it on stderr.
+// With `session_optional` and no --session, a key file that names no
+// session, or is not there yet, is accepted (session_id 0).
+WatchTarget watch_target(const Args& args, const char* command, bool session_optional = false);
+
+// The key file read again (an owner rewrites it as it opens each session);
+// UsageError naming it when it is unreadable, open to others or malformed.
+client::WatchFile read_key_file(const std::string& path);
 
 struct Display {
   image::Tonemap tonemap = image::Tonemap::Aces;

@@ -70,6 +70,8 @@ const char* const kUsage =
     "                     (history reset; default 30)\n"
     "  --send-split       send diffuse + specular instead of radiance when the pipeline takes both\n"
     "  --share-input      let the session's watchers (dn preview) see the noisy radiance too\n"
+    "  --watch-key-file F write each session's watch key and id to F (mode 0600) for\n"
+    "                     `dn watch --key-file F` and `dn preview --key-file F`\n"
     "  --quiet            no per-frame lines\n"
     "  --help             this help\n"
     "Without --out, --server or --reference, frames are rendered and only timed (ms, Mrays/s).\n";
@@ -142,6 +144,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     else if (a == "--reconnect-for") o.reconnect_for_s = parse_int(a, value(), 1, 86400);
     else if (a == "--send-split") o.send_split = true;
     else if (a == "--share-input") o.share_input = true;
+    else if (a == "--watch-key-file") o.watch_key_file = value();
     else if (a == "--png") o.png = true;
     else if (a == "--quiet" || a == "-q") o.quiet = true;
     else throw UsageError("unknown argument '" + a + "'");
@@ -153,6 +156,7 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
   if (o.reference2 && !o.reference_spp) throw UsageError("--reference2 needs --reference");
   if (o.server.empty() && !o.pipeline.empty()) throw UsageError("--pipeline needs --server");
   if (o.share_input && o.server.empty()) throw UsageError("--share-input needs --server");
+  if (!o.watch_key_file.empty() && o.server.empty()) throw UsageError("--watch-key-file needs --server");
   if (o.share_input && o.send_split) throw UsageError("--share-input shares the radiance plane, which --send-split does not send");
   return o;
 }
@@ -218,6 +222,7 @@ int run_cli(const CliOptions& o) {
     so.in_flight = o.in_flight;
     so.send_split = o.send_split;
     so.share_input = o.share_input;
+    so.watch_key_file = o.watch_key_file;
     so.out_dir = o.out;
     so.statistics_demodulated = o.render.channels.statistics_demodulated;
     so.quiet = o.quiet;

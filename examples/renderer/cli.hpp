@@ -29,6 +29,7 @@ struct CliOptions {
   double reconnect_for_s = 30.0;    // after a lost server connection, how long to keep reconnecting
   bool send_split = false;
   bool share_input = false;         // let watchers (dn preview) see the noisy radiance (protocol 1.7)
+  std::string watch_key_file;       // --watch-key-file: each session's watch key and id, mode 0600
   bool png = false;                 // also DIR/frame_%04d.png, tone-mapped radiance
   bool quiet = false;
   bool help = false;

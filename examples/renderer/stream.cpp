@@ -7,6 +7,7 @@
 
 #include "dn/client/client.hpp"
 #include "dn/client/parameters.hpp"
+#include "dn/client/watch_file.hpp"
 #include "dn/image/exr_io.hpp"
 #include "frame_exr.hpp"
 
@@ -131,11 +132,12 @@ void print_reconnected(const client::Reconnected& r) {
                r.attempts, r.attempts == 1 ? "" : "s", static_cast<double>(r.took.count()) / 1e3);
 }
 
-// The session's id and a ready `dn watch` command: printed when the session
-// opens and again when a reconnection replaces it (new id, new watch key).
-void print_watch_hint(client::Session& session) {
-  std::fprintf(stderr, "dnrender: session %llu (watch it with: %s --output 'watch/%%04d.png')\n",
-               static_cast<unsigned long long>(session.id()), session.watch_command().c_str());
+// The session's id and ready `dn watch` / `dn preview` commands: when the
+// session opens and again when a reconnection replaces it (new id, new watch
+// key), which is also written to the watch key file for its watchers.
+void announce_session(client::Session& session, const std::string& watch_key_file, bool quiet) {
+  if (!watch_key_file.empty()) client::write_watch_file(watch_key_file, {session.watch_key(), session.id()});
+  if (!quiet) std::fputs(client::owner_hints("dnrender", session, watch_key_file).c_str(), stderr);
 }
 
 }  // namespace
@@ -197,15 +199,16 @@ void FrameStreamer::open(const FrameBuffers& sample) {
   // after a lost server").
   client::ReconnectOptions reconnect;
   reconnect.give_up_after = std::chrono::milliseconds(static_cast<int64_t>(options.reconnect_for_s * 1e3));
-  reconnect.on_reconnect = [state = state_.get(), quiet = options.quiet](const client::Reconnected& r) {
+  reconnect.on_reconnect = [state = state_.get(), quiet = options.quiet,
+                            key_file = options.watch_key_file](const client::Reconnected& r) {
     print_reconnected(r);
     // Called once the new session is open: session() is it.
-    if (!quiet && state->session && state->session->session()) print_watch_hint(*state->session->session());
+    if (state->session && state->session->session()) announce_session(*state->session->session(), key_file, quiet);
   };
   client::Connection connection = std::move(*state_->connection);
   state_->connection.reset();
   state_->session.emplace(std::move(connection), desc, state_->connect, reconnect);
-  if (!options.quiet) print_watch_hint(*state_->session->session());
+  announce_session(*state_->session->session(), options.watch_key_file, options.quiet);
   if (!options.out_dir.empty()) std::filesystem::create_directories(options.out_dir);
 }
 

@@ -21,6 +21,7 @@ struct StreamOptions {
   int in_flight = 2;      // frames kept in flight
   bool send_split = false;  // send diffuse + specular instead of radiance when the pipeline takes both
   bool share_input = false;  // SessionDesc::share_input: watchers also get the noisy radiance
+  std::string watch_key_file;  // rewritten with each session's watch key and id (client::write_watch_file)
   std::string out_dir;    // empty: results are received but not written
   // The frames' sample statistics are demodulated (dnrender --stats-demodulated):
   // the session is opened with the pipeline's parameter demodulated = 1.

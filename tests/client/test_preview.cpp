@@ -1,8 +1,12 @@
 // dn preview's pieces without a browser: the --http address rules (loopback or
-// a token), and the binary frame message the page decodes.
+// a token), the binary frame and status messages the page decodes, and key files.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <fstream>
 #include <cstring>
 #include <limits>
 
@@ -10,6 +14,7 @@
 #include "commands.hpp"
 #include "preview/preview_address.hpp"
 #include "preview/preview_frame.hpp"
+#include "dn/client/watch_file.hpp"
 
 namespace {
 
@@ -109,6 +114,43 @@ TEST(PreviewFrame, MessageIsLengthJsonThenRgba8Planes) {
       EXPECT_EQ(std::vector<uint8_t>(px + 8, px + 16), std::vector<uint8_t>(expected_in, expected_in + 8));
     }
   }
+}
+
+TEST(PreviewFrame, StatusIsLengthThenJsonAlone) {
+  const std::vector<uint8_t> m =
+      cli::encode_preview_status("ended", 18446744073709551615ull, "session \"x\" ended after 3 frames");
+  const std::string json =
+      R"({"status":"ended","session":"18446744073709551615","detail":"session \"x\" ended after 3 frames"})";
+  ASSERT_EQ(m.size(), 4 + json.size());
+  uint32_t n = 0;
+  std::memcpy(&n, m.data(), 4);
+  EXPECT_EQ(n, json.size());
+  EXPECT_EQ(std::string(m.begin() + 4, m.end()), json);
+}
+
+// A key file round-trips, is written 0600 over an older one, and is refused once others may read it.
+TEST(WatchFile, WrittenPrivateReadBackRefusedWhenOpen) {
+  const std::string path = ::testing::TempDir() + "dn_watch_file_" + std::to_string(::getpid());
+  const std::string key = "00112233445566778899aabbccddeeff";
+  {
+    std::ofstream(path) << "stale\n";
+  }
+  ::chmod(path.c_str(), 0644);
+  client::write_watch_file(path, {key, 18446744073709551615ull});
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+  const client::WatchFile f = client::read_watch_file(path);
+  EXPECT_EQ(f.key, key);
+  EXPECT_EQ(f.session_id, 18446744073709551615ull);
+  ::chmod(path.c_str(), 0604);
+  try {
+    client::read_watch_file(path);
+    ADD_FAILURE() << "read a key file other users can read";
+  } catch (const client::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("(mode 0604)"), std::string::npos) << e.what();
+  }
+  ::unlink(path.c_str());
 }
 
 }  // namespace

@@ -177,8 +177,8 @@ TEST_F(Cli, DenoisePrintsTheWatchCommandWithTheKey) {
                      "/in/frame_%04d.exr' --start 0 --end 0",
                  &log);
   ASSERT_EQ(rc, 0) << log;
-  const std::regex hint("dn: session ([0-9]+) \\(watch it with: dn watch --server " + server.tcp_url() +
-                        " --session ([0-9]+) --key [0-9a-f]{32} --output 'watch/%04d.png'\\)");
+  const std::regex hint("dn: session ([0-9]+) \\(watch it with: DN_WATCH_KEY=[0-9a-f]{32} dn watch --server " +
+                        server.tcp_url() + " --session ([0-9]+) --output 'watch/%04d.png'\\)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(log, m, hint)) << log;
   EXPECT_EQ(m[1].str(), m[2].str());
@@ -188,7 +188,7 @@ TEST_F(Cli, WatchNeedsAWellFormedKey) {
   const std::string watch = std::string(DN_DN_PATH) + " watch --server tcp://127.0.0.1:1 --session 5 --output w.png";
   std::string log;
   EXPECT_EQ(shell("env -u DN_WATCH_KEY " + watch, &log), 2) << log;
-  EXPECT_NE(log.find("missing --key KEY (or set DN_WATCH_KEY)"), std::string::npos) << log;
+  EXPECT_NE(log.find("missing the watch key: set DN_WATCH_KEY or give --key-file FILE"), std::string::npos) << log;
   EXPECT_EQ(shell(watch + " --key 0123456789ABCDEF0123456789abcdef", &log), 2) << log;
   EXPECT_NE(log.find("--key: expected the session's watch key, 32 lowercase hex digits, got "
                      "'0123456789ABCDEF0123456789abcdef'"),

@@ -194,19 +194,19 @@ TEST(ServerKilledUnderDnrender, ItReconnectsResetsHistoryAndFinishes) {
   // The new session's id and watch command are printed again, as at the start:
   // the old ones name a session that is gone.
   std::smatch first, reconnected, hint;
-  const std::string watch_line = "dnrender: session ([0-9]+) \\(watch it with: dn watch --server " + where.tcp +
-                                 " --session ([0-9]+) --key ([0-9a-f]{32}) --output 'watch/%04d.png'\\)";
+  const std::string watch_line = "dnrender: session ([0-9]+) \\(watch it with: DN_WATCH_KEY=([0-9a-f]{32}) dn watch "
+                                 "--server " + where.tcp + " --session ([0-9]+) --output 'watch/%04d.png'\\)";
   ASSERT_TRUE(std::regex_search(out, first, std::regex(watch_line))) << out;
-  EXPECT_EQ(first[1], first[2]);
+  EXPECT_EQ(first[1], first[3]);
   ASSERT_TRUE(std::regex_search(out, reconnected, std::regex("after losing session ([0-9]+) .*new session ([0-9]+) from")))
       << out;
   EXPECT_EQ(reconnected[1], first[1]);
   const std::string after = reconnected.suffix();
   ASSERT_TRUE(std::regex_search(after, hint, std::regex(watch_line))) << "no watch hint after the reconnection\n" << out;
   EXPECT_EQ(hint[1], reconnected[2]);
-  EXPECT_EQ(hint[2], reconnected[2]);
+  EXPECT_EQ(hint[3], reconnected[2]);
   EXPECT_NE(hint[1], first[1]);
-  EXPECT_NE(hint[3], first[3]) << "a new session has a new watch key";
+  EXPECT_NE(hint[2], first[2]) << "a new session has a new watch key";
 }
 
 }  // namespace

@@ -11,7 +11,8 @@ frame, takes a screenshot, and checks:
     one 8-bit step;
   - the noisy-input canvas equals the radiance the owner sent;
   - the page names the pipeline, the frame index and per-pass timings;
-  - both watchers exit 0 when the owner closes the session.
+  - when the owner closes the session, dn watch exits 0 and the page keeps the
+    last frame, marked ended, with dn preview still serving it.
 Exit 0 pass, 1 fail, 77 skip (no browser).
 """
 import base64
@@ -243,13 +244,14 @@ def main():
         owner_out = Line(owner.stdout)
         session, key = owner_out.until(r"^session (\d+) ([0-9a-f]{32})$", what="the session id").groups()
 
-        target = ["--server", url, "--session", session, "--key", key]
+        target = ["--server", url, "--session", session]
+        env = dict(os.environ, DN_WATCH_KEY=key)  # the key in the environment, not on the command line
         preview = subprocess.Popen([dn, "preview", *target, "--http", "127.0.0.1:0", "--quiet"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+                                   stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env)
         children.append(preview)
         page_url = Line(preview.stdout).until(r"at (http://127\.0\.0\.1:\d+/)$", what="the preview URL").group(1)
         watch = subprocess.Popen([dn, "watch", *target, "--output", os.path.join(work, "w_%04d.pfm")],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
         children.append(watch)
         Line(watch.stderr).until(r"watching session", what="dn watch to attach")
 
@@ -290,6 +292,28 @@ def main():
                 fail("the page hides the noisy input the owner shared")
             shot = tools.call("Page.captureScreenshot", {"format": "png", "fromSurface": True})
             png = decode_png(base64.b64decode(shot["data"]))
+
+            owner.stdin.close()  # the owner closes its session: dn watch ends, the page stays
+            for name, child in (("owner", owner), ("dn watch", watch)):
+                try:
+                    code = child.wait(timeout=60)
+                except subprocess.TimeoutExpired:
+                    fail(name + " did not exit after the session closed")
+                if code != 0:
+                    fail("%s exited %d" % (name, code))
+            deadline = time.monotonic() + TIMEOUT_S
+            while tools.evaluate("window.dnPreview.status") != "ended":
+                if time.monotonic() > deadline:
+                    fail("the page never marked the session ended")
+                time.sleep(0.1)
+            status = tools.evaluate("document.getElementById('status').textContent")
+            print("page after the end: " + status, flush=True)
+            if "session %s ended after %d frames" % (session, FRAMES) not in status:
+                fail("the page's status after the end: " + status)
+            if tools.evaluate("window.dnPreview.frameIndex") != last:
+                fail("the page lost the last frame when the session ended")
+            if preview.poll() is not None:
+                fail("dn preview exited %d when the session ended (the page would go)" % preview.returncode)
         finally:
             tools.close()
 
@@ -300,14 +324,6 @@ def main():
         _, _, noisy = read_pfm(last_input)
         compare("noisy input", png, rects[1], [srgb8(aces(v)) for v in noisy])
 
-        owner.stdin.close()  # the owner closes its session: both watchers end normally
-        for name, child in (("owner", owner), ("dn preview", preview), ("dn watch", watch)):
-            try:
-                code = child.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                fail(name + " did not exit after the session closed")
-            if code != 0:
-                fail("%s exited %d" % (name, code))
         print("PASS", flush=True)
         return 0
     finally:

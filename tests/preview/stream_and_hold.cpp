@@ -2,7 +2,8 @@
 // owner sharing its input), prints "session ID KEY", waits for "go" on stdin,
 // streams N deterministic frames (a moving gradient with a bright highlight),
 // prints "done N", writes the last frame's radiance to a PFM, then holds the
-// session open until stdin closes.
+// session open until stdin closes. With WATCH_KEY_FILE it also writes the
+// session's key and id there, as dnrender --watch-key-file does.
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -10,14 +11,15 @@
 #include <vector>
 
 #include "dn/client/client.hpp"
+#include "dn/client/watch_file.hpp"
 #include "dn/image/pfm.hpp"
 
 using namespace dn;
 using protocol::ChannelId;
 
 int main(int argc, char** argv) {
-  if (argc != 7) {
-    std::fprintf(stderr, "usage: stream_and_hold URL PIPELINE FRAMES WIDTH HEIGHT LAST_INPUT.pfm\n");
+  if (argc != 7 && argc != 8) {
+    std::fprintf(stderr, "usage: stream_and_hold URL PIPELINE FRAMES WIDTH HEIGHT LAST_INPUT.pfm [WATCH_KEY_FILE]\n");
     return 2;
   }
   const std::string url = argv[1], pipeline = argv[2], last_input = argv[6];
@@ -33,6 +35,7 @@ int main(int argc, char** argv) {
     desc.channel(ChannelId::Radiance).channel(ChannelId::Albedo).channel(ChannelId::Normal);
     desc.channel(ChannelId::Depth).channel(ChannelId::Motion);
     client::Session session = conn.open_session(desc);
+    if (argc == 8) client::write_watch_file(argv[7], {session.watch_key(), session.id()});
     std::printf("session %llu %s\n", (unsigned long long)session.id(), session.watch_key().c_str());
     std::fflush(stdout);
     std::string line;

@@ -41,8 +41,9 @@ done
 "$render" --scene 2 --frames 4 --width 64 --height 36 --spp 0.25 --server "unix://$sock" --pipeline progressive \
   --out "$dir/progressive" 2>"$dir/progressive.log"
 grep -q "channels:.* sample_count" "$dir/progressive.log"
-# ... and says how to watch the session: a dn watch command with the session's key.
-grep -q "watch it with: dn watch --server unix://$sock --session [0-9]* --key [0-9a-f]\{32\} " "$dir/progressive.log"
+# ... and says how to watch the session: a dn watch command given the session's key in its environment.
+grep -q "watch it with: DN_WATCH_KEY=[0-9a-f]\{32\} dn watch --server unix://$sock --session [0-9]* --output" \
+  "$dir/progressive.log"
 for f in 0000 0003; do
   test -s "$dir/progressive/denoised_$f.exr"
 done

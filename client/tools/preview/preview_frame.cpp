@@ -63,13 +63,27 @@ std::string preview_header_json(const client::Result& r, const PreviewContext& c
   return j + "}";
 }
 
-std::vector<uint8_t> encode_preview_frame(const client::Result& r, const PreviewContext& ctx) {
-  const std::string json = preview_header_json(r, ctx);
-  const size_t pixels = size_t(r.width) * r.height;
+namespace {
+
+std::vector<uint8_t> with_length(const std::string& json) {
   std::vector<uint8_t> out(4 + json.size());
   const auto n = static_cast<uint32_t>(json.size());
   for (int b = 0; b < 4; ++b) out[b] = uint8_t(n >> (8 * b));
   std::memcpy(out.data() + 4, json.data(), json.size());
+  return out;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_preview_status(const std::string& status, uint64_t session_id, const std::string& detail) {
+  return with_length("{\"status\":" + json_string(status) + ",\"session\":\"" + std::to_string(session_id) +
+                     "\",\"detail\":" + json_string(detail) + "}");
+}
+
+std::vector<uint8_t> encode_preview_frame(const client::Result& r, const PreviewContext& ctx) {
+  const std::string json = preview_header_json(r, ctx);
+  const size_t pixels = size_t(r.width) * r.height;
+  std::vector<uint8_t> out = with_length(json);
   out.reserve(out.size() + pixels * 4 * (r.has_input() ? 2 : 1));
   append_rgba8(out, r.rgb(), pixels, ctx);
   if (r.has_input()) append_rgba8(out, r.input_rgb(), pixels, ctx);

@@ -84,13 +84,15 @@ int PreviewHttpServer::on_ws_connect(const mg_connection* conn, void* self) {
 
 void PreviewHttpServer::on_ws_ready(mg_connection* conn, void* self) {
   auto* s = static_cast<PreviewHttpServer*>(self);
-  std::shared_ptr<const std::vector<uint8_t>> latest;
+  std::shared_ptr<const std::vector<uint8_t>> latest, status;
   {
     std::lock_guard lock(s->mutex_);
     s->sockets_.insert(conn);
     latest = s->latest_;
+    status = s->status_;
   }
   if (latest) send(conn, *latest);
+  if (status) send(conn, *status);
 }
 
 int PreviewHttpServer::on_ws_data(mg_connection*, int, char*, size_t, void*) {
@@ -114,6 +116,12 @@ void PreviewHttpServer::publish(std::shared_ptr<const std::vector<uint8_t>> mess
   std::lock_guard lock(mutex_);
   latest_ = message;
   // Under the lock, so a page closing meanwhile cannot be written after its close callback.
+  for (mg_connection* conn : sockets_) send(conn, *message);
+}
+
+void PreviewHttpServer::publish_status(std::shared_ptr<const std::vector<uint8_t>> message) {
+  std::lock_guard lock(mutex_);
+  status_ = message;
   for (mg_connection* conn : sockets_) send(conn, *message);
 }
 

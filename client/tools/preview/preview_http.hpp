@@ -1,6 +1,6 @@
 // The HTTP side of dn preview, on civetweb (Debian's libcivetweb): serves the
 // page at "/" and pushes each new frame to every page over a WebSocket at
-// "/ws". A page that connects gets the newest frame at once.
+// "/ws". A page that connects gets the newest frame and status at once.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +31,9 @@ class PreviewHttpServer {
   // Sends `message` (encode_preview_frame) to every connected page and keeps
   // it for pages that connect later.
   void publish(std::shared_ptr<const std::vector<uint8_t>> message);
+  // Sends a status message (encode_preview_status) to every page and keeps
+  // it, after the newest frame, for pages that connect later.
+  void publish_status(std::shared_ptr<const std::vector<uint8_t>> message);
   size_t pages() const;
 
  private:
@@ -48,6 +51,7 @@ class PreviewHttpServer {
   mutable std::mutex mutex_;
   std::set<mg_connection*> sockets_;
   std::shared_ptr<const std::vector<uint8_t>> latest_;
+  std::shared_ptr<const std::vector<uint8_t>> status_;
 };
 
 }  // namespace dn::cli

@@ -107,6 +107,8 @@ class Session {
   // --advertise-url: e.g. a balancer's port that reaches this backend);
   // empty when the server names none: then this connection's address.
   const std::string& watch_url() const;
+  // The server address watchers use: watch_url(), else this connection's.
+  std::string watch_server() const;
   // The `dn watch` command line that watches this session, ready to paste:
   // "dn watch --server URL --session ID --key KEY" (no --key from an older
   // server), URL being watch_url() when the server gives one.
