@@ -76,7 +76,9 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
     const std::string prefix = "pipeline." + cost.pipeline + ".";
     add(prefix + "device_bytes_fixed", cost.fixed_bytes);
     add(prefix + "device_bytes_per_pixel", cost.bytes_per_pixel);
-    add(prefix + "reference_channels", n(cost.reference_channels));  // the model's session: channel_bit mask
+    // The model's session's channel_bit mask, in halves: a STATS value is a double, exact only below 2^53.
+    add(prefix + "reference_channels_lo", n(cost.reference_channels & 0xFFFFFFFFu));  // ids 0-31: bit i = id i
+    add(prefix + "reference_channels_hi", n(cost.reference_channels >> 32));          // ids 32-63: bit i = id 32 + i
     if (const auto ms = counters.frame_times.ms_per_megapixel(cost.pipeline)) {  // absent until measured
       add(prefix + "frame_ms_per_megapixel", *ms);
       add(prefix + "frames_measured", n(counters.frame_times.frames_measured(cost.pipeline)));

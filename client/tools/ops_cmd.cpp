@@ -75,7 +75,8 @@ int run_stats(const std::vector<std::string>& argv) {
   if (args.has("help")) {
     std::printf("usage: dn stats [--server URL] [--raw]\n\n"
                 "Prints the server's statistics, one per line: 3 significant digits with units\n"
-                "(ms, s, min, h; B, kB, MB, GB; B/px), counts exact with thousands separators.\n\n"
+                "(ms, s, min, h; B, kB, MB, GB; B/px), channel masks as channel names, counts\n"
+                "exact with thousands separators.\n\n"
                 "options:\n%s",
                 args.usage().c_str());
     return 0;

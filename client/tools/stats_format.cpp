@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+
+#include "dn/protocol/channels.hpp"
+#include "server_info.hpp"
 
 namespace dn::cli {
 
@@ -12,7 +16,7 @@ bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// "1234567" -> "1,234,567"; v is a whole number.
+// "1234567" -> "1,234,567"; v is a whole number, every digit printed (%.0f is exact).
 std::string grouped(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.0f", std::fabs(v));
@@ -64,6 +68,22 @@ ReadableValue bytes(double b) {
   return {u == 0 ? grouped(std::round(b)) : significant3(b), units[u]};
 }
 
+// A channel mask as names ("radiance,albedo"), bit i being channel id
+// first_id + i; a bit no channel of this client's protocol has (a newer
+// server's) as "channel <id>".
+ReadableValue channel_names(double mask_value, uint32_t first_id) {
+  const uint64_t mask = static_cast<uint64_t>(mask_value) << first_id;
+  uint64_t known = 0;
+  for (const auto& c : protocol::kChannels)
+    if (static_cast<uint32_t>(c.id) < protocol::kChannelIdLimit) known |= protocol::channel_bit(c.id);
+  std::string names = mask & known ? channel_set(mask & known) : "";
+  for (uint32_t id = 0; id < 64; ++id)
+    if ((mask & ~known) >> id & 1u) names += (names.empty() ? "channel " : ",channel ") + std::to_string(id);
+  return {names.empty() ? "none" : names, "", true};
+}
+
+bool is_whole(double v) { return std::isfinite(v) && v == std::round(v); }
+
 template <class Format>
 std::string report(const std::vector<protocol::StatValue>& values, Format&& format) {
   std::vector<ReadableValue> shown;
@@ -71,12 +91,13 @@ std::string report(const std::vector<protocol::StatValue>& values, Format&& form
   for (const auto& v : values) {
     shown.push_back(format(v));
     name_width = std::max(name_width, v.name.size());
-    number_width = std::max(number_width, shown.back().number.size());
+    if (!shown.back().words) number_width = std::max(number_width, shown.back().number.size());
   }
   std::string out;
   for (size_t i = 0; i < values.size(); ++i) {
     std::string line = values[i].name;
-    line.resize(name_width + 2 + number_width - shown[i].number.size(), ' ');
+    const size_t pad = shown[i].words ? 0 : number_width - shown[i].number.size();
+    line.resize(name_width + 2 + pad, ' ');
     line += shown[i].number;
     if (!shown[i].unit.empty()) line += " " + shown[i].unit;
     out += line + "\n";
@@ -91,7 +112,11 @@ ReadableValue readable_stat(const std::string& name, double value) {
   if (ends_with(name, "_bytes") || name.rfind("bytes_", 0) == 0) return bytes(value);  // device_bytes, bytes_in
   if (ends_with(name, "_ms")) return duration_ms(value);
   if (ends_with(name, "_s")) return duration_s(value);
-  if (std::isfinite(value) && value == std::round(value) && std::fabs(value) < 1e15) return {grouped(value), ""};
+  // A channel mask comes in halves of 32 bits (STATS values are doubles): ids 0-31 and 32-63.
+  const bool mask_half = is_whole(value) && value >= 0 && value < 0x1p32;
+  if (ends_with(name, "_channels_lo") && mask_half) return channel_names(value, 0);
+  if (ends_with(name, "_channels_hi") && mask_half) return channel_names(value, 32);
+  if (is_whole(value)) return {grouped(value), ""};
   return {significant3(value), ""};
 }
 

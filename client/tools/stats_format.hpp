@@ -1,7 +1,9 @@
 // dn stats: the server's STATS values as people read them. The unit comes
 // from the name: _ms and _s durations, _bytes (or bytes_) sizes (B, kB, MB,
-// GB: powers of 1000), _bytes_per_pixel; anything else is a count (exact, with
-// thousands separators) or a plain number. Non-counts keep 3 significant digits.
+// GB: powers of 1000), _bytes_per_pixel; channel masks as channel names
+// (_channels_lo: bit i = channel id i, _channels_hi: id 32 + i); anything else
+// is a count (every digit exact, with thousands separators) or a plain
+// number. Non-counts keep 3 significant digits.
 #pragma once
 
 #include <string>
@@ -12,8 +14,9 @@
 namespace dn::cli {
 
 struct ReadableValue {
-  std::string number;  // "1.23", "1,234,567"
+  std::string number;  // "1.23", "1,234,567", "radiance,albedo"
   std::string unit;    // "ms", "MB", ...; empty for counts and plain numbers
+  bool words = false;  // a list of names: starts at the number column instead of widening it
 };
 
 ReadableValue readable_stat(const std::string& name, double value);
