@@ -447,12 +447,6 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
   return out;
 }
 
-bool pipeline_needs_camera(const protocol::PipelineInfo* pipeline) {
-  if (!pipeline) return true;
-  return ((pipeline->required_channels | pipeline->optional_channels) &
-          protocol::channel_bit(protocol::ChannelId::SpecularF0)) != 0;
-}
-
 const char* to_string(FrameCameras::Source s) {
   switch (s) {
     case FrameCameras::Source::File: return "camera file";
@@ -468,7 +462,6 @@ struct FrameCameras::Impl {
   std::map<long long, FileCamera> file;
   mutable std::mutex mutex;
   std::map<long long, Record> records;
-  bool warned = false;
 };
 
 FrameCameras::FrameCameras(const std::string& camera_file, const Preset& preset,
@@ -479,6 +472,7 @@ FrameCameras::FrameCameras(const std::string& camera_file, const Preset& preset,
     impl_->file = read_camera_file(camera_file);
     return;
   }
+  if (!needs_camera) return;  // nothing uses it: no recovery
   for (const ChannelSpec& spec : preset.channels) {
     if (spec.id == protocol::ChannelId::Position) position_ = resolve(spec, exr_channels, preset.layer_prefix);
     if (spec.id == protocol::ChannelId::Depth) depth_ = resolve(spec, exr_channels, preset.layer_prefix);
@@ -525,21 +519,15 @@ FrameCameras::Source FrameCameras::apply(const dn::image::ExrReader& exr, long l
         camera.projection = c.projection;
         rec = {Source::Recovered, c.rms_px, c.max_px, c.points};
       } catch (const CameraRecoveryError& e) {
-        if (needs_camera_)
-          throw std::runtime_error(frame + exr.path() + ": no camera in the header, and none from the Position pass: " +
-                                   e.what());
-        std::lock_guard<std::mutex> lock(impl_->mutex);
-        if (!impl_->warned)
-          std::fprintf(stderr, "dn: warning: %s%s; sending identity matrices (this pipeline does not use them)\n",
-                       frame.c_str(), e.what());
-        impl_->warned = true;
+        throw std::runtime_error(frame + exr.path() + ": no camera in the header, and none from the Position pass: " +
+                                 e.what());
       }
     } else if (needs_camera_) {
       throw std::runtime_error(
           frame + exr.path() +
           " has no camera: no dn.view / dn.projection header attributes and no Position pass to recover it from, "
-          "but the pipeline uses the camera; enable the Position pass (Blender: View Layer → Passes → Data → "
-          "Position) or give the cameras with --camera FILE (examples/blender/export_camera.py writes one)");
+          "but the pipeline, or a channel made for it, uses the camera; enable the Position pass "
+          "(Blender: View Layer → Passes → Data → Position) or give the cameras with --camera FILE (examples/blender/export_camera.py writes one)");
     }
   }
   std::lock_guard<std::mutex> lock(impl_->mutex);

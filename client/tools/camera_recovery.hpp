@@ -66,15 +66,10 @@ struct RecoveredCamera {
 RecoveredCamera recover_camera(std::span<const float> positions, int width, int height,
                                std::span<const float> depth = {}, const CameraRecoveryOptions& options = {});
 
-// True for the pipelines whose passes use the camera matrices: those that
-// take specular_f0 compute F_beta from the view direction (inverse(projection
-// * view)); the others run with identity. Unknown (a server that lists no
-// pipelines): true.
-bool pipeline_needs_camera(const protocol::PipelineInfo* pipeline);
-
 // dn denoise's camera choice per frame: --camera FILE > the EXR header's dn.*
-// attributes > recovered from the Position pass > identity (only when the
-// pipeline does not need a camera; otherwise an error).
+// attributes > recovered from the Position pass > identity. `needs_camera`
+// (plan_needs_camera): without it nothing is recovered (identity unless a file
+// or header gives one); with it a frame without a camera is an error.
 class FrameCameras {
  public:
   enum class Source { File, Header, Recovered, Identity };

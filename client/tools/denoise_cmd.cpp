@@ -270,11 +270,25 @@ int run_denoise(const std::vector<std::string>& argv) {
     throw UsageError("--pipeline: server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
                      "' (it offers: " + names + ")");
   }
-  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp).
-  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), pipeline_needs_camera(pipeline));
   const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
   const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
   apply_statistics_kind(first.string_attribute("dn.stat_samples"), first_path, plan, pipeline, params);
+  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp),
+  // looked for only when the pipeline or a planned channel's conversion uses them.
+  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), plan_needs_camera(pipeline, plan));
+  auto load = [&](size_t i) {
+    const std::string path = format_frame_path(input, frames[i]);
+    image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
+    LoadedFrame lf = load_frame(exr, plan, frames[i], rough_guides ? &*rough_guides : nullptr);
+    cameras.apply(exr, frames[i], lf.camera);
+    apply_camera_conversions(lf, plan, exr);
+    if (rough_guides) apply_rough_guides(lf, *rough_guides);
+    derive_reflection_features(lf, plan, exr);
+    return lf;
+  };
+  // The first frame is made in full (channels, camera, conversions) before the session opens: a file that
+  // cannot give what the pipeline needs is refused with nothing opened on the server.
+  LoadedFrame first_frame = load(0);
 
   client::SessionDesc desc;
   desc.width = uint32_t(width);
@@ -406,19 +420,9 @@ int run_denoise(const std::vector<std::string>& argv) {
     }
   };
 
-  auto load = [&](size_t i) {
-    const std::string path = format_frame_path(input, frames[i]);
-    image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
-    LoadedFrame lf = load_frame(exr, plan, frames[i], rough_guides ? &*rough_guides : nullptr);
-    cameras.apply(exr, frames[i], lf.camera);
-    apply_camera_conversions(lf, plan, exr);
-    if (rough_guides) apply_rough_guides(lf, *rough_guides);
-    derive_reflection_features(lf, plan, exr);
-    return lf;
-  };
-  std::future<LoadedFrame> next = std::async(std::launch::async, load, size_t(0));
+  std::future<LoadedFrame> next;
   for (size_t i = 0; i < frames.size(); ++i) {
-    LoadedFrame f = next.get();
+    LoadedFrame f = i == 0 ? std::move(first_frame) : next.get();
     if (i + 1 < frames.size()) next = std::async(std::launch::async, load, i + 1);
     if (f.width != width || f.height != height)
       throw std::runtime_error(f.path + " is " + std::to_string(f.width) + "x" + std::to_string(f.height) +

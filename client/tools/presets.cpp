@@ -153,6 +153,7 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
       return TermSpec{{}, P + layer, P + colour, optional};
     };
     auto opt = [&](const std::string& layer) { return TermSpec{{}, P + layer, {}, true}; };
+    const SourceSpec position{P + "Position", 3};
     p.channels = {
         spec(ChannelId::Radiance, {{{L(P + "Combined")}}}),
         spec(ChannelId::DiffuseLighting, {{{L(P + "DiffDir"), L(P + "DiffInd")}}}),
@@ -183,11 +184,14 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
         // protocol leaves to F_beta: the server divides and multiplies by the
         // same product, and dividing it out measured worse (docs/client.md).
         spec(ChannelId::ReflectionAlbedo, {{{L(P + "Denoising Albedo")}}}),
+        // The derivations read the Position pass (and the hit the Denoising Depth).
         spec(ChannelId::ReflectionNormal, {{{L(P + "Denoising Normal")}, Convert::CyclesCameraNormal}}),
-        spec(ChannelId::ReflectionDepth, {{{L(P + "Denoising Depth")}, Convert::CyclesChainDepth}}),
-        spec(ChannelId::ReflectionDirection, {{{L(P + "Normal")}, Convert::CyclesMirrorDirection}}),
-        spec(ChannelId::ReflectionDistance, {{{L(P + "Denoising Depth")}, Convert::CyclesChainLength}}),
-        spec(ChannelId::ReflectionPosition, {{{L(P + "Position")}, Convert::CyclesChainHit}}),
+        spec(ChannelId::ReflectionDepth, {{{L(P + "Denoising Depth")}, Convert::CyclesChainDepth, false, {position}}}),
+        spec(ChannelId::ReflectionDirection, {{{L(P + "Normal")}, Convert::CyclesMirrorDirection, false, {position}}}),
+        spec(ChannelId::ReflectionDistance,
+             {{{L(P + "Denoising Depth")}, Convert::CyclesChainLength, false, {position}}}),
+        spec(ChannelId::ReflectionPosition,
+             {{{L(P + "Position")}, Convert::CyclesChainHit, false, {SourceSpec{P + "Denoising Depth", 1}}}}),
     };
     // Radiance mode: the Denoising Data passes follow near-specular bounces
     // (a mirror's albedo, normal and depth are those of what it reflects),
@@ -240,10 +244,10 @@ Preset make_preset(const std::string& name_in, const std::vector<std::string>& c
   throw ChannelMapError("unknown preset '" + name_in + "' (expected dnrender, cycles or auto)");
 }
 
-ChannelSpec parse_channel_override(const std::string& assignment) {
+ChannelSpec parse_channel_override(const std::string& assignment, const ChannelSyntax& syntax) {
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0 || eq + 1 == assignment.size())
-    throw ChannelMapError("--channel expects NAME=SPEC (e.g. albedo=ViewLayer.DiffCol), got '" + assignment + "'");
+    throw ChannelMapError(syntax.map + " expects NAME=SPEC (e.g. albedo=ViewLayer.DiffCol), got '" + assignment + "'");
   const std::string name = trim(assignment.substr(0, eq));
   std::string rhs = trim(assignment.substr(eq + 1));
   const auto* info = protocol::find_channel(name);
@@ -251,7 +255,7 @@ ChannelSpec parse_channel_override(const std::string& assignment) {
     std::string names;
     for (const auto& c : protocol::kChannels)
       if (c.id != ChannelId::Output) names += (names.empty() ? "" : ", ") + std::string(c.name);
-    throw ChannelMapError("--channel " + assignment + ": unknown protocol channel '" + name + "' (one of: " + names +
+    throw ChannelMapError(syntax.map + " " + assignment + ": unknown protocol channel '" + name + "' (one of: " + names +
                           ")");
   }
   RecipeSpec r;
@@ -259,22 +263,22 @@ ChannelSpec parse_channel_override(const std::string& assignment) {
     const std::string conv = rhs.substr(at + 1);
     rhs = trim(rhs.substr(0, at));
     if (conv != "cycles")
-      throw ChannelMapError("--channel " + assignment + ": unknown conversion '@" + conv + "' (only @cycles)");
+      throw ChannelMapError(syntax.map + " " + assignment + ": unknown conversion '@" + conv + "' (only @cycles)");
     if (info->id == ChannelId::Depth) r.convert = Convert::CyclesDepth;
     else if (info->id == ChannelId::Motion) r.convert = Convert::CyclesVector;
-    else throw ChannelMapError("--channel " + assignment + ": @cycles applies to depth and motion only");
+    else throw ChannelMapError(syntax.map + " " + assignment + ": @cycles applies to depth and motion only");
   }
   for (const auto& term : split(rhs, '+')) {
-    if (term.empty()) throw ChannelMapError("--channel " + assignment + ": empty term");
+    if (term.empty()) throw ChannelMapError(syntax.map + " " + assignment + ": empty term");
     TermSpec t;
     if (term.find(',') != std::string::npos) {
       t.channels = split(term, ',');
       if (t.channels.size() != info->components)
-        throw ChannelMapError("--channel " + assignment + ": '" + term + "' lists " +
+        throw ChannelMapError(syntax.map + " " + assignment + ": '" + term + "' lists " +
                               std::to_string(t.channels.size()) + " EXR channels, '" + name + "' has " +
                               std::to_string(info->components) + " components");
       for (const auto& c : t.channels)
-        if (c.empty()) throw ChannelMapError("--channel " + assignment + ": empty channel name in '" + term + "'");
+        if (c.empty()) throw ChannelMapError(syntax.map + " " + assignment + ": empty channel name in '" + term + "'");
     } else {
       t.layer = term;
     }
@@ -322,12 +326,35 @@ std::string ResolvedChannel::describe() const {
   return out;
 }
 
+bool needs_camera(Convert c) {
+  switch (c) {
+    case Convert::None:
+    case Convert::CyclesDepth:
+    case Convert::CyclesVector: return false;
+    case Convert::CyclesVirtualDepth:
+    case Convert::CyclesMirrorDirection:
+    case Convert::CyclesChainLength:
+    case Convert::CyclesChainDepth:
+    case Convert::CyclesChainHit:
+    case Convert::CyclesCameraNormal: return true;
+  }
+  return true;
+}
+
+bool is_derived(Convert c, bool past_specular) { return past_specular || needs_camera(c); }
+
 std::optional<ResolvedChannel> resolve(const ChannelSpec& s, const std::vector<std::string>& chans,
-                                       const std::string& prefix) {
+                                       const std::string& prefix, bool plain_only) {
   const uint32_t n = components(s.id);
   for (const auto& alt : s.alternatives) {
-    ResolvedChannel r{s.id, {}, {}, alt.convert, alt.past_specular};
+    if (plain_only && is_derived(alt.convert, alt.past_specular)) continue;
+    ResolvedChannel r{s.id, {}, {}, alt.convert, alt.past_specular, {}};
     bool ok = !alt.terms.empty();
+    for (const auto& src : alt.sources) {
+      auto found = resolve_term(TermSpec{{}, src.layer, {}, false}, src.components, chans, prefix);
+      if (!found) ok = false;
+      else r.sources.push_back(std::move(*found));
+    }
     for (const auto& t : alt.terms) {
       auto term = resolve_term(t, n, chans, prefix);
       std::optional<std::vector<std::string>> factor;
@@ -364,6 +391,7 @@ std::string describe_tried(const ChannelSpec& s, const std::string& prefix) {
         one += t.optional ? "[" + term + "]" : term;
       }
     }
+    for (size_t i = 0; i < alt.sources.size(); ++i) one += (i ? ", " : " with ") + alt.sources[i].layer;
     out += (out.empty() ? "" : "; ") + one;
   }
   std::string suffixes;
@@ -402,13 +430,14 @@ std::string RoughGuidePlan::describe_rule() const {
   return "the Denoising Depth lies beyond Depth";
 }
 
-std::vector<ChannelId> parse_channel_list(const std::string& list) {
+std::vector<ChannelId> parse_channel_list(const std::string& list, const ChannelSyntax& syntax) {
   std::vector<ChannelId> out;
   for (const auto& name : split(list, ',')) {
     const auto* c = protocol::find_channel(name);
-    if (!c || c->id == ChannelId::Output) throw ChannelMapError("--channels: unknown protocol channel '" + name + "'");
+    if (!c || c->id == ChannelId::Output)
+      throw ChannelMapError(syntax.list + ": unknown protocol channel '" + name + "'");
     if (std::find(out.begin(), out.end(), c->id) != out.end())
-      throw ChannelMapError("--channels: '" + name + "' listed twice");
+      throw ChannelMapError(syntax.list + ": '" + name + "' listed twice");
     out.push_back(c->id);
   }
   return out;
@@ -446,7 +475,8 @@ std::string settings_hint(const Preset& preset, const ChannelSpec& s) {
 std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vector<ChannelSpec>& overrides,
                                            const protocol::PipelineInfo* pipeline,
                                            const std::optional<std::vector<ChannelId>>& only,
-                                           const std::vector<std::string>& chans, const std::string& file) {
+                                           const std::vector<std::string>& chans, const std::string& file,
+                                           const ChannelSyntax& syntax) {
   // The spec used for each channel: an override replaces the preset's, and
   // the preset's mode-specific spec its common one. The mode is known once
   // radiance is decided (radiance_sent below).
@@ -462,13 +492,13 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
   };
   auto resolvable = [&](ChannelId id) {
     auto s = spec_for(id);
-    return s && resolve(*s, chans, preset.layer_prefix).has_value();
+    return s && resolve(*s, chans, preset.layer_prefix, true).has_value();
   };
   auto missing = [&](ChannelId id, const std::string& why) -> ChannelMapError {
     auto s = spec_for(id);
     std::string tried = s ? describe_tried(*s, preset.layer_prefix) : "nothing (no mapping in preset '" + preset.name + "')";
     return ChannelMapError(why + " channel '" + cname(id) + "', but " + file + " has none of the EXR layers tried: " +
-                           tried + "; map it with --channel " + cname(id) + "=LAYER" +
+                           tried + "; map it with " + syntax.map_example(cname(id)) +
                            (s ? settings_hint(preset, *s) : std::string()));
   };
 
@@ -538,11 +568,11 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
   std::vector<ResolvedChannel> out;
   for (ChannelId id : wanted) {
     auto s = spec_for(id);
-    std::optional<ResolvedChannel> r = s ? resolve(*s, chans, preset.layer_prefix) : std::nullopt;
+    std::optional<ResolvedChannel> r = s ? resolve(*s, chans, preset.layer_prefix, !must.count(id)) : std::nullopt;
     if (!r) {
       if (must.count(id)) {
         bool overridden = std::any_of(overrides.begin(), overrides.end(), [&](auto& o) { return o.id == id; });
-        throw missing(id, overridden ? "--channel maps" : (only ? "--channels lists" : pname));
+        throw missing(id, overridden ? syntax.map + " maps" : (only ? syntax.list + " lists" : pname));
       }
       continue;
     }
@@ -550,6 +580,24 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
   }
   // Protocol order (by id) keeps the session's declaration stable.
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return uint8_t(a.id) < uint8_t(b.id); });
+  return out;
+}
+
+bool pipeline_uses_camera(const protocol::PipelineInfo* pipeline) {
+  return pipeline && (pipeline->required_channels & protocol::channel_bit(ChannelId::SpecularF0)) != 0;
+}
+
+bool plan_needs_camera(const protocol::PipelineInfo* pipeline, const std::vector<ResolvedChannel>& plan) {
+  return pipeline_uses_camera(pipeline) ||
+         std::any_of(plan.begin(), plan.end(), [](const ResolvedChannel& c) { return needs_camera(c.convert); });
+}
+
+const ChannelSyntax kCliChannelSyntax{"--channels", "--channel", "--channel NAME=LAYER"};
+const ChannelSyntax kPythonChannelSyntax{"channels=[...]", "channels={...}", "channels={..., 'NAME': 'LAYER'}"};
+
+std::string ChannelSyntax::map_example(const std::string& name) const {
+  std::string out = example;
+  if (const size_t at = out.find("NAME"); at != std::string::npos) out.replace(at, 4, name);
   return out;
 }
 

@@ -46,6 +46,12 @@ struct TermSpec {
   std::string times;                  // a layer to multiply by (empty: none)
   bool optional = false;              // left out when the file lacks it (the others still make the channel)
 };
+// A layer a conversion reads besides its terms: the recipe applies only
+// when the file has it.
+struct SourceSpec {
+  std::string layer;
+  uint32_t components = 1;
+};
 // One way to make a channel: the sum of its terms, then a conversion.
 struct RecipeSpec {
   std::vector<TermSpec> terms;
@@ -54,7 +60,15 @@ struct RecipeSpec {
   // of the path, which Preset::rough_guides replaces where the surface is not
   // a mirror.
   bool past_specular = false;
+  std::vector<SourceSpec> sources;
 };
+
+// True for the conversions the client computes with the frame's camera.
+bool needs_camera(Convert convert);
+// A derived recipe: made with the camera or a mirror guide (past_specular).
+// Only a channel the pipeline requires is made by one; a channel it merely
+// accepts is sent as the file has it, or not at all.
+bool is_derived(Convert convert, bool past_specular);
 // All ways to make a protocol channel, tried in order.
 struct ChannelSpec {
   protocol::ChannelId id = protocol::ChannelId::Radiance;
@@ -103,11 +117,22 @@ inline constexpr float kPastPrimaryDepth = 0.02f;
 Preset make_preset(const std::string& name, const std::vector<std::string>& exr_channels,
                    const std::string& view_layer = {});
 
+// How the caller's interface names its channel choices, for error messages:
+// `dn denoise`'s options or dn.read_frame's keyword.
+struct ChannelSyntax {
+  std::string list;  // the exact channel list: "--channels"
+  std::string map;   // one mapping: "--channel"
+  std::string example;  // mapping channel NAME by hand: "--channel NAME=LAYER"
+  std::string map_example(const std::string& name) const;  // `example` for channel `name`
+};
+extern const ChannelSyntax kCliChannelSyntax;     // --channels LIST, --channel NAME=SPEC
+extern const ChannelSyntax kPythonChannelSyntax;  // channels=[...], channels={NAME: SPEC}
+
 // Parses "--channel NAME=SPEC". SPEC: terms joined by '+'; a term is a layer
 // name (DiffCol, ViewLayer.DiffCol) or explicit channels separated by ','
 // (N.X,N.Y,N.Z). A trailing "@cycles" applies the Cycles conversion (depth,
-// motion). Throws UsageError-like ChannelMapError on syntax errors.
-ChannelSpec parse_channel_override(const std::string& assignment);
+// motion). Throws ChannelMapError on syntax errors, worded in `syntax`.
+ChannelSpec parse_channel_override(const std::string& assignment, const ChannelSyntax& syntax = kCliChannelSyntax);
 
 // A concrete recipe: per term, one EXR channel name per component, and per
 // term the channels of its factor (empty: none).
@@ -117,12 +142,14 @@ struct ResolvedChannel {
   std::vector<std::vector<std::string>> factors;  // one per term
   Convert convert = Convert::None;
   bool past_specular = false;  // from a RecipeSpec with past_specular
+  std::vector<std::vector<std::string>> sources;  // the RecipeSpec's sources, one EXR channel per component
   std::string describe() const;  // "ViewLayer.DiffDir.{R,G,B} + ViewLayer.DiffInd.{R,G,B}"
 };
 
-// First alternative whose channels all exist in `exr_channels`.
+// First alternative whose channels and sources all exist in `exr_channels`;
+// with `plain_only`, derived alternatives (is_derived) are skipped.
 std::optional<ResolvedChannel> resolve(const ChannelSpec& spec, const std::vector<std::string>& exr_channels,
-                                       const std::string& layer_prefix);
+                                       const std::string& layer_prefix, bool plain_only = false);
 // The layers an alternative list tries, for error messages ("ViewLayer.DiffCol, DiffCol").
 std::string describe_tried(const ChannelSpec& spec, const std::string& layer_prefix);
 
@@ -133,11 +160,22 @@ std::string describe_tried(const ChannelSpec& spec, const std::string& layer_pre
 // required or overridden; the sample statistics (51-54) are taken as
 // optional channels only all four together. `only` (from --channels) replaces the automatic
 // choice. `pipeline` may be null (server did not list it): then `only` or the
-// overrides, else radiance/albedo/normal/depth/motion when present.
+// overrides, else radiance/albedo/normal/depth/motion when present. Only the
+// required, listed and overridden channels take derived recipes (is_derived);
+// the others take the file's plain layers. Errors are worded in `syntax`.
 std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vector<ChannelSpec>& overrides,
                                            const protocol::PipelineInfo* pipeline,
                                            const std::optional<std::vector<protocol::ChannelId>>& only,
-                                           const std::vector<std::string>& exr_channels, const std::string& file);
+                                           const std::vector<std::string>& exr_channels, const std::string& file,
+                                           const ChannelSyntax& syntax = kCliChannelSyntax);
+
+// True when the server's passes use the frame's camera: a pipeline that
+// requires specular_f0 computes F_beta from the view direction; the others
+// run with identity matrices.
+bool pipeline_uses_camera(const protocol::PipelineInfo* pipeline);
+// True when a run needs each frame's camera: the pipeline uses it, or a
+// planned channel is converted with it.
+bool plan_needs_camera(const protocol::PipelineInfo* pipeline, const std::vector<ResolvedChannel>& plan);
 
 // Preset::rough_guides resolved for a plan: for each planned channel taken
 // past_specular, the recipe that replaces it on pixels that are not mirrors,
@@ -161,8 +199,9 @@ std::optional<RoughGuidePlan> plan_rough_guides(const Preset& preset, const std:
 // (docs/protocol.md §7.7; an F16 one is refused, INVALID_CHANNEL).
 protocol::Format wire_format(protocol::ChannelId id, bool fp16);
 
-// Parses "radiance,albedo,..." (protocol channel names).
-std::vector<protocol::ChannelId> parse_channel_list(const std::string& list);
+// Parses "radiance,albedo,..." (protocol channel names); errors worded in `syntax`.
+std::vector<protocol::ChannelId> parse_channel_list(const std::string& list,
+                                                   const ChannelSyntax& syntax = kCliChannelSyntax);
 
 // Cycles conversions, in place on interleaved data.
 // Depth: values >= 1e9 (Cycles writes 1e10 for background), non-finite or <= 0 become +inf.

@@ -21,14 +21,14 @@ std::vector<float>* plane_with(LoadedFrame& frame, const std::vector<ResolvedCha
   return nullptr;
 }
 
-// "L.Denoising Depth.Z" -> "L." (the view layer's prefix of the pass names).
-std::string layer_prefix(const std::vector<ResolvedChannel>& plan, Convert c) {
-  for (const auto& ch : plan)
-    if (ch.convert == c && !ch.terms.empty() && !ch.terms.front().empty()) {
-      const std::string& name = ch.terms.front().front();
-      const size_t at = name.find("Denoising Depth");
-      return at == std::string::npos ? std::string() : name.substr(0, at);
-    }
+// The raw Denoising Depth's EXR channel: the term of the length and depth
+// conversions, a source of the hit's (presets.cpp); empty when none is planned.
+std::string denoising_depth_channel(const std::vector<ResolvedChannel>& plan) {
+  for (const auto& ch : plan) {
+    if ((ch.convert == Convert::CyclesChainLength || ch.convert == Convert::CyclesChainDepth) && !ch.terms.empty())
+      return ch.terms.front().front();
+    if (ch.convert == Convert::CyclesChainHit && !ch.sources.empty()) return ch.sources.front().front();
+  }
   return {};
 }
 
@@ -64,9 +64,12 @@ void derive_reflection_features(LoadedFrame& frame, const std::vector<ResolvedCh
   const size_t n = size_t(frame.width) * size_t(frame.height);
 
   // The Denoising Depth (raw) from the file; the mirror's F0 from the plan.
-  const std::string prefix = layer_prefix(plan, length ? Convert::CyclesChainLength : Convert::CyclesChainDepth);
   std::vector<float> dd, f0;
-  if (length || vdepth || hit) dd = exr.read_channel(prefix + "Denoising Depth.Z");
+  if (length || vdepth || hit) {
+    const std::string dd_channel = denoising_depth_channel(plan);
+    if (dd_channel.empty()) throw std::logic_error("derive_reflection_features: no Denoising Depth in the plan");
+    dd = exr.read_channel(dd_channel);
+  }
   for (const auto& p : frame.planes)
     if (p.id == ChannelId::SpecularF0) f0 = p.data;
   // Per pixel: primary distance t1 and view depth z1 (cos = z1 / t1).

@@ -108,7 +108,7 @@ std::pair<FloatArray, FloatArray> same_shape(const py::handle& a, const py::hand
 // ---- dn.read_frame ------------------------------------------------------------------------------
 
 LoadedFrame read_frame(const std::string& path, const py::object& pipeline_obj, const std::string& preset_name,
-                       const std::optional<std::string>& layer, const std::optional<std::vector<std::string>>& only_names,
+                       const std::optional<std::string>& layer, const py::object& channels_obj,
                        bool fp16, const py::object& view, const py::object& projection, const py::object& jitter,
                        const std::optional<std::string>& camera_file, long long number) {
   const protocol::PipelineInfo* pipeline = nullptr;
@@ -126,6 +126,30 @@ LoadedFrame read_frame(const std::string& path, const py::object& pipeline_obj, 
     given_projection = to_mat4(projection, "projection");
   }
   if (!jitter.is_none()) given_jitter = to_vec2(jitter, "jitter");
+  // channels: a list of names (the preset's mapping for each) or a dict name -> SPEC (as `dn denoise
+  // --channel NAME=SPEC` takes it) or None (the preset's); either way exactly these channels.
+  std::optional<std::string> only_list;
+  std::vector<std::string> assignments;
+  if (!channels_obj.is_none()) {
+    only_list.emplace();
+    auto add_name = [&](const py::handle& name) {
+      if (!py::isinstance<py::str>(name)) throw py::type_error("channels: expected protocol channel names (str)");
+      *only_list += (only_list->empty() ? "" : ",") + std::string(py::str(name));
+    };
+    if (py::isinstance<py::dict>(channels_obj)) {
+      for (auto item : py::reinterpret_borrow<py::dict>(channels_obj)) {
+        add_name(item.first);
+        if (item.second.is_none()) continue;
+        if (!py::isinstance<py::str>(item.second))
+          throw py::type_error("channels: a mapping's value is a SPEC string (e.g. 'ViewLayer.DiffCol') or None");
+        assignments.push_back(std::string(py::str(item.first)) + "=" + std::string(py::str(item.second)));
+      }
+    } else if (py::isinstance<py::str>(channels_obj)) {
+      throw py::type_error("channels: expected a list of names or a dict name -> SPEC, not a str");
+    } else {
+      for (auto name : channels_obj) add_name(name);
+    }
+  }
 
   struct Native {
     cli::Preset preset;
@@ -141,12 +165,10 @@ LoadedFrame read_frame(const std::string& path, const py::object& pipeline_obj, 
     image::ExrReader exr(path);
     n.preset = cli::make_preset(preset_name, exr.channels(), layer.value_or(""));
     std::optional<std::vector<protocol::ChannelId>> only;
-    if (only_names) {
-      std::string list;
-      for (const auto& s : *only_names) list += (list.empty() ? "" : ",") + s;
-      only = cli::parse_channel_list(list);
-    }
-    n.plan = cli::plan_channels(n.preset, {}, pipeline, only, exr.channels(), path);
+    if (only_list) only = cli::parse_channel_list(*only_list, cli::kPythonChannelSyntax);
+    std::vector<cli::ChannelSpec> overrides;
+    for (const auto& a : assignments) overrides.push_back(cli::parse_channel_override(a, cli::kPythonChannelSyntax));
+    n.plan = cli::plan_channels(n.preset, overrides, pipeline, only, exr.channels(), path, cli::kPythonChannelSyntax);
     n.rough = cli::plan_rough_guides(n.preset, n.plan, exr.channels());
     cli::apply_statistics_kind(exr.string_attribute("dn.stat_samples"), path, n.plan, pipeline, n.parameters);
     n.frame = cli::load_frame(exr, n.plan, number, n.rough ? &*n.rough : nullptr);
@@ -159,9 +181,9 @@ LoadedFrame read_frame(const std::string& path, const py::object& pipeline_obj, 
       n.frame.camera.prev_jitter.reset();
     }
     if (given_jitter) n.frame.camera.jitter = given_jitter;
-    // A pipeline that does not use the camera gets identity when none is found, as with `dn denoise`.
+    // As with `dn denoise`: a camera is looked for only when the pipeline or a planned channel uses it.
     cli::FrameCameras cameras(camera_file.value_or(""), n.preset, exr.channels(),
-                              pipeline ? cli::pipeline_needs_camera(pipeline) : false);
+                              cli::plan_needs_camera(pipeline, n.plan));
     const cli::FrameCameras::Source source = cameras.apply(exr, number, n.frame.camera);
     n.source = given_view ? "given" : cli::to_string(source);
     if (auto rec = cameras.record(number)) n.residual = rec->rms_px;
@@ -266,7 +288,8 @@ void bind_image_io(py::module_& m) {
         py::arg("jitter") = py::none(), py::arg("camera_file") = py::none(), py::arg("number") = 0,
         "Reads one frame of a renderer's EXR as `dn denoise` does: preset 'cycles' (Blender multilayer EXR), "
         "'dnrender' or 'auto'; every channel `pipeline` (a dn.PipelineInfo) requires, and the optional ones the "
-        "file has (channels: exactly these names); Cycles' depth, vector and Denoising Data conversions. The camera: "
+        "file has (channels: exactly these names, a list, or a dict name -> SPEC of `dn denoise --channel`, or None "
+        "for the preset's); Cycles' depth, vector and Denoising Data conversions. The camera: "
         "view and projection if given, else camera_file (export_camera.py's format, line `frame <number>`), else "
         "the EXR header, else recovered from the Position pass. Raises dn.ChannelMapError naming the pass (and "
         "the Blender setting) when one is missing.");

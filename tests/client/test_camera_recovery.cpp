@@ -310,22 +310,32 @@ TEST(CameraRecovery, DnrenderFramesMatchTheirHeaders) {
 
 struct Log {
   std::vector<protocol::FrameInfo> infos;
+  int sessions_opened = 0;
 };
 
 void recording_server(test::Peer& peer, Log& log) {
   protocol::Welcome w = test::test_welcome();
   protocol::PipelineInfo fb;
   fb.name = "svgf-fb";
-  fb.required_channels = protocol::channel_bit(protocol::ChannelId::Radiance);
-  // It takes specular_f0, so it computes F_beta from the view direction and needs a camera.
-  fb.optional_channels = protocol::channel_bit(protocol::ChannelId::SpecularF0);
+  // It requires specular_f0, so it computes F_beta from the view direction and needs a camera.
+  fb.required_channels =
+      protocol::channel_bit(protocol::ChannelId::Radiance) | protocol::channel_bit(protocol::ChannelId::SpecularF0);
   w.pipelines.push_back(fb);
+  // Accepts every channel, uses none but radiance.
+  protocol::PipelineInfo passthrough;
+  passthrough.name = "passthrough";
+  passthrough.required_channels = protocol::channel_bit(protocol::ChannelId::Radiance);
+  for (const auto& c : protocol::kChannels)
+    if (c.id != protocol::ChannelId::Radiance && c.id != protocol::ChannelId::Output)
+      passthrough.optional_channels |= protocol::channel_bit(c.id);
+  w.pipelines.push_back(passthrough);
   peer.handshake_with(w);
   for (;;) {
     auto m = peer.recv(10000);
     if (!m) return;
     const uint64_t id = m->header.request_id;
     if (auto* o = std::get_if<protocol::OpenSession>(&m->message)) {
+      ++log.sessions_opened;
       protocol::Session s;
       s.session_id = 5;
       s.width = o->width;
@@ -367,14 +377,15 @@ class DenoiseCamera : public ::testing::Test {
       std::vector<image::ExrChannelOut> ch;
       for (int k = 0; k < 3; ++k) {
         ch.push_back({L + "Combined." + "RGB"[k], rgb.data() + k, 3, image::ExrPixelType::Half});
+        ch.push_back({L + "SpecularF0." + "RGB"[k], rgb.data() + k, 3, image::ExrPixelType::Half});
         ch.push_back({L + "Position." + "XYZ"[k], pos.data() + k, 3, image::ExrPixelType::Float});
       }
       image::write_exr(cli::format_frame_path((dir / "f_%04d.exr").string(), frame), W, H, ch);
     }
   }
   void TearDown() override { fs::remove_all(dir); }
-  std::vector<std::string> args(const std::string& url) {
-    return {"--server", url, "--pipeline", "svgf-fb", "--input", (dir / "f_%04d.exr").string(),
+  std::vector<std::string> args(const std::string& url, const std::string& pipeline = "svgf-fb") {
+    return {"--server", url, "--pipeline", pipeline, "--input", (dir / "f_%04d.exr").string(),
             "--start", "1", "--end", "2", "--quiet"};
   }
   fs::path dir;
@@ -428,8 +439,12 @@ TEST_F(DenoiseCamera, NoCameraAtAllIsAnErrorForSvgfFb) {
   // Frames without a Position pass and without headers.
   for (int frame = 1; frame <= 2; ++frame) {
     std::vector<float> rgb(size_t(W * H * 3), 0.5f);
-    image::write_exr_rgb(cli::format_frame_path((dir / "f_%04d.exr").string(), frame), W, H, rgb.data(),
-                         image::ExrPixelType::Half);
+    std::vector<image::ExrChannelOut> ch;
+    for (int k = 0; k < 3; ++k) {
+      ch.push_back({std::string(1, "RGB"[k]), rgb.data() + k, 3, image::ExrPixelType::Half});
+      ch.push_back({std::string("specular_f0.") + "RGB"[k], rgb.data() + k, 3, image::ExrPixelType::Half});
+    }
+    image::write_exr(cli::format_frame_path((dir / "f_%04d.exr").string(), frame), W, H, ch);
   }
   Log log;
   test::FakeServer server([&](test::Peer& p) { recording_server(p, log); });
@@ -443,6 +458,45 @@ TEST_F(DenoiseCamera, NoCameraAtAllIsAnErrorForSvgfFb) {
     EXPECT_NE(m.find("--camera FILE"), std::string::npos) << m;
   }
   server.join();
+  EXPECT_EQ(log.sessions_opened, 0) << "the error comes before the session is opened";
+}
+
+TEST_F(DenoiseCamera, PassthroughNeedsNoCamera) {
+  // Frames without a Position pass and without headers, their specular_f0
+  // included: passthrough accepts it but does not use the camera.
+  for (int frame = 1; frame <= 2; ++frame) {
+    std::vector<float> rgb(size_t(W * H * 3), 0.5f);
+    std::vector<image::ExrChannelOut> ch;
+    for (int k = 0; k < 3; ++k) {
+      ch.push_back({std::string(1, "RGB"[k]), rgb.data() + k, 3, image::ExrPixelType::Half});
+      ch.push_back({std::string("specular_f0.") + "RGB"[k], rgb.data() + k, 3, image::ExrPixelType::Half});
+    }
+    image::write_exr(cli::format_frame_path((dir / "f_%04d.exr").string(), frame), W, H, ch);
+  }
+  Log log;
+  test::FakeServer server([&](test::Peer& p) { recording_server(p, log); });
+  EXPECT_EQ(cli::run_denoise(args(server.url(), "passthrough")), 0);
+  server.join();
+  ASSERT_EQ(log.infos.size(), 2u);
+  protocol::Mat4 identity{};
+  identity[0] = identity[5] = identity[10] = identity[15] = 1.0f;
+  for (const auto& info : log.infos) {
+    EXPECT_EQ(info.view, identity);
+    EXPECT_EQ(info.projection, identity);
+  }
+}
+
+TEST_F(DenoiseCamera, PassthroughRecoversNoCamera) {
+  // The Position pass is there (SetUp's frames), but nothing uses a camera:
+  // none is recovered.
+  Log log;
+  test::FakeServer server([&](test::Peer& p) { recording_server(p, log); });
+  EXPECT_EQ(cli::run_denoise(args(server.url(), "passthrough")), 0);
+  server.join();
+  ASSERT_EQ(log.infos.size(), 2u);
+  protocol::Mat4 identity{};
+  identity[0] = identity[5] = identity[10] = identity[15] = 1.0f;
+  EXPECT_EQ(log.infos[1].view, identity);
 }
 
 }  // namespace

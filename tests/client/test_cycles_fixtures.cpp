@@ -256,6 +256,67 @@ TEST(CyclesFixtures, MissingPassNamesTheBlenderSetting) {
   }
 }
 
+// A pipeline that accepts every channel but uses only radiance (passthrough)
+// gets the file's plain layers: no camera, no mirror guides, no reflection
+// features, with or without the Denoising Data and Position passes.
+TEST(CyclesFixtures, AcceptedChannelsAreSentAsTheFileHasThem) {
+  dn::protocol::PipelineInfo passthrough;
+  passthrough.name = "passthrough";
+  passthrough.required_channels = dn::protocol::channel_bit(ChannelId::Radiance);
+  for (const auto& c : dn::protocol::kChannels)
+    if (c.id != ChannelId::Radiance && c.id != ChannelId::Output)
+      passthrough.optional_channels |= dn::protocol::channel_bit(c.id);
+  const dn::image::ExrReader exr(fixture("frame_0000.exr"));
+  auto without = [&](std::initializer_list<const char*> passes) {
+    std::vector<std::string> out;
+    for (const auto& c : exr.channels())
+      if (std::none_of(passes.begin(), passes.end(), [&](const char* p) { return c.find(p) != std::string::npos; }))
+        out.push_back(c);
+    return out;
+  };
+  for (const auto& channels : {exr.channels(), without({".Denoising "}), without({".Denoising ", ".Position."})}) {
+    const Preset preset = make_preset("cycles", channels);
+    const auto plan = plan_channels(preset, {}, &passthrough, std::nullopt, channels, "frame.exr");
+    EXPECT_FALSE(plan_needs_camera(&passthrough, plan));
+    for (const auto& c : plan) {
+      EXPECT_FALSE(is_derived(c.convert, c.past_specular)) << dn::protocol::find_channel(c.id)->name;
+      if (c.id == ChannelId::Depth) EXPECT_EQ(c.describe(), "ViewLayer.Depth.Z (Cycles depth)");
+    }
+    EXPECT_FALSE(plan_rough_guides(preset, plan, channels));
+  }
+}
+
+// A derived reflection feature is made only when the passes its conversion
+// reads exist: without the Denoising Data the hit (Position + direction x the
+// length the Denoising Depth gives) cannot be made, so a pipeline that
+// requires it is refused at planning, naming the pass.
+TEST(CyclesFixtures, ReflectionHitNeedsTheDenoisingDepth) {
+  dn::protocol::PipelineInfo p;
+  p.name = "needs-hit";
+  p.required_channels = dn::protocol::channel_bit(ChannelId::Radiance) |
+                        dn::protocol::channel_bit(ChannelId::ReflectionPosition);
+  const dn::image::ExrReader exr(fixture("frame_0000.exr"));
+  std::vector<std::string> channels;
+  for (const auto& c : exr.channels())
+    if (c.find(".Denoising Depth.") == std::string::npos) channels.push_back(c);
+  const Preset preset = make_preset("cycles", channels);
+  try {
+    plan_channels(preset, {}, &p, std::nullopt, channels, "frame.exr");
+    FAIL() << "the reflection position cannot be made";
+  } catch (const ChannelMapError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("requires channel 'reflection_position'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("with ViewLayer.Denoising Depth"), std::string::npos) << msg;
+  }
+  // With the pass, the hit's source is the Denoising Depth.
+  const Preset full = make_preset("cycles", exr.channels());
+  const auto plan = plan_channels(full, {}, &p, std::nullopt, exr.channels(), "frame.exr");
+  ASSERT_EQ(plan.back().id, ChannelId::ReflectionPosition);
+  ASSERT_EQ(plan.back().sources.size(), 1u);
+  EXPECT_EQ(plan.back().sources[0], std::vector<std::string>{"ViewLayer.Denoising Depth.Z"});
+  EXPECT_TRUE(plan_needs_camera(&p, plan));
+}
+
 }  // namespace
 
 namespace reflect_features {
