@@ -57,6 +57,8 @@ function(dn_doc_examples lang ext link inc_suffix)
       target_compile_options(${dn_name} PRIVATE -Wall -Wextra -Werror)
     endif()
     list(APPEND dn_targets ${dn_name})
+    # The sources too, for tests that build them another way (tests/capi: with pkg-config).
+    set_property(GLOBAL APPEND PROPERTY DN_DOC_EXAMPLE_SOURCES_${ext} ${dn_source})
     string(APPEND dn_doc_examples "{\"$<TARGET_FILE:${dn_name}>\", ${dn_line}},\n")
 
     math(EXPR dn_offset "${dn_offset} + ${dn_code_start} + ${dn_length} + 4")
