@@ -38,3 +38,23 @@ def test_python_example_runs(page, line, code, server, tmp_path):
     p = subprocess.run([sys.executable, str(script)], cwd=SOURCE_DIR, env=env, capture_output=True, text=True,
                        timeout=240)
     assert p.returncode == 0, "%s:%d exited %d\n%s%s" % (page, line, p.returncode, p.stdout, p.stderr)
+
+
+def test_readme_python_example_prints_what_it_did_with_the_python_the_readme_names(server, tmp_path):
+    """README.md names the interpreter its example runs with; it must be the one
+    the module was built for (the one running these tests), and the example
+    must say what it did."""
+    with open(os.path.join(SOURCE_DIR, "README.md"), encoding="utf-8") as f:
+        text = f.read()
+    named = re.search(r"^PYTHONPATH=build/python (\S+) example\.py", text, re.M)
+    assert named, "README.md names no interpreter for its Python example (PYTHONPATH=build/python PYTHON example.py)"
+    python = named.group(1)
+    assert os.path.realpath(python) == os.path.realpath(sys.executable), \
+        "README.md runs the example with %s, the module is built for %s" % (python, sys.executable)
+    (page, line, code), = [p.values for p in blocks() if p.values[0] == "README.md"]
+    script = tmp_path / "example.py"
+    script.write_text(code)
+    p = subprocess.run([python, str(script)], cwd=SOURCE_DIR, env=dict(os.environ, DN_SERVER=server.url),
+                       capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, "README.md:%d exited %d\n%s%s" % (line, p.returncode, p.stdout, p.stderr)
+    assert re.fullmatch(r"denoised a 64x36 frame with svgf: \(36, 64, 3\) float32, mean \d\.\d{3}\n", p.stdout), p.stdout
