@@ -117,11 +117,14 @@ Server::Server(ServerOptions options, gpu::Context& device, std::string device_n
         std::lock_guard lock(completions_mutex_);
         warm_up_ = report;
       }
-      log::info("warm_up", {{"sessions", report.configs},
-                            {"kernels", report.kernels},
-                            {"ms", report.ms},
-                            {"cache_bytes", report.cache_bytes},
-                            {"error", report.error}});
+      // A failure leaves some configuration a client can open cold: a warning.
+      log::write(report.error.empty() ? log::Level::Info : log::Level::Warn, "warm_up",
+                 {{"sessions", report.configs},
+                  {"offered", report.offered},
+                  {"kernels", report.kernels},
+                  {"ms", report.ms},
+                  {"cache_bytes", report.cache_bytes},
+                  {"error", report.error}});
     });
   }
   loop_.set_wake_handler([this] { drain_completions(); });

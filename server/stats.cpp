@@ -24,6 +24,7 @@ void ServerCounters::add_build(const BuiltPipeline& built) {
   builds.max_ms = std::max(builds.max_ms, built.build_ms);
   builds.last_ms = built.build_ms;
   builds.compile_ms += built.compile_ms;
+  builds.first_run_ms += built.first_run_ms;
 }
 
 protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live, gpu::Context& device) {
@@ -53,16 +54,22 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
   add("kernels_compiled", n(compiled.kernels));
   add("kernel_compile_ms", compiled.total_ms);
   add("kernel_compile_max_ms", compiled.slowest_ms);
+  const gpu::FirstRunStats first_runs = device.kernels().first_runs();
+  add("kernel_first_runs", n(first_runs.kernels));
+  add("kernel_unprepared_first_runs", n(first_runs.unprepared));  // compiled inside the shared queue on lavapipe
   add("pipeline_cache_loaded_bytes", n(device.pipeline_cache().loaded_bytes()));
   add("session_builds", n(counters.builds.count));
   add("session_build_mean_ms", counters.builds.count ? counters.builds.total_ms / n(counters.builds.count) : 0.0);
   add("session_build_max_ms", counters.builds.max_ms);
   add("session_build_last_ms", counters.builds.last_ms);
   add("session_build_compile_ms", counters.builds.compile_ms);
+  add("session_build_first_run_ms", counters.builds.first_run_ms);
   add("warm_up_done", live.warm_up ? 1.0 : 0.0);
   if (live.warm_up) {
     add("warm_up_ms", live.warm_up->ms);
     add("warm_up_kernels", n(live.warm_up->kernels));
+    add("warm_up_configs", n(live.warm_up->configs));
+    add("warm_up_configs_offered", n(live.warm_up->offered));
   }
 
   // Capacity: aggregate figures for every peer (a placer sees no session of anyone else).

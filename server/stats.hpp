@@ -41,6 +41,7 @@ struct ServerCounters {
     uint64_t count = 0;
     double total_ms = 0, max_ms = 0, last_ms = 0;
     double compile_ms = 0;  // of total_ms, compiling kernels
+    double first_run_ms = 0;  // of total_ms, frames on a private device (PipelineBuilder::run_off_queue)
   } builds;
 
   void add_frame_timings(const std::vector<protocol::PassTiming>& timings);

@@ -122,10 +122,17 @@ void Kernel::record_push(VkCommandBuffer cmd, std::span<const uint8_t> bytes) co
 
 void Kernel::record_dispatch(VkCommandBuffer cmd, VkDescriptorSet set, const GridPush& grid) const {
   const auto g = groups(grid.size[0], grid.size[1]);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set, 0, nullptr);
   if (push_constant_bytes_ > 0) record_push(cmd, {reinterpret_cast<const uint8_t*>(&grid), sizeof grid});
   vkCmdDispatch(cmd, g[0], g[1], 1);
+}
+
+void Kernel::note_dispatch() const {
+  if (dispatched_.load(std::memory_order_relaxed) || dispatched_.exchange(true)) return;
+  if (!first_runs_) return;
+  ++first_runs_->kernels;
+  if (!prepared_.load()) ++first_runs_->unprepared;
 }
 
 void Kernel::destroy() noexcept {
@@ -139,7 +146,16 @@ void Kernel::destroy() noexcept {
 
 namespace {
 thread_local double compile_ms_this_thread = 0.0;
+thread_local KernelCache::Recording* recording = nullptr;
 }  // namespace
+
+std::shared_ptr<const Kernel> KernelCache::recorded(std::shared_ptr<const Kernel> kernel) {
+  if (recording) recording->kernels_.push_back(kernel);
+  return kernel;
+}
+
+KernelCache::Recording::Recording() : outer_(recording) { recording = this; }
+KernelCache::Recording::~Recording() { recording = outer_; }
 
 double KernelCache::compile_ms_of_this_thread() { return compile_ms_this_thread; }
 
@@ -156,11 +172,12 @@ std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
     else
       kernels_.emplace(key, promise.get_future().share());
   }
-  if (compiled_elsewhere.valid()) return compiled_elsewhere.get();  // waits if it is still compiling
+  if (compiled_elsewhere.valid()) return recorded(compiled_elsewhere.get());  // waits if it is still compiling
   const auto start = std::chrono::steady_clock::now();
-  std::shared_ptr<const Kernel> kernel;
+  std::shared_ptr<Kernel> kernel;
   try {
-    kernel = std::make_shared<const Kernel>(device_, desc, pipeline_cache_);
+    kernel = std::make_shared<Kernel>(device_, desc, pipeline_cache_);
+    kernel->first_runs_ = &first_runs_;
   } catch (...) {
     std::lock_guard lock(mutex_);
     kernels_.erase(key);  // the next caller tries again
@@ -176,7 +193,7 @@ std::shared_ptr<const Kernel> KernelCache::get(const KernelDesc& desc) {
     stats_.slowest_ms = std::max(stats_.slowest_ms, ms);
   }
   promise.set_value(kernel);
-  return kernel;
+  return recorded(kernel);
 }
 
 CompileStats KernelCache::stats() const {

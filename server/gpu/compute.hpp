@@ -15,6 +15,7 @@
 #include <vulkan/vulkan.h>
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <future>
 #include <map>
@@ -28,6 +29,7 @@
 namespace dn::gpu {
 
 class Context;
+struct FirstRunCounter;
 
 struct SpecConstant {
   uint32_t id = 0;
@@ -86,7 +88,18 @@ class Kernel {
   VkFormat texel_format(uint32_t i) const { return i < texel_formats_.size() ? texel_formats_[i] : VK_FORMAT_UNDEFINED; }
   VkDescriptorSetLayout set_layout() const { return set_layout_; }
   VkPipelineLayout layout() const { return layout_; }
-  VkPipeline pipeline() const { return pipeline_; }
+  // For recording a dispatch (its only use): the first call counts the
+  // kernel's first run on this device (KernelCache::first_runs).
+  VkPipeline pipeline() const {
+    note_dispatch();
+    return pipeline_;
+  }
+  // Whether a dispatch of this kernel has been recorded on this device.
+  bool dispatched() const { return dispatched_.load(); }
+  // Prepared: run once off the frame path (the warm-up, or a run on a private
+  // device whose machine code reaches this one through Mesa's shader cache).
+  bool prepared() const { return prepared_.load(); }
+  void mark_prepared() const { prepared_.store(true); }
   // Workgroup shape (x, y); (0, 0) for kernels whose constant 0 the caller set.
   std::array<uint32_t, 2> local_size() const { return {local_size_x_, local_size_y_}; }
   uint32_t push_constant_bytes() const { return push_constant_bytes_; }
@@ -101,7 +114,9 @@ class Kernel {
   void record_dispatch(VkCommandBuffer cmd, VkDescriptorSet set, const GridPush& grid) const;
 
  private:
+  friend class KernelCache;
   void destroy() noexcept;
+  void note_dispatch() const;
   VkDevice device_;
   std::string name_;
   uint32_t storage_buffers_;
@@ -112,6 +127,22 @@ class Kernel {
   VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipeline_ = VK_NULL_HANDLE;
+  mutable std::atomic<bool> dispatched_{false};
+  mutable std::atomic<bool> prepared_{false};
+  FirstRunCounter* first_runs_ = nullptr;  // the cache's, set when it hands the kernel out
+};
+
+// First runs on one device. Lavapipe JIT-compiles a kernel's machine code at
+// its first dispatch, inside the one queue every session shares, so a first
+// run that was not prepared stalls every other session's frames meanwhile.
+struct FirstRunStats {
+  uint64_t kernels = 0;     // kernels dispatched at least once
+  uint64_t unprepared = 0;  // of which the first dispatch came before any preparing run
+};
+
+struct FirstRunCounter {
+  std::atomic<uint64_t> kernels{0};
+  std::atomic<uint64_t> unprepared{0};
 };
 
 // What compiling has cost so far (for STATS and the benchmarks).
@@ -131,10 +162,28 @@ class KernelCache {
   std::shared_ptr<const Kernel> get(const KernelDesc& desc);
   size_t size() const;
   CompileStats stats() const;
+  FirstRunStats first_runs() const { return {first_runs_.kernels.load(), first_runs_.unprepared.load()}; }
   // Milliseconds the calling thread has spent compiling (in any cache).
   static double compile_ms_of_this_thread();
 
+  // While one lives, every kernel the calling thread gets (from any cache,
+  // compiled or found) is listed: the kernels a pipeline being built uses.
+  class Recording {
+   public:
+    Recording();
+    ~Recording();
+    Recording(const Recording&) = delete;
+    Recording& operator=(const Recording&) = delete;
+    const std::vector<std::shared_ptr<const Kernel>>& kernels() const { return kernels_; }
+
+   private:
+    friend class KernelCache;
+    std::vector<std::shared_ptr<const Kernel>> kernels_;
+    Recording* outer_;
+  };
+
  private:
+  static std::shared_ptr<const Kernel> recorded(std::shared_ptr<const Kernel> kernel);
   using Key = std::tuple<const uint32_t*, size_t, uint32_t, std::vector<SpecConstant>, uint32_t, uint32_t, uint32_t,
                          std::vector<VkFormat>>;
   VkDevice device_;
@@ -142,6 +191,7 @@ class KernelCache {
   mutable std::mutex mutex_;
   std::map<Key, std::shared_future<std::shared_ptr<const Kernel>>> kernels_;
   CompileStats stats_;
+  FirstRunCounter first_runs_;
 };
 
 // Descriptor sets of one pipeline instance: a pool sized for `sets` sets of

@@ -104,7 +104,7 @@ std::vector<DeviceInfo> Context::list_devices() {
 }
 
 Context::Context(const ContextOptions& options)
-    : validation_(std::make_unique<ValidationState>()), force_staging_(options.force_staging) {
+    : options_(options), validation_(std::make_unique<ValidationState>()), force_staging_(options.force_staging) {
   validation_->print = options.print_validation_messages;
   bool validation = options.validation || env_validation();
   if (validation && !validation_layer_available()) {

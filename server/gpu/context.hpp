@@ -61,6 +61,8 @@ class Context {
   static bool validation_layer_available();
 
   const std::string& name() const { return info_.name; }
+  // What it was made with (a private context for the same device copies them).
+  const ContextOptions& options() const { return options_; }
   const DeviceInfo& info() const { return info_; }
   const DeviceLimits& limits() const { return limits_; }
 
@@ -117,6 +119,7 @@ class Context {
   void create_instance(bool validation, bool sync_validation);
   void create_device();
 
+  ContextOptions options_;
   std::unique_ptr<ValidationState> validation_;
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;

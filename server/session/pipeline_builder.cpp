@@ -1,9 +1,11 @@
 #include "server/session/pipeline_builder.hpp"
 
+#include <strings.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <variant>
 
@@ -39,11 +41,53 @@ void run_one_frame(pipelines::Pipeline& pipeline, const pipelines::SessionConfig
   pipeline.process(frame, false, output, timings);
 }
 
+// Whether a frame on a private device keeps kernel compiles out of the shared
+// queue: lavapipe JIT-compiles at a kernel's first dispatch, on the device
+// that dispatches it, and only Mesa's shader cache carries the machine code
+// to another device. A GPU driver compiles when the pipeline is created.
+bool can_prepare_off_queue(const gpu::Context& context) {
+  if (context.info().type != "cpu") return false;
+  for (const char* name : {"MESA_SHADER_CACHE_DISABLE", "MESA_GLSL_CACHE_DISABLE"}) {
+    const char* v = std::getenv(name);  // Mesa's env_var_as_boolean
+    if (v && (!std::strcmp(v, "1") || !strcasecmp(v, "true") || !strcasecmp(v, "yes") || !strcasecmp(v, "y")))
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+bool PipelineBuilder::needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels) {
+  for (const auto& k : kernels)
+    if (!k->dispatched() && !k->prepared()) return true;
+  return false;
+}
+
+// One frame of zeros through a copy of the session's pipeline (same size,
+// so lavapipe picks the same variants) on a device of its own, whose queue
+// runs beside the shared one. Destroying that device waits for Mesa's shader
+// cache writes, so the session's first real frame loads the machine code.
+double PipelineBuilder::run_off_queue(const pipelines::PreparedPipeline& prepared,
+                                      const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels) {
+  const auto start = Clock::now();
+  {
+    gpu::ContextOptions options = context_.options();
+    options.pipeline_cache_dir.clear();
+    gpu::Context private_device(options);
+    const gpu::KernelCache::Recording its_own;  // keeps its kernels out of the caller's recording; gone before the device
+    run_one_frame(*pipelines::create(private_device, prepared), prepared.config());
+  }
+  for (const auto& k : kernels) k->mark_prepared();
+  return ms_since(start);
+}
 
 PipelineBuilder::PipelineBuilder(gpu::Context& context, std::function<void(BuiltPipeline&&)> on_built,
                                  PipelineFactory factory)
-    : context_(context), on_built_(std::move(on_built)), factory_(std::move(factory)), thread_([this] { loop(); }) {}
+    : context_(context),
+      on_built_(std::move(on_built)),
+      factory_(std::move(factory)),
+      off_queue_(!factory_ && can_prepare_off_queue(context)),
+      thread_([this] { loop(); }) {}
 
 PipelineBuilder::~PipelineBuilder() { stop(); }
 
@@ -91,13 +135,21 @@ void PipelineBuilder::submit(BuildRequest&& request) {
     BuiltPipeline out{std::move(request)};
     const auto start = Clock::now();
     const double compiled_before = gpu::KernelCache::compile_ms_of_this_thread();
+    gpu::KernelCache::Recording used;
     try {
       out.pipeline = factory_ ? factory_(out.request.prepared) : pipelines::create(context_, out.request.prepared);
     } catch (const std::exception& e) {
       out.error = e.what();
     }
-    out.build_ms = ms_since(start);
     out.compile_ms = gpu::KernelCache::compile_ms_of_this_thread() - compiled_before;
+    if (out.pipeline && off_queue_ && needs_first_run(used.kernels())) {
+      try {
+        out.first_run_ms = run_off_queue(out.request.prepared, used.kernels());
+      } catch (const std::exception& e) {  // the session still works: its first frame compiles in the shared queue
+        out.first_run_error = e.what();
+      }
+    }
+    out.build_ms = ms_since(start);
     on_built_(std::move(out));
   };
   {
@@ -114,7 +166,9 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
     WarmUpReport report;
     const auto start = Clock::now();
     const uint64_t kernels_before = context_.kernels().stats().kernels;
-    for (const auto& config : warm_up_configs()) {
+    const auto configs = warm_up_configs();
+    report.offered = static_cast<uint32_t>(configs.size());
+    for (const auto& config : configs) {
       {
         std::lock_guard lock(mutex_);
         if (stopping_) return;
@@ -123,7 +177,10 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
         const auto prepared = pipelines::prepare(config);
         if (auto* err = std::get_if<pipelines::ConfigError>(&prepared)) throw std::invalid_argument(err->message);
         // Built, run once and dropped: its kernels stay in the cache, compiled and dispatched.
-        run_one_frame(*pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared)), config);
+        gpu::KernelCache::Recording used;
+        auto pipeline = pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared));
+        for (const auto& k : used.kernels()) k->mark_prepared();
+        run_one_frame(*pipeline, config);
         ++report.configs;
       } catch (const std::exception& e) {
         if (report.error.empty()) report.error = config.pipeline + ": " + e.what();
@@ -140,24 +197,57 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
   });
 }
 
+namespace {
+
+using protocol::ChannelId;
+
+uint64_t bits(std::initializer_list<ChannelId> ids) {
+  uint64_t mask = 0;
+  for (ChannelId id : ids) mask |= protocol::channel_bit(id);
+  return mask;
+}
+
+// The signal channels of each input form a pipeline accepts: radiance, or the
+// split pair with each signal in radiance or lighting form (specular_lighting
+// comes with specular_albedo); with a sample mask and without, where offered.
+std::vector<uint64_t> input_forms(const pipelines::PipelineDescription& p) {
+  const uint64_t accepted = p.required_channels | p.optional_channels;
+  const uint64_t radiance = bits({ChannelId::Radiance});
+  std::vector<uint64_t> forms;
+  if (accepted & radiance) forms.push_back(radiance);
+  if (p.required_channels & radiance) return forms;  // its only form (passthrough passes the rest through)
+  for (uint64_t diffuse : {bits({ChannelId::Diffuse}), bits({ChannelId::DiffuseLighting})})
+    for (uint64_t specular : {bits({ChannelId::Specular}), bits({ChannelId::SpecularLighting, ChannelId::SpecularAlbedo})})
+      if (((diffuse | specular) & ~accepted) == 0) forms.push_back(diffuse | specular);
+  const uint64_t mask = bits({ChannelId::SampleCount});
+  if (accepted & mask) {
+    const size_t n = forms.size();
+    for (size_t i = 0; i < n; ++i) forms.push_back(forms[i] | mask);
+  }
+  return forms;
+}
+
+}  // namespace
+
 std::vector<pipelines::SessionConfig> PipelineBuilder::warm_up_configs() {
-  using protocol::ChannelId;
+  const uint64_t signals = bits({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::DiffuseLighting,
+                                 ChannelId::Specular, ChannelId::SpecularLighting, ChannelId::SpecularAlbedo});
   std::vector<pipelines::SessionConfig> out;
+  // fp32 first: the common case is warm soonest.
   for (const protocol::Format format : {protocol::Format::F32, protocol::Format::F16}) {
     for (const auto& p : pipelines::available_pipelines()) {
-      pipelines::SessionConfig config;
-      config.width = 64;  // kernels do not depend on the resolution
-      config.height = 64;
-      config.pipeline = p.name;
-      config.output_format = format;
-      uint64_t mask = p.required_channels;
-      // Pipelines that take radiance or a split form: the radiance form, unless the split one is required.
-      const uint64_t radiance = protocol::channel_bit(ChannelId::Radiance);
-      const uint64_t split = protocol::channel_bit(ChannelId::Diffuse) | protocol::channel_bit(ChannelId::Specular);
-      if ((p.optional_channels & radiance) && !(mask & split)) mask |= radiance;
-      for (const auto& c : protocol::kChannels)
-        if (mask & protocol::channel_bit(c.id)) config.channels.push_back({c.id, format});
-      out.push_back(std::move(config));
+      for (const uint64_t form : input_forms(p)) {
+        pipelines::SessionConfig config;
+        config.width = kWarmUpWidth;
+        config.height = kWarmUpHeight;
+        config.pipeline = p.name;
+        config.output_format = format;
+        const uint64_t mask = (p.required_channels & ~signals) | form;
+        for (const auto& c : protocol::kChannels)
+          if (mask & protocol::channel_bit(c.id))  // sample statistics are fp32 only (their sums overflow fp16)
+            config.channels.push_back({c.id, protocol::is_sample_statistic(c.id) ? protocol::Format::F32 : format});
+        out.push_back(std::move(config));
+      }
     }
   }
   return out;

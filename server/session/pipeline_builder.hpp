@@ -5,10 +5,17 @@
 // must only hand them to the event loop.
 //
 // At start it can warm up, on a thread of its own so requests never queue
-// behind it: build each default pipeline once (fp32 and fp16 planes, default
-// parameters) so the first real session finds its kernels compiled, then save
-// the on-disk pipeline cache. A request needing a kernel the warm-up is
-// compiling waits for that kernel only (gpu::KernelCache).
+// behind it: build every offered pipeline in every input form (fp32 and fp16
+// planes, default parameters) and run it once, so the first real session
+// finds its kernels compiled, then save the on-disk pipeline cache. A request
+// needing a kernel the warm-up is compiling waits for that kernel only
+// (gpu::KernelCache).
+//
+// A build whose kernels have never run on the device (a form or parameter the
+// warm-up did not cover) runs one frame of zeros through a copy of the
+// pipeline on a private device before the session opens: on lavapipe that
+// compiles the machine code beside the shared queue instead of inside it, in
+// every other session's way (run_off_queue).
 #pragma once
 
 #include <condition_variable>
@@ -24,6 +31,7 @@
 
 namespace dn::gpu {
 class Context;
+class Kernel;
 }
 
 namespace dn::server {
@@ -41,10 +49,13 @@ struct BuiltPipeline {
   std::string error;                              // why, when it failed
   double build_ms = 0.0;                          // compile + allocate, wall clock
   double compile_ms = 0.0;                        // of which compiling kernels
+  double first_run_ms = 0.0;                      // of which the frame on a private device (0: none needed)
+  std::string first_run_error;                    // why that frame failed (the session still opens)
 };
 
 struct WarmUpReport {
-  uint32_t configs = 0;         // sessions built and dropped
+  uint32_t offered = 0;         // configurations warm_up_configs() lists
+  uint32_t configs = 0;         // of which built, run and dropped
   uint64_t kernels = 0;         // kernels compiled
   double ms = 0.0;              // wall clock of the whole warm-up
   uint64_t cache_bytes = 0;     // pipeline cache written to disk (0: none)
@@ -68,17 +79,29 @@ class PipelineBuilder {
   void stop();
 
   // The sessions the warm-up builds: every offered pipeline with its default
-  // parameters and its least channel set, all planes fp32, then all fp16
-  // (a configuration a pipeline refuses is reported in WarmUpReport::error).
+  // parameters, its required channels and each input form it accepts
+  // (radiance; diffuse or diffuse_lighting with specular or
+  // specular_lighting; each also with sample_count where offered), all planes
+  // fp32, then all fp16 (statistics stay fp32). A configuration a pipeline
+  // refuses is reported in WarmUpReport::error.
   static std::vector<pipelines::SessionConfig> warm_up_configs();
+  // Not a power of two in either axis: llvmpipe specialises a texel read on
+  // whether the buffer's size is one, and real frames' sizes are not.
+  static constexpr uint32_t kWarmUpWidth = 48, kWarmUpHeight = 36;
+
+  // Whether any of these kernels has never been dispatched on the device nor prepared.
+  static bool needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels);
 
  private:
   void loop();
   void hold_for_test();
+  double run_off_queue(const pipelines::PreparedPipeline& prepared,
+                       const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels);
 
   gpu::Context& context_;
   std::function<void(BuiltPipeline&&)> on_built_;
   PipelineFactory factory_;
+  const bool off_queue_;  // whether run_off_queue helps on this device
   std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<std::function<void()>> jobs_;
