@@ -455,15 +455,18 @@ bool is_split(ChannelId id) {
 // The renderer settings that make the layers a spec tries ("; in Blender: ...").
 std::string settings_hint(const Preset& preset, const ChannelSpec& s) {
   std::vector<std::string> hints;
-  for (const auto& alt : s.alternatives)
-    for (const auto& t : alt.terms)
-      for (const std::string& layer : {t.layer, t.times})
-        for (const auto& [name, where] : preset.settings) {
-          const bool match = layer == name || (layer.size() > name.size() &&
-                                               layer.compare(layer.size() - name.size(), name.size(), name) == 0 &&
-                                               layer[layer.size() - name.size() - 1] == '.');
-          if (match && std::find(hints.begin(), hints.end(), where) == hints.end()) hints.push_back(where);
-        }
+  std::vector<std::string> layers;
+  for (const auto& alt : s.alternatives) {
+    for (const auto& t : alt.terms) layers.insert(layers.end(), {t.layer, t.times});
+    for (const auto& src : alt.sources) layers.push_back(src.layer);
+  }
+  for (const std::string& layer : layers)
+    for (const auto& [name, where] : preset.settings) {
+      const bool match = layer == name || (layer.size() > name.size() &&
+                                           layer.compare(layer.size() - name.size(), name.size(), name) == 0 &&
+                                           layer[layer.size() - name.size() - 1] == '.');
+      if (match && std::find(hints.begin(), hints.end(), where) == hints.end()) hints.push_back(where);
+    }
   if (hints.empty()) return {};
   std::string out = "; in Blender turn on ";
   for (size_t i = 0; i < hints.size(); ++i) out += (i ? (i + 1 == hints.size() ? " or " : ", ") : "") + hints[i];

@@ -307,6 +307,7 @@ TEST(CyclesFixtures, ReflectionHitNeedsTheDenoisingDepth) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find("requires channel 'reflection_position'"), std::string::npos) << msg;
     EXPECT_NE(msg.find("with ViewLayer.Denoising Depth"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("Passes > Data > Denoising Data"), std::string::npos) << msg;
   }
   // With the pass, the hit's source is the Denoising Depth.
   const Preset full = make_preset("cycles", exr.channels());
