@@ -7,7 +7,10 @@
 # every output with what it is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bench/speed_error.sh --scenes 1 --frames "${DN_FRAMES:-8}" --still 8 --size "${DN_SIZE:-256x144}" \
+# Only what the run below needs: the packages, and these targets (the
+# programs bench/speed_error.sh calls), not the tests.
+./scripts/setup.sh --targets "dnserver dn dnrender side_by_side region_metrics region_temporal"
+DN_SKIP_SETUP=1 bench/speed_error.sh --scenes 1 --frames "${DN_FRAMES:-8}" --still 8 --size "${DN_SIZE:-256x144}" \
   --ref-spp "${DN_REF_SPP:-64}" --out out
 cp out/results.md out/metrics.md
 
