@@ -1,7 +1,7 @@
 #version 450
 // passthrough: Radiance -> Output with format conversion only. No filtering
 // and no sanitizing (values are copied as they come; fp32 -> fp16 rounds to
-// nearest even, overflow becomes Inf).
+// nearest even and saturates a finite value at 65504, NaN and Inf stay).
 //
 // It walks the output word by word in a grid-stride loop, so neighbouring
 // invocations touch neighbouring words and same-format copies move whole
@@ -28,7 +28,7 @@ void main() {
     } else if (OUTPUT_HALF) {
       const uint e = 2u * w;
       const float hi = e + 1u < elements ? DN_LOAD(radiance, false, e + 1u) : 0.0;
-      result.data[w] = packHalf2x16(vec2(DN_LOAD(radiance, false, e), hi));
+      result.data[w] = dn_pack_half_saturated(vec2(DN_LOAD(radiance, false, e), hi));
     } else {
       result.data[w] = floatBitsToUint(DN_LOAD(radiance, true, w));
     }

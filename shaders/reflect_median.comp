@@ -37,7 +37,7 @@
 #include "svgf_guards.glsl"
 #include "reflect.glsl"
 
-vec3 emitted(uint p) { return HAS_EMISSION ? dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p)) : vec3(0.0); }
+vec3 emitted(uint p) { return HAS_EMISSION ? dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)) : vec3(0.0); }
 
 // One exchange of the network: a gets the component-wise min, b the max.
 #define DN_EXCHANGE(a, b) \

@@ -3,7 +3,7 @@
 // assigned to g) / (1 + their number), per colour channel, on the signal as
 // sent (before demodulation, as the paper mixes "unfiltered sample energy").
 // The samples that can be assigned to guide g lie in g's 3x3 pixels. Values
-// are sanitized first (NaN and Inf as 0, negatives as 0), as every signal is.
+// are sanitized first (NaN, Inf, negatives and values above the radiance bound as 0), as every signal is.
 // One invocation per pixel.
 //
 // Resources: passes/supersample_mix.pass (binding 0 FrameConstants).
@@ -17,9 +17,7 @@
 
 #include "supersample.glsl"
 
-vec3 sanitized(vec3 c) {
-  return vec3(dn_sanitize_radiance(c.x), dn_sanitize_radiance(c.y), dn_sanitize_radiance(c.z));
-}
+vec3 sanitized(vec3 c) { return dn_sanitize_radiance(c); }
 
 #define DN_MIX(j, buf)                                                                \
   if (SAMPLES >= j && dn_sample_code(word, j) == want) {                              \

@@ -23,7 +23,7 @@ vec3 remodulate(uint p) {
   vec3 c = illum_at(p).rgb * dn_guarded_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
   if (HAS_SPECULAR)
     c += specular_at(p).rgb * (SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0));
-  if (HAS_EMISSION) c += dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p));
+  if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;
 }
 

@@ -19,18 +19,28 @@
 #define DN_LOAD3(buf, is_half, pixel) \
   vec3(DN_LOAD(buf, is_half, 3u * (pixel)), DN_LOAD(buf, is_half, 3u * (pixel) + 1u), DN_LOAD(buf, is_half, 3u * (pixel) + 2u))
 
+// fp32 -> fp16 output: round to nearest even (packHalf2x16 on the devices
+// we test), but a finite value beyond the largest finite half (65504)
+// saturates to it instead of becoming Inf. NaN and Inf stay as they are
+// (only passthrough, which does not sanitize, can hold them).
+const float DN_HALF_MAX = 65504.0;
+float dn_saturate_half(float x) {
+  return (floatBitsToUint(x) & 0x7f800000u) != 0x7f800000u ? clamp(x, -DN_HALF_MAX, DN_HALF_MAX) : x;
+}
+uint dn_pack_half_saturated(vec2 v) { return packHalf2x16(vec2(dn_saturate_half(v.x), dn_saturate_half(v.y))); }
+
 // Stores the RGB values of pixels 2*pair and 2*pair+1. An fp16 RGB pair is
 // exactly three 32-bit words, so no two invocations ever write the same word.
 // When has_b is false (odd pixel count, last pair) only pixel a is written; in
 // fp16 its last word's high half is padding (buffers are rounded up to 4 bytes).
-// fp32 -> fp16 uses packHalf2x16 (round to nearest even on the devices we test).
+// fp32 -> fp16 saturates (dn_pack_half_saturated).
 #define DN_STORE_RGB_PAIR(buf, is_half, pair, a, b, has_b)                 \
   {                                                                        \
     if (is_half) {                                                         \
       uint dn_w = 3u * (pair);                                             \
-      buf.data[dn_w] = packHalf2x16((a).xy);                               \
-      buf.data[dn_w + 1u] = packHalf2x16(vec2((a).z, (has_b) ? (b).x : 0.0)); \
-      if (has_b) buf.data[dn_w + 2u] = packHalf2x16((b).yz);               \
+      buf.data[dn_w] = dn_pack_half_saturated((a).xy);                     \
+      buf.data[dn_w + 1u] = dn_pack_half_saturated(vec2((a).z, (has_b) ? (b).x : 0.0)); \
+      if (has_b) buf.data[dn_w + 2u] = dn_pack_half_saturated((b).yz);     \
     } else {                                                               \
       uint dn_e = 6u * (pair);                                             \
       buf.data[dn_e] = floatBitsToUint((a).x);                             \

@@ -1,7 +1,8 @@
 // Input sanitizing, applied where a pass first reads a plane so that no bad
 // value ever enters history or a product overflows (docs/pipelines.md,
 // "Sanitize rule", with the table of guide rules):
-//   radiance: NaN, +Inf, -Inf -> 0; negative -> 0 (max(x, 0)); per component
+//   radiance: NaN, +Inf, -Inf -> 0; negative -> 0 (max(x, 0)); above
+//             DN_MAX_RADIANCE -> 0 (a bad sample, like +Inf); per component
 //   normal:   any non-finite component, or |n|^2 not finite (a huge normal)
 //             -> the zero vector ("no normal": rejects every tap)
 //   depth:    a pixel is foreground iff depth is finite and within
@@ -24,7 +25,11 @@ bool dn_is_finite(float x) { return (floatBitsToUint(x) & 0x7f800000u) != 0x7f80
 bool dn_is_finite(vec2 v) { return dn_is_finite(v.x) && dn_is_finite(v.y); }
 bool dn_is_finite(vec3 v) { return dn_is_finite(v.x) && dn_is_finite(v.y) && dn_is_finite(v.z); }
 
-float dn_sanitize_radiance(float x) { return dn_is_finite(x) ? max(x, 0.0) : 0.0; }
+// Finite radiance above this counts as a bad sample: it keeps squares of the
+// demodulated colour (<= 1e15 after the albedo guard: moments, variances,
+// Welch statistics) and sums of many of them far from fp32 overflow.
+const float DN_MAX_RADIANCE = 1e12;
+float dn_sanitize_radiance(float x) { return dn_is_finite(x) && x <= DN_MAX_RADIANCE ? max(x, 0.0) : 0.0; }
 vec3 dn_sanitize_radiance(vec3 c) {
   return vec3(dn_sanitize_radiance(c.x), dn_sanitize_radiance(c.y), dn_sanitize_radiance(c.z));
 }

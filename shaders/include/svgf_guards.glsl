@@ -1,12 +1,8 @@
-// svgf guards and constants (docs/pipelines.md, "svgf in detail"): radiance
-// guards, epsilons, the history normal packing. Needs sanitize.glsl.
+// svgf guards and constants (docs/pipelines.md, "svgf in detail"):
+// epsilons, the history normal packing. Needs sanitize.glsl.
 #ifndef DN_SVGF_GUARDS_GLSL
 #define DN_SVGF_GUARDS_GLSL
 
-// Finite radiance components above this count as bad samples (-> 0, like
-// +Inf): it keeps l^2 of the demodulated colour (<= 1e15 after the albedo
-// guard) far from fp32 overflow in the moments.
-const float DN_SVGF_MAX_RADIANCE = 1e12;
 // Added to the filtered variance under the square root of the luminance
 // edge-stopping function (Falcor adds 1e-10, which breaks scale equivariance
 // near k = 1e-3); it matters only for luminance std devs below about 1e-10.
@@ -29,12 +25,6 @@ const float DN_SVGF_NO_DATA = -1.0;
 // bright pixel's variance does not open a dark neighbour's luminance
 // edge-stopping to it (docs/pipelines.md, "svgf in detail").
 const float DN_SVGF_STEP_SIGMAS = 3.0;
-
-vec3 dn_svgf_sanitize(vec3 c) {
-  c = dn_sanitize_radiance(c);
-  return vec3(c.x > DN_SVGF_MAX_RADIANCE ? 0.0 : c.x, c.y > DN_SVGF_MAX_RADIANCE ? 0.0 : c.y,
-              c.z > DN_SVGF_MAX_RADIANCE ? 0.0 : c.z);
-}
 
 // Octahedral unit-normal packing into two snorm16 (history only).
 uint dn_svgf_pack_normal(vec3 n) {

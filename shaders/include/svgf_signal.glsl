@@ -10,8 +10,8 @@
 #define DN_SVGF_SIGNAL_GLSL
 
 vec3 dn_svgf_current(uint p) {
-  vec3 c = dn_svgf_sanitize(DN_LOAD3(signal, SIGNAL_HALF, p));
-  if (SUBTRACT_EMISSION) c = max(c - dn_svgf_sanitize(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
+  vec3 c = dn_sanitize_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
+  if (SUBTRACT_EMISSION) c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
   vec3 a = DEMODULATE ? dn_guarded_albedo(DN_LOAD3(modulator, MODULATOR_HALF, p)) : vec3(1.0);
   return c / a;
 }

@@ -18,11 +18,11 @@ std::vector<double> AccumulateReference::step(const ReferenceFrame& f) {
   for (int y = 0; y < h_; ++y) {
     for (int x = 0; x < w_; ++x) {
       const int i = y * w_ + x;
-      // Sanitize radiance: non-finite or negative components become 0.
+      // Sanitize radiance: non-finite, negative or above 1e12 components become 0.
       double c[3];
       for (int k = 0; k < 3; ++k) {
         const double v = f.radiance[3 * i + k];
-        c[k] = (std::isfinite(v) && v > 0.0) ? v : 0.0;
+        c[k] = (std::isfinite(v) && v > 0.0 && v <= 1e12f) ? v : 0.0;
       }
       const double z = f.depth[i];
       // Foreground within [FLT_MIN, 1e18] (docs/pipelines.md "Sanitize rule").

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "gpu_test_env.hpp"
+#include "hard_case_scene.hpp"
 #include "svgf_inputs.hpp"
 
 namespace dn {
@@ -34,12 +35,7 @@ namespace {
 
 using test::ChannelId;
 using test::Format;
-
-constexpr int kW = 32, kH = 16, kN = kW * kH;
-// Frames per case: clean up to kBadFrame, the bad one, then clean again.
-constexpr int kFrames = 5, kBadFrame = 1;
-// The patch that holds the bad value: 8x6 pixels inside the image.
-bool in_patch(int x, int y) { return x >= 10 && x < 18 && y >= 5 && y < 11; }
+using namespace hard_cases;
 
 struct BadValue {
   const char* name;
@@ -56,147 +52,6 @@ const BadValue kBadValues[] = {{"NaN", std::numeric_limits<float>::quiet_NaN()},
 const BadValue kBadHalfValues[] = {{"NaN", std::numeric_limits<float>::quiet_NaN()},
                                    {"PlusInf", std::numeric_limits<float>::infinity()},
                                    {"Max65504", 65504.0f}};
-
-// A pipeline as a session opens it: its declared channels and the ones
-// tested here (every declared channel that is not the filtered light).
-struct PipelineKind {
-  const char* label;     // test-name part
-  const char* pipeline;  // registry name
-  std::vector<ChannelId> declared;
-  std::vector<ChannelId> guides;
-  bool stateless = false;  // no history: the frames after the bad one equal the clean session's
-};
-
-const std::vector<PipelineKind>& kinds() {
-  using C = ChannelId;
-  static const std::vector<PipelineKind> k = {
-      {"passthrough", "passthrough", {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion},
-       {C::Albedo, C::Normal, C::Depth, C::Motion}, true},
-      {"accumulate", "accumulate", {C::Radiance, C::Normal, C::Depth, C::Motion}, {C::Normal, C::Depth, C::Motion}},
-      {"svgf", "svgf", {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::Roughness},
-       {C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::Roughness}},
-      {"svgf_split", "svgf",
-       {C::Diffuse, C::Specular, C::SpecularAlbedo, C::Albedo, C::Normal, C::Depth, C::Motion, C::Roughness},
-       {C::SpecularAlbedo}},
-      {"svgf_fb", "svgf-fb",
-       {C::Diffuse, C::Specular, C::Albedo, C::SpecularF0, C::Roughness, C::Normal, C::Depth, C::Motion, C::Emission},
-       {C::Albedo, C::SpecularF0, C::Roughness, C::Normal, C::Depth, C::Motion, C::Emission}},
-      {"reflect", "reflect",
-       {C::Diffuse, C::Specular, C::Emission, C::Albedo, C::SpecularF0, C::Roughness, C::Normal, C::Depth, C::Motion,
-        C::Position, C::ReflectionPosition, C::ReflectionAlbedo, C::ReflectionNormal, C::ReflectionDepth,
-        C::ReflectionDirection, C::ReflectionDistance, C::ReflectionFootprint},
-       {C::Emission, C::Albedo, C::SpecularF0, C::Roughness, C::Normal, C::Depth, C::Motion, C::Position,
-        C::ReflectionPosition, C::ReflectionAlbedo, C::ReflectionNormal, C::ReflectionDepth, C::ReflectionDirection,
-        C::ReflectionDistance, C::ReflectionFootprint}},
-      {"stat", "stat", {C::Radiance, C::Albedo, C::Normal, C::StatCount, C::StatMean, C::StatM2, C::StatM3},
-       {C::Albedo, C::Normal, C::StatCount, C::StatMean, C::StatM2, C::StatM3}, true},
-      {"stat_temporal", "stat-temporal",
-       {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::StatCount, C::StatMean, C::StatM2, C::StatM3},
-       {C::Albedo, C::Normal, C::Depth, C::Motion, C::StatCount, C::StatMean, C::StatM2, C::StatM3}},
-      {"svgf_samples", "svgf",
-       {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Sample1Radiance, C::Sample1Normal, C::Sample1Depth,
-        C::Sample1Offset},
-       {C::Sample1Normal, C::Sample1Depth, C::Sample1Offset}},
-      {"progressive", "progressive",
-       {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::SampleCount},
-       {C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::SampleCount}},
-  };
-  return k;
-}
-
-// A still camera at the origin looking down -z (fovy 60 degrees), column-major.
-constexpr float kTanHalf = 0.57735027f, kAspect = float(kW) / kH, kNear = 0.1f, kFar = 100.0f;
-std::array<float, 16> identity() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
-std::array<float, 16> projection() {
-  std::array<float, 16> m{};
-  m[0] = 1.0f / (kTanHalf * kAspect);
-  m[5] = 1.0f / kTanHalf;
-  m[10] = (kFar + kNear) / (kNear - kFar);
-  m[11] = -1.0f;
-  m[14] = 2.0f * kFar * kNear / (kNear - kFar);
-  return m;
-}
-
-// The clean still scene: two surfaces (a plane facing the camera, a tilted
-// one on the right), a background corner, smooth light, the three
-// reflection classes in columns, a few emitters; statistics of 8 samples
-// whose Box-Cox (lambda 1/2) mean gives the radiance back.
-std::vector<float> clean_plane(ChannelId id, int x, int y) {
-  // Light up to 7 (demodulated): 3.4e38 times it overflows where a guide multiplies.
-  const float light = 8.0f * (0.4f + 0.3f * std::sin(0.4f * x) * std::cos(0.5f * y) + (x > 20 ? 0.2f : 0.0f));
-  const bool background = x < 4 && y < 4;
-  const float depth = background ? 0.0f : (x > 20 ? 3.0f + 0.05f * (x - 20) : 2.0f);
-  const float nx = x > 20 ? 0.6f : 0.0f, nz = x > 20 ? 0.8f : 1.0f;
-  const float px = (2.0f * (x + 0.5f) / kW - 1.0f) * kTanHalf * kAspect * depth;
-  const float py = (1.0f - 2.0f * (y + 0.5f) / kH) * kTanHalf * depth;
-  const float albedo[3] = {0.3f + 0.02f * (x % 8), 0.5f, 0.7f - 0.03f * (y % 6)};
-  switch (id) {
-    case ChannelId::Radiance:
-    case ChannelId::Sample1Radiance:
-    case ChannelId::Diffuse:
-      return {albedo[0] * light, albedo[1] * light, albedo[2] * light};
-    case ChannelId::Specular: return {0.2f * light, 0.2f * light, 0.2f * light};
-    case ChannelId::Albedo: return {albedo[0], albedo[1], albedo[2]};
-    case ChannelId::SpecularAlbedo: return {0.4f, 0.4f, 0.4f};
-    case ChannelId::SpecularF0: return {0.04f, 0.04f, 0.04f};
-    case ChannelId::Roughness: return {x % 3 == 0 ? 0.02f : x % 3 == 1 ? 0.25f : 0.8f};
-    case ChannelId::Normal:
-    case ChannelId::Sample1Normal: return {nx, 0.0f, nz};
-    case ChannelId::Depth:
-    case ChannelId::Sample1Depth: return {depth};
-    case ChannelId::Sample1Offset: return {0.25f, -0.2f};
-    case ChannelId::Motion: return {0.0f, 0.0f};
-    case ChannelId::Emission: return (x + 3 * y) % 17 == 0 ? std::vector<float>{0.5f, 0.4f, 0.3f} : std::vector<float>(3, 0.0f);
-    case ChannelId::SampleCount: return {1.0f};
-    case ChannelId::Position: return {px, py, -depth};
-    case ChannelId::ReflectionPosition: return {px, py + 1.0f, -depth - 1.0f};
-    case ChannelId::ReflectionAlbedo: return {0.6f, 0.5f, 0.4f};
-    case ChannelId::ReflectionNormal: return {0.0f, -0.6f, 0.8f};
-    case ChannelId::ReflectionDepth: return {depth + 1.4f};
-    case ChannelId::ReflectionDirection: return {0.0f, 0.6f, -0.8f};
-    case ChannelId::ReflectionDistance: return {1.4f};
-    case ChannelId::ReflectionFootprint: return {0.05f};
-    case ChannelId::StatCount: return {8.0f};
-    case ChannelId::StatMean: {
-      std::vector<float> m;
-      for (float a : albedo) m.push_back(2.0f * (std::sqrt(a * light) - 1.0f));
-      return m;
-    }
-    case ChannelId::StatM2: return {0.02f, 0.02f, 0.02f};
-    case ChannelId::StatM3: return {0.001f, 0.001f, 0.001f};
-    default: throw std::logic_error("no clean plane for this channel");
-  }
-}
-
-// A plane's format in a session whose planes are `planes`: statistics are fp32 only.
-Format format_of(ChannelId id, Format planes) {
-  const bool statistics = id == ChannelId::StatCount || id == ChannelId::StatMean || id == ChannelId::StatM2 ||
-                          id == ChannelId::StatM3;
-  return statistics ? Format::F32 : planes;
-}
-
-// A frame of the still scene; with `bad`, channel `bad_id` holds `bad_value`
-// in every component inside the patch.
-test::HostFrame frame(const PipelineKind& kind, Format planes, bool reset, bool bad, ChannelId bad_id, float bad_value) {
-  test::HostFrame f;
-  f.info.flags = reset ? protocol::kFrameReset : 0u;
-  f.info.view = f.info.prev_view = identity();
-  f.info.projection = f.info.prev_projection = projection();
-  for (ChannelId id : kind.declared) {
-    std::vector<float> plane;
-    for (int y = 0; y < kH; ++y)
-      for (int x = 0; x < kW; ++x)
-        for (float v : clean_plane(id, x, y)) plane.push_back(bad && id == bad_id && in_patch(x, y) ? bad_value : v);
-    f.add(id, format_of(id, planes), plane);
-  }
-  return f;
-}
-
-std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind, Format planes) {
-  std::vector<protocol::ChannelDecl> channels;
-  for (ChannelId id : kind.declared) channels.push_back({id, format_of(id, planes)});
-  return pipelines::create(test::context(), test::make_config(kind.pipeline, kW, kH, channels));
-}
 
 struct Case {
   size_t kind;
@@ -232,8 +87,7 @@ class GuideHardCases : public test::GpuTest, public ::testing::WithParamInterfac
     if (!k.session) {
       k.session = open(kinds()[kind], planes);
       for (int t = 0; t < kFrames; ++t)
-        k.clean.push_back(
-            svgf_inputs::run(*k.session, frame(kinds()[kind], planes, t == 0, false, ChannelId::Radiance, 0.0f)));
+        k.clean.push_back(svgf_inputs::run(*k.session, frame(kinds()[kind], planes, t == 0)));
     }
     return k;
   }

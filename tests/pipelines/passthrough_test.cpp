@@ -1,7 +1,10 @@
 // passthrough: fp32 copies are bit-exact; fp16 <-> fp32 conversion follows
-// IEEE round-to-nearest-even (checked against the tests' own to_half).
+// IEEE round-to-nearest-even (checked against the tests' own to_half), an
+// fp16 output saturating at 65504.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
 #include <random>
 
 #include "frames.hpp"
@@ -62,22 +65,28 @@ TEST_F(PassthroughTest, Fp32NaNStaysNaN) {
   EXPECT_EQ(out[4], 1.0f);
 }
 
-TEST_F(PassthroughTest, Fp32ToFp16RoundsToNearestEven) {
+// Round to nearest even; a finite value beyond the largest finite half
+// saturates to +-65504 (docs/pipelines.md, "Output format conversion"),
+// NaN and Inf stay (passthrough does not sanitize).
+TEST_F(PassthroughTest, Fp32ToFp16RoundsToNearestEvenAndSaturates) {
   const uint32_t w = 41, h = 13;  // odd pixel count: the last half-word is padding
   auto values = random_values(w * h * 3, 2);
-  // Ties and near-ties at several magnitudes, overflow, subnormal halves, zeros.
+  // Ties and near-ties at several magnitudes, beyond the half range, subnormal halves, zeros, non-finite.
   const float special[] = {1.0f + 0x1p-11f, 1.0f + 3 * 0x1p-11f, 1.0f + 0x1p-11f + 0x1p-20f, 65504.0f, 65519.0f,
                            65520.0f, 1e6f, -1e6f, 0x1p-24f, 0x1p-25f, 0x1.8p-25f, 3 * 0x1p-26f, 0x1p-15f + 0x1p-25f,
-                           6.1e-5f, -0.0f, 0.0f, 1e-30f, 2049.0f, 2051.0f, -2051.0f};
+                           6.1e-5f, -0.0f, 0.0f, 1e-30f, 2049.0f, 2051.0f, -2051.0f, 3.4e38f,
+                           std::numeric_limits<float>::max(), -1e38f, 1e11f, INFINITY, -INFINITY};
   for (size_t i = 0; i < std::size(special); ++i) values[i] = special[i];
   const auto bytes = run(w, h, Format::F32, Format::F16, values);
   ASSERT_EQ(bytes.size(), size_t(w) * h * 3 * 2);
   for (size_t i = 0; i < values.size(); ++i) {
     uint16_t got;
     std::memcpy(&got, bytes.data() + 2 * i, 2);
-    ASSERT_EQ(got, test::to_half(values[i])) << "element " << i << " value " << values[i];
+    const float v = values[i];
+    const float saturated = std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : v;
+    ASSERT_EQ(got, test::to_half(saturated)) << "element " << i << " value " << v;
 #ifdef DN_HAVE_PROTOCOL_LIB
-    ASSERT_EQ(got, protocol::float_to_half(values[i])) << "element " << i << " value " << values[i];
+    ASSERT_EQ(got, protocol::float_to_half(saturated)) << "element " << i << " value " << v;
 #endif
   }
 }

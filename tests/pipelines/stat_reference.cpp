@@ -8,7 +8,8 @@ namespace dn::test {
 namespace {
 
 bool finite(float x) { return std::isfinite(x); }
-float sanitize(float x) { return finite(x) ? std::max(x, 0.0f) : 0.0f; }
+// Radiance: non-finite, negative or above 1e12 -> 0 (docs/pipelines.md "Sanitize rule").
+float sanitize(float x) { return finite(x) && x <= 1e12f ? std::max(x, 0.0f) : 0.0f; }
 // A normal with any non-finite component, or whose fp32 |n|^2 overflows, is
 // the zero vector (docs/pipelines.md "Sanitize rule").
 double normal_component(const std::vector<float>& n, int i, int c) {

@@ -37,7 +37,7 @@ StatAccumulator frame_statistics(const StatFrame& f, int q) {
     s.m2[c] = f.m2[3 * q + c];
     s.m3[c] = f.m3[3 * q + c];
     const float r = f.radiance[3 * q + c];
-    s.raw[c] = std::isfinite(r) ? std::max(r, 0.0f) : 0.0f;
+    s.raw[c] = std::isfinite(r) && r <= 1e12f ? std::max(r, 0.0f) : 0.0f;  // the radiance rule
   }
   return ok ? s : StatAccumulator{};
 }
