@@ -42,13 +42,25 @@ def canvas_rect(tools):
     return tools.evaluate("(r => [r.width, r.height])(document.getElementById('output').getBoundingClientRect())")
 
 
-def run_owner(streamer, url, key_file, work, tools, name):
-    """Starts an owner that writes the key file, streams FRAMES frames; returns (process, session id)."""
+def wait_in_log(log_path, text, preview, what):
+    deadline = time.monotonic() + TIMEOUT_S
+    while text not in open(log_path).read():
+        if preview.poll() is not None:
+            fail("dn preview exited %d before %s" % (preview.returncode, what))
+        if time.monotonic() > deadline:
+            fail("timed out waiting for " + what)
+        time.sleep(0.1)
+
+
+def run_owner(streamer, url, key_file, work, tools, preview, log_path, name):
+    """Starts an owner that writes the key file and, once dn preview shows its session, streams
+    FRAMES frames (a watcher sees the frames after it attaches); returns (process, session id)."""
     owner = subprocess.Popen([streamer, url, "svgf", str(FRAMES), str(WIDTH), str(HEIGHT),
                               os.path.join(work, name + ".pfm"), key_file],
                              stdin=subprocess.PIPE, stdout=subprocess.PIPE)
     out = Line(owner.stdout)
     session = out.until(r"^session (\d+) [0-9a-f]{32}$", what=name + "'s session").group(1)
+    wait_in_log(log_path, "dn: showing session " + session, preview, "dn preview to attach to " + name + "'s session")
     owner.stdin.write(b"go\n")
     owner.stdin.flush()
     out.until(r"^done %d$" % FRAMES, what=name + "'s frames")
@@ -96,17 +108,12 @@ def main():
             f.write("0123456789abcdef0123456789abcdef\nsession 1\n")
         os.chmod(key_file + ".tmp", 0o600)
         os.rename(key_file + ".tmp", key_file)
-        deadline = time.monotonic() + TIMEOUT_S
-        while "dn: session 1 named in %s cannot be watched" % key_file not in open(preview_log.name).read():
-            if preview.poll() is not None:
-                fail("dn preview exited %d on a key file naming a closed session" % preview.returncode)
-            if time.monotonic() > deadline:
-                fail("dn preview did not report the closed session the key file names")
-            time.sleep(0.1)
+        wait_in_log(preview_log.name, "dn: session 1 named in %s cannot be watched" % key_file, preview,
+                    "dn preview to report the closed session the key file names")
         if tools.evaluate("window.dnPreview.status") != "waiting":
             fail("the page stopped waiting after a closed session")
 
-        owner, first = run_owner(streamer, url, key_file, work, tools, "owner 1")
+        owner, first = run_owner(streamer, url, key_file, work, tools, preview, preview_log.name, "owner 1")
         children.append(owner)
 
         # Fit to window: both canvases side by side fill the width, aspect kept; 1:1: image pixels.
@@ -140,7 +147,7 @@ def main():
             fail("dn preview exited %d when the session ended" % preview.returncode)
 
         # The next session written to the key file appears on the same page.
-        owner2, second = run_owner(streamer, url, key_file, work, tools, "owner 2")
+        owner2, second = run_owner(streamer, url, key_file, work, tools, preview, preview_log.name, "owner 2")
         children.append(owner2)
         if second == first:
             fail("the second owner got the first session's id")
