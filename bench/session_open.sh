@@ -2,7 +2,10 @@
 # Session open latency, cold and warm, with the frame latency of a client
 # streaming meanwhile (bench/session_open_bench.cpp). Cold: Mesa's shader
 # cache off, no warm-up, no disk cache, so the first open compiles every
-# kernel. Warm: after the server's warm-up has finished.
+# kernel. Warm: after the server's warm-up has finished; then every pipeline
+# in every input form, fp32 and fp16, at 256x144: its first frame against its
+# steady state (bench/session_open_first_frames.cpp; fails above 3x or when a
+# kernel is compiled).
 #   bench/session_open.sh [BUILD_DIR] [PIPELINE] [WxH] [OPENS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,3 +41,5 @@ wait_for ping
 wait_for warm_up_done
 "$build/bench/session_open_bench" --server "$url" --pipeline "$pipeline" --size "$size" --opens "$opens"
 "$build/client/dn" stats --server "$url" | grep -E "warm_up|kernel|session_build" || true
+echo "== warm: each pipeline and input form's first frame against its steady state (256x144)"
+"$build/bench/session_open_first_frames" --server "$url" --size 256x144

@@ -82,20 +82,36 @@ std::string describe(const protocol::OpenSession& o) {
   return s;
 }
 
+// The next message that is not the server's keep-alive PING (answered with PONG).
+std::optional<Received> receive_reply(RawClient& c, double timeout_s) {
+  for (;;) {
+    auto r = c.receive(timeout_s);
+    if (!r) return r;
+    auto* ping = std::get_if<protocol::Ping>(&r->message);
+    if (!ping) return r;
+    c.send(protocol::Pong{ping->payload}, r->header.request_id);
+  }
+}
+
 // Opens the session, sends one frame and waits for its RESULT; fails the test on anything else.
 void open_and_run_one_frame(RawClient& c, const protocol::OpenSession& request, uint64_t request_id) {
-  protocol::Session session;
-  ASSERT_NO_THROW(session = c.open_session(request, request_id)) << describe(request);
+  // RawClient::open waits 20 s; a build with a run on the private device takes longer on a cold cache.
+  c.send(request, request_id);
+  auto reply = receive_reply(c, 600.0);
+  ASSERT_TRUE(reply) << describe(request);
+  auto* opened = std::get_if<protocol::Session>(&reply->message);
+  ASSERT_NE(opened, nullptr) << describe(request) << ": " << protocol::to_string(reply->header.type);
+  const protocol::Session session = *opened;
   auto f = make_frame(session.session_id, 0, request.width, request.height, request.channels, 0.5f);
   c.send(f.frame, request_id + 1);
   // Generous: a cold kernel compiles on the private device during the open,
   // but a loaded 2-core machine may still be slow.
-  auto r = c.receive(300.0);
+  auto r = receive_reply(c, 300.0);
   ASSERT_TRUE(r) << describe(request);
   ASSERT_TRUE(std::get_if<protocol::Result>(&r->message)) << describe(request) << ": "
                                                           << protocol::to_string(r->header.type);
   c.send(protocol::CloseSession{session.session_id}, request_id + 2);
-  auto closed = c.receive(60.0);
+  auto closed = receive_reply(c, 60.0);
   ASSERT_TRUE(closed) << describe(request);
   EXPECT_TRUE(std::get_if<protocol::SessionClosed>(&closed->message)) << protocol::to_string(closed->header.type);
 }
@@ -128,8 +144,8 @@ TEST(FirstFrame, AfterTheWarmUpNoInputFormCompilesAKernel) {
   uint64_t id = 10;
   for (Format format : {Format::F32, Format::F16})
     for (const Form& form : forms) {
-      // Another size than the warm-up's: kernels do not depend on it.
-      open_and_run_one_frame(c, session_of(form, format, 40, 24), id);
+      // The warm-up's size class (lavapipe compiles anew for frames below about 64x64).
+      open_and_run_one_frame(c, session_of(form, format, 256, 144), id);
       id += 10;
     }
   const auto after = stats(c);
@@ -160,14 +176,18 @@ TEST(FirstFrame, NewKernelsRunOffTheSharedQueueBeforeTheSessionOpens) {
   RawClient streamer(server.tcp_url());
   streamer.hello();
   const auto stream_request = passthrough_session(32, 16);
-  const uint64_t stream_id = streamer.open(stream_request);
+  streamer.send(stream_request, 1);
+  auto stream_reply = receive_reply(streamer, 600.0);  // its kernels, too, run first on a private device
+  ASSERT_TRUE(stream_reply);
+  ASSERT_TRUE(std::get_if<protocol::Session>(&stream_reply->message));
+  const uint64_t stream_id = std::get<protocol::Session>(stream_reply->message).session_id;
   std::atomic<bool> stop{false};
   std::atomic<int> streamed{0}, stream_failures{0};
   std::thread stream([&] {
     for (uint64_t i = 0; !stop; ++i) {
       auto f = make_frame(stream_id, i, 32, 16, stream_request.channels, 0.25f);
       streamer.send(f.frame, 100 + i);
-      auto r = streamer.receive(300.0);
+      auto r = receive_reply(streamer, 300.0);
       if (!r || !std::get_if<protocol::Result>(&r->message)) {
         ++stream_failures;
         return;
