@@ -8,6 +8,7 @@
 #include "server/cache_dir.hpp"
 #include "server/gpu/context.hpp"
 #include "server/gpu/devices.hpp"
+#include "server/idle_trim.hpp"
 #include "server/log.hpp"
 #include "server/options.hpp"
 #include "server/server.hpp"
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   dn::log::parse_level(options.log_level, level);
   dn::log::set_level(level);
   ::signal(SIGPIPE, SIG_IGN);
+  dn::server::configure_allocator();
   // Block SIGTERM/SIGINT before any thread exists (workers, the Vulkan driver's
   // own), so every thread inherits the mask and the event loop's signalfd alone
   // receives them.

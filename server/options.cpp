@@ -137,6 +137,10 @@ const std::vector<Flag>& flags() {
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.handshake_timeout_s) && o.handshake_timeout_s > 0; }},
       {"--idle-timeout", "SECONDS", "close a connection that sent nothing for this long, 0 = never (default 300)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.idle_timeout_s); }},
+      {"--idle-trim", "SECONDS",
+       "after this long with no frame, session or connection change, give back memory no session holds: free "
+       "transient scratch, kernels outside the warm-up set no session uses, malloc's free pages; 0 = never (default 5)",
+       [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.idle_trim_s); }},
       {"--heartbeat", "SECONDS", "PING a connection that sent nothing for this long, 0 = never (default 30)",
        [](ServerOptions& o, std::string_view v) { return parse_seconds(v, o.heartbeat_s); }},
       {"--message-timeout", "SECONDS",

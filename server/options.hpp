@@ -39,6 +39,7 @@ struct ServerOptions {
   double write_timeout_s = 60.0;         // queued output and nothing written for this long: close (0 = never)
   double dead_peer_s = 120.0;            // TCP keepalive and TCP_USER_TIMEOUT: a vanished peer is noticed in this time
   double shutdown_grace_s = 30.0;        // SIGTERM: time allowed to finish frames in flight
+  double idle_trim_s = 5.0;              // quiet this long: give back memory no session holds (0 = never)
   std::string log_level = "info";
   std::string advertise_url;             // SESSION.watch_url (1.8): where watchers reach this backend; empty: none
   std::string cache_dir;                 // on-disk pipeline cache; default: the user's cache dir (server/cache_dir.hpp)

@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "dn/protocol/codec.hpp"
+#include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/devices.hpp"
 #include "gpu/pipeline_cache.hpp"
@@ -54,7 +55,10 @@ double seconds_since(Clock::time_point t, Clock::time_point now) {
 }  // namespace
 
 Server::Server(ServerOptions options, gpu::Context& device, std::string device_name, PipelineFactory factory)
-    : options_(std::move(options)), device_(device), device_name_(std::move(device_name)) {
+    : options_(std::move(options)),
+      device_(device),
+      device_name_(std::move(device_name)),
+      idle_trim_(options_.idle_trim_s) {
   receive_budget_.limit = options_.receive_budget_bytes;
   const uint64_t heaps = gpu::describe_device(device_.physical_device(), 0).device_local_bytes;
   device_budget_bytes_ = options_.max_device_bytes && (options_.max_device_bytes < heaps || heaps == 0)
@@ -596,6 +600,31 @@ void Server::check_timers() {
     }
   }
   for (auto& [id, reason] : to_close) close_connection(id, reason);
+  trim_when_idle(now);
+}
+
+void Server::trim_when_idle(Clock::time_point now) {
+  bool warm_up_done = false;
+  {
+    std::lock_guard lock(completions_mutex_);
+    warm_up_done = warm_up_.has_value();
+  }
+  // The warm-up's kernels stay compiled for the server's lifetime; later ones only while used.
+  if (warm_up_done && !warm_up_kernels_kept_) {
+    device_.kernels().keep_current();
+    warm_up_kernels_kept_ = true;
+  }
+  const bool busy = sessions_being_built_ > 0 || sessions_.frames_in_flight() > 0 || (options_.warm_up && !warm_up_done);
+  const std::vector<uint64_t> activity{counters_.frames_processed, counters_.frames_failed, counters_.sessions_opened,
+                                       counters_.connections_accepted, sessions_.size(), connections_.size()};
+  if (!idle_trim_.due(activity, busy, now)) return;
+  const IdleTrimReport r = trim_idle_memory(device_);
+  log::info("idle_trim", {{"resident_before", r.resident_before},
+                          {"resident_after", r.resident_after},
+                          {"transient_bytes", r.transient_bytes},
+                          {"kernels", r.kernels},
+                          {"sessions", sessions_.size()},
+                          {"ms", r.ms}});
 }
 
 void Server::on_stats(net::Connection& c, const protocol::Header& h) {

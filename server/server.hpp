@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "server/idle_trim.hpp"
 #include "server/net/connection.hpp"
 #include "server/net/event_loop.hpp"
 #include "server/net/listener.hpp"
@@ -92,6 +93,8 @@ class Server {
   void on_pipeline_built(BuiltPipeline&& built);
   void save_pipeline_cache();
   void check_timers();
+  // --idle-trim: memory no session holds goes back once the server is quiet.
+  void trim_when_idle(std::chrono::steady_clock::time_point now);
   void begin_shutdown();
   bool shutdown_complete() const;
   net::Connection* find_connection(uint64_t id);
@@ -133,6 +136,8 @@ class Server {
   std::map<uint8_t, Bytes> welcome_by_minor_;  // encoded WELCOME (request id 0) per negotiated minor
   ServerCounters counters_;
   std::vector<pipelines::SharedResourceTiming> shared_resources_;
+  IdleTrimSchedule idle_trim_;
+  bool warm_up_kernels_kept_ = false;  // KernelCache::keep_current() ran after the warm-up
 };
 
 }  // namespace dn::server

@@ -201,6 +201,31 @@ CompileStats KernelCache::stats() const {
   return stats_;
 }
 
+void KernelCache::keep_current() {
+  std::lock_guard lock(mutex_);
+  for (const auto& [key, kernel] : kernels_)
+    if (kernel.wait_for(std::chrono::seconds(0)) == std::future_status::ready) kept_.insert(kernel.get().get());
+}
+
+size_t KernelCache::drop_unused() {
+  std::vector<std::shared_future<std::shared_ptr<const Kernel>>> doomed;  // destroyed after the lock is released
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = kernels_.begin(); it != kernels_.end();) {
+      // A compile that failed is never left here ready, so get() does not throw; the
+      // cache's own reference is the only one when no pipeline holds the kernel.
+      const bool ready = it->second.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+      if (ready && !kept_.contains(it->second.get().get()) && it->second.get().use_count() == 1) {
+        doomed.push_back(std::move(it->second));
+        it = kernels_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  return doomed.size();
+}
+
 size_t KernelCache::size() const {
   std::lock_guard lock(mutex_);
   return kernels_.size();

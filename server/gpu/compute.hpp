@@ -21,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <span>
 #include <string>
 #include <tuple>
@@ -161,6 +162,12 @@ class KernelCache {
   // kernel another thread is compiling waits for that one kernel only.
   std::shared_ptr<const Kernel> get(const KernelDesc& desc);
   size_t size() const;
+  // Bounds what compiled kernels keep while idle: keep_current() marks every
+  // kernel compiled so far (the warm-up's) as kept for the cache's lifetime;
+  // drop_unused() destroys the others that no pipeline holds now (a later
+  // session compiles them again) and returns how many it destroyed.
+  void keep_current();
+  size_t drop_unused();
   CompileStats stats() const;
   FirstRunStats first_runs() const { return {first_runs_.kernels.load(), first_runs_.unprepared.load()}; }
   // Milliseconds the calling thread has spent compiling (in any cache).
@@ -190,6 +197,7 @@ class KernelCache {
   VkPipelineCache pipeline_cache_;
   mutable std::mutex mutex_;
   std::map<Key, std::shared_future<std::shared_ptr<const Kernel>>> kernels_;
+  std::set<const Kernel*> kept_;
   CompileStats stats_;
   FirstRunCounter first_runs_;
 };
