@@ -1,7 +1,8 @@
 #version 450
-// passthrough: Radiance -> Output with format conversion only. No filtering
-// and no sanitizing (values are copied as they come; fp32 -> fp16 rounds to
-// nearest even and saturates a finite value at 65504, NaN and Inf stay).
+// passthrough: Radiance -> Output with format conversion only. No filtering;
+// finite values are copied as they come (fp32 -> fp16 rounds to nearest even
+// and saturates at 65504) and a non-finite one (NaN, +-Inf) becomes 0, so no
+// output is ever non-finite.
 //
 // It walks the output word by word in a grid-stride loop, so neighbouring
 // invocations touch neighbouring words and same-format copies move whole
@@ -16,6 +17,15 @@
 #include "pass.glsl"
 #include "passes/passthrough.pass"
 
+// A word of two halves with each NaN / Inf half (exponent all ones) zeroed.
+uint finite_halves(uint w) {
+  const uint lo = (w & 0x7c00u) == 0x7c00u ? 0u : (w & 0xffffu);
+  const uint hi = (w & 0x7c000000u) == 0x7c000000u ? 0u : (w & 0xffff0000u);
+  return hi | lo;
+}
+
+float finite_or_zero(float x) { return (floatBitsToUint(x) & 0x7f800000u) != 0x7f800000u ? x : 0.0; }
+
 void main() {
   const uint invocations = (frame.size.z + 1u) / 2u;
   const uint t = dn_invocation_index();
@@ -24,13 +34,16 @@ void main() {
   const uint out_words = OUTPUT_HALF ? (elements + 1u) / 2u : elements;
   for (uint w = t; w < out_words; w += invocations) {
     if (RADIANCE_HALF == OUTPUT_HALF) {
-      result.data[w] = radiance.data[w];  // same format: the words themselves
+      // Same format: the words themselves, non-finite values zeroed.
+      const uint v = radiance.data[w];
+      result.data[w] = OUTPUT_HALF ? finite_halves(v) : ((v & 0x7f800000u) == 0x7f800000u ? 0u : v);
     } else if (OUTPUT_HALF) {
       const uint e = 2u * w;
       const float hi = e + 1u < elements ? DN_LOAD(radiance, false, e + 1u) : 0.0;
-      result.data[w] = dn_pack_half_saturated(vec2(DN_LOAD(radiance, false, e), hi));
+      const vec2 pair = vec2(finite_or_zero(DN_LOAD(radiance, false, e)), finite_or_zero(hi));
+      result.data[w] = dn_pack_half_saturated(pair);
     } else {
-      result.data[w] = floatBitsToUint(DN_LOAD(radiance, true, w));
+      result.data[w] = floatBitsToUint(finite_or_zero(DN_LOAD(radiance, true, w)));
     }
   }
 }

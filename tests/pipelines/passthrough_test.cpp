@@ -1,6 +1,6 @@
-// passthrough: fp32 copies are bit-exact; fp16 <-> fp32 conversion follows
-// IEEE round-to-nearest-even (checked against the tests' own to_half), an
-// fp16 output saturating at 65504.
+// passthrough: fp32 copies of finite values are bit-exact; fp16 <-> fp32
+// conversion follows IEEE round-to-nearest-even (checked against the tests'
+// own to_half), an fp16 output saturating at 65504; NaN and +-Inf become 0.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -53,21 +53,29 @@ TEST_F(PassthroughTest, Fp32CopyIsBitExact) {
   values[2] = INFINITY;
   values[3] = -INFINITY;
   values[4] = 3.4e38f;
+  auto expected = values;
+  expected[2] = expected[3] = 0.0f;  // non-finite: 0
   const auto bytes = run(w, h, Format::F32, Format::F32, values);
-  EXPECT_EQ(bytes, test::encode_plane(values, Format::F32));
+  EXPECT_EQ(bytes, test::encode_plane(expected, Format::F32));
 }
 
-TEST_F(PassthroughTest, Fp32NaNStaysNaN) {
+TEST_F(PassthroughTest, Fp32NonFiniteBecomesZero) {
   std::vector<float> values(3 * 4, 1.0f);
   values[5] = NAN;
-  const auto out = test::decode_output(run(2, 2, Format::F32, Format::F32, values), Format::F32);
-  EXPECT_TRUE(std::isnan(out[5]));
-  EXPECT_EQ(out[4], 1.0f);
+  values[6] = INFINITY;
+  values[7] = -INFINITY;
+  for (Format out_format : {Format::F32, Format::F16}) {
+    const auto out = test::decode_output(run(2, 2, Format::F32, out_format, values), out_format);
+    EXPECT_EQ(out[5], 0.0f);
+    EXPECT_EQ(out[6], 0.0f);
+    EXPECT_EQ(out[7], 0.0f);
+    EXPECT_EQ(out[4], 1.0f);
+  }
 }
 
 // Round to nearest even; a finite value beyond the largest finite half
 // saturates to +-65504 (docs/pipelines.md, "Output format conversion"),
-// NaN and Inf stay (passthrough does not sanitize).
+// NaN and Inf become 0.
 TEST_F(PassthroughTest, Fp32ToFp16RoundsToNearestEvenAndSaturates) {
   const uint32_t w = 41, h = 13;  // odd pixel count: the last half-word is padding
   auto values = random_values(w * h * 3, 2);
@@ -83,7 +91,7 @@ TEST_F(PassthroughTest, Fp32ToFp16RoundsToNearestEvenAndSaturates) {
     uint16_t got;
     std::memcpy(&got, bytes.data() + 2 * i, 2);
     const float v = values[i];
-    const float saturated = std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : v;
+    const float saturated = std::isfinite(v) ? std::clamp(v, -65504.0f, 65504.0f) : 0.0f;
     ASSERT_EQ(got, test::to_half(saturated)) << "element " << i << " value " << v;
 #ifdef DN_HAVE_PROTOCOL_LIB
     ASSERT_EQ(got, protocol::float_to_half(saturated)) << "element " << i << " value " << v;
@@ -95,15 +103,20 @@ TEST_F(PassthroughTest, Fp16ToFp32IsExact) {
   const uint32_t w = 19, h = 9;
   std::vector<float> values = random_values(w * h * 3, 3);
   for (auto& v : values) v = test::from_half(test::to_half(v));  // representable in fp16 (incl. subnormals, inf)
+  auto expected = values;
+  for (auto& v : expected) v = std::isfinite(v) ? v : 0.0f;
+  ASSERT_NE(expected, values);  // the random values reach Inf in fp16
   const auto out = test::decode_output(run(w, h, Format::F16, Format::F32, values), Format::F32);
-  EXPECT_EQ(out, values);
+  EXPECT_EQ(out, expected);
 }
 
 TEST_F(PassthroughTest, Fp16ToFp16IsExact) {
   const uint32_t w = 21, h = 11;
   std::vector<float> values = random_values(w * h * 3, 4);
-  const auto encoded = test::encode_plane(values, Format::F16);
-  EXPECT_EQ(run(w, h, Format::F16, Format::F16, values), encoded);
+  auto expected = values;
+  for (auto& v : expected) v = std::isfinite(test::from_half(test::to_half(v))) ? v : 0.0f;
+  ASSERT_NE(expected, values);  // the random values reach Inf in fp16
+  EXPECT_EQ(run(w, h, Format::F16, Format::F16, values), test::encode_plane(expected, Format::F16));
 }
 
 TEST_F(PassthroughTest, ReportsTimingsAndSkipsDownloadWhenAsked) {
