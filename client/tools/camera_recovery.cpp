@@ -13,7 +13,6 @@ namespace dn::cli {
 
 namespace {
 
-constexpr const char* kSuggestion = "; give the cameras with --camera FILE (examples/blender/export_camera.py writes one)";
 
 std::string num(const char* f, double v) {
   char buf[64];
@@ -254,7 +253,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
   if (all.size() < options.min_points)
     throw CameraRecoveryError("only " + std::to_string(all.size()) + " usable pixels in the Position pass (" +
                               std::to_string(options.min_points) +
-                              " needed; background pixels are non-finite, all-zero or have no depth)" + kSuggestion);
+                              " needed; background pixels are non-finite, all-zero or have no depth)");
 
   // ---- Hartley normalisation ----
   double c3[3] = {0, 0, 0}, c2[2] = {0, 0};
@@ -273,7 +272,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
   d3 /= double(all.size());
   d2 /= double(all.size());
   if (!(d3 > 0) || !(d2 > 0))
-    throw CameraRecoveryError("the usable pixels of the Position pass all hold the same point" + std::string(kSuggestion));
+    throw CameraRecoveryError("the usable pixels of the Position pass all hold the same point");
   const double s3 = std::sqrt(3.0) / d3, s2 = std::sqrt(2.0) / d2;
   std::vector<Pair> norm = all;
   for (Pair& q : norm) {
@@ -295,7 +294,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
                                 " usable pixels of the Position pass lie on one plane (thickness " +
                                 num("%.2g", thin / wide) +
                                 " of their extent): a pinhole camera cannot be recovered from a single plane "
-                                "(e.g. a frame showing only the floor)" + kSuggestion);
+                                "(e.g. a frame showing only the floor)");
   }
 
   // ---- fit, dropping outliers (silhouette pixels mix two surfaces) ----
@@ -308,11 +307,11 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
       if (inlier[i]) use.push_back(norm[i]);
     if (use.size() < options.min_points)
       throw CameraRecoveryError("only " + std::to_string(use.size()) +
-                                " pixels of the Position pass agree with one pinhole camera" + kSuggestion);
+                                " pixels of the Position pass agree with one pinhole camera");
     pn = refine(dlt(use, gap), use);
     if (round == 0 && gap < 1e-12)
       throw CameraRecoveryError("the usable pixels of the Position pass are degenerate (they do not determine a "
-                                "3x4 projection)" + std::string(kSuggestion));
+                                "3x4 projection)");
     std::vector<double> r(all.size());
     for (size_t i = 0; i < norm.size(); ++i) r[i] = residual(pn, norm[i]) / s2;  // pixels
     std::vector<double> sorted = r;
@@ -360,7 +359,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
       " (a panoramic, fisheye or orthographic camera? In Blender, Camera → Lens → Type must be Perspective)";
   if (!(m3 > 0) || !(wmin > 0) || wmax < wmin * (1.0 + 1e-4))
     throw CameraRecoveryError("the Position pass fits a camera at infinity or points on both sides of it: not a "
-                              "perspective camera" + pinhole_hint + kSuggestion);
+                              "perspective camera" + pinhole_hint);
   for (double& v : p) v *= sign / m3;
 
   RecoveredCamera out;
@@ -385,7 +384,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
     throw CameraRecoveryError("the Position pass is not consistent with a pinhole camera: RMS reprojection residual " +
                               num("%.3g", out.rms_px) + " px (limit " + num("%g", options.max_rms_px) + "), " +
                               std::to_string(out.rejected) + " of " + std::to_string(all.size()) +
-                              " pixels rejected as outliers" + pinhole_hint + kSuggestion);
+                              " pixels rejected as outliers" + pinhole_hint);
 
   // ---- decomposition: M = K R, K upper triangular with a positive diagonal ----
   const double M[9] = {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
@@ -400,9 +399,9 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
   const double K[9] = {ka, kb, kc, 0, kd, ke, 0, 0, kf};
   double Kinv[9], Minv[9], detK = 0, detM = 0;
   if (!(ka > 0) || !(kd > 0) || !invert3(K, Kinv, detK) || !invert3(M, Minv, detM))
-    throw CameraRecoveryError("the fitted projection is singular: not a perspective camera" + pinhole_hint + kSuggestion);
+    throw CameraRecoveryError("the fitted projection is singular: not a perspective camera" + pinhole_hint);
   if (detM < 0)
-    throw CameraRecoveryError("the fitted camera is mirrored (left-handed image axes)" + std::string(kSuggestion));
+    throw CameraRecoveryError("the fitted camera is mirrored (left-handed image axes)");
   double R[9];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) R[i * 3 + j] = Kinv[i * 3] * M[j] + Kinv[i * 3 + 1] * M[3 + j] + Kinv[i * 3 + 2] * M[6 + j];
@@ -419,8 +418,7 @@ RecoveredCamera recover_camera(std::span<const float> positions, int width, int 
     throw CameraRecoveryError("the recovered camera has skew " + num("%.3g", out.skew / out.fx) + " and pixel aspect " +
                               num("%.4g", out.fx / out.fy) + " (limits " + num("%g", options.max_skew) + ", 1 ± " +
                               num("%g", options.max_aspect_error) +
-                              "): non-square pixels? In Blender, Output → Format → Aspect X and Y must be equal" +
-                              kSuggestion);
+                              "): non-square pixels? In Blender, Output → Format → Aspect X and Y must be equal");
 
   // ---- the protocol's matrices ----
   // view = diag(1, -1, -1, 1) [R | -R C]: the fit's camera axes are x right, y down, z forward; OpenGL's y up, z back.
@@ -457,7 +455,11 @@ const char* to_string(FrameCameras::Source s) {
   return "?";
 }
 
+CameraRecoveryError::CameraRecoveryError(const std::string& reason)
+    : std::runtime_error(reason + "; " + kCliChannelSyntax.camera_hint()), reason_(reason) {}
+
 struct FrameCameras::Impl {
+  ChannelSyntax syntax;
   std::string file_path;
   std::map<long long, FileCamera> file;
   mutable std::mutex mutex;
@@ -465,8 +467,10 @@ struct FrameCameras::Impl {
 };
 
 FrameCameras::FrameCameras(const std::string& camera_file, const Preset& preset,
-                           const std::vector<std::string>& exr_channels, bool needs_camera)
+                           const std::vector<std::string>& exr_channels, bool needs_camera,
+                           const ChannelSyntax& syntax)
     : impl_(std::make_shared<Impl>()), needs_camera_(needs_camera) {
+  impl_->syntax = syntax;
   if (!camera_file.empty()) {
     impl_->file_path = camera_file;
     impl_->file = read_camera_file(camera_file);
@@ -520,14 +524,14 @@ FrameCameras::Source FrameCameras::apply(const dn::image::ExrReader& exr, long l
         rec = {Source::Recovered, c.rms_px, c.max_px, c.points};
       } catch (const CameraRecoveryError& e) {
         throw std::runtime_error(frame + exr.path() + ": no camera in the header, and none from the Position pass: " +
-                                 e.what());
+                                 e.reason() + "; " + impl_->syntax.camera_hint());
       }
     } else if (needs_camera_) {
       throw std::runtime_error(
           frame + exr.path() +
           " has no camera: no dn.view / dn.projection header attributes and no Position pass to recover it from, "
           "but the pipeline, or a channel made for it, uses the camera; enable the Position pass "
-          "(Blender: View Layer → Passes → Data → Position) or give the cameras with --camera FILE (examples/blender/export_camera.py writes one)");
+          "(Blender: View Layer → Passes → Data → Position) or " + impl_->syntax.camera_hint());
     }
   }
   std::lock_guard<std::mutex> lock(impl_->mutex);

@@ -27,11 +27,15 @@
 
 namespace dn::cli {
 
-// The Position pass does not describe a usable pinhole camera. what() says
-// why and suggests --camera FILE.
+// The Position pass does not describe a usable pinhole camera. reason() says
+// why; what() adds the CLI's suggestion (--camera FILE).
 class CameraRecoveryError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit CameraRecoveryError(const std::string& reason);
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string reason_;
 };
 
 struct CameraRecoveryOptions {
@@ -74,8 +78,9 @@ class FrameCameras {
  public:
   enum class Source { File, Header, Recovered, Identity };
   // `camera_file`: path of a --camera file (camera_file.hpp) or empty.
+  // `syntax`: how the caller names a camera file, for its errors.
   FrameCameras(const std::string& camera_file, const Preset& preset, const std::vector<std::string>& exr_channels,
-               bool needs_camera);
+               bool needs_camera, const ChannelSyntax& syntax = kCliChannelSyntax);
 
   // Sets camera.view / camera.projection (and jitter from a file) for frame
   // `number` of `exr`, unless the header already has them. Thread-safe; call

@@ -146,11 +146,11 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
 
 namespace {
 
-std::runtime_error no_camera(const LoadedFrame& frame, const ResolvedChannel& ch) {
+std::runtime_error no_camera(const LoadedFrame& frame, const ResolvedChannel& ch, const ChannelSyntax& syntax) {
   return std::runtime_error(frame.path + ": " + ch.describe() +
                             " needs the frame's camera: give the Position pass (View Layer Properties > Passes > "
-                            "Data > Position) or --camera FILE, or map the primary hit's depth with --channel "
-                            "depth=Depth@cycles");
+                            "Data > Position) or " + syntax.camera + ", or map the primary hit's depth with " +
+                            syntax.map_example("depth", "Depth@cycles"));
 }
 
 // cos of the angle between pixel (x, y)'s centre ray and the view axis. The
@@ -193,10 +193,10 @@ void path_length_to_view_depth(std::vector<float>& depth, int width, int height,
 }  // namespace
 
 void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
-                              const dn::image::ExrReader& exr) {
+                              const dn::image::ExrReader& exr, const ChannelSyntax& syntax) {
   for (const auto& ch : plan) {
     if (ch.convert != Convert::CyclesVirtualDepth) continue;
-    if (!frame.camera.projection) throw no_camera(frame, ch);
+    if (!frame.camera.projection) throw no_camera(frame, ch, syntax);
     // The Depth pass of the same layer: "L.Denoising Depth.Z" -> "L.Depth.Z".
     std::string z = ch.terms.front().front();
     const std::string from = "Denoising Depth";

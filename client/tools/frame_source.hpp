@@ -54,7 +54,7 @@ LoadedFrame load_frame(const dn::image::ExrReader& exr, const std::vector<Resolv
 // `exr`'s Depth pass. Throws std::runtime_error naming the frame when the plan
 // has such a plane and the frame has no camera.
 void apply_camera_conversions(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
-                              const dn::image::ExrReader& exr);
+                              const dn::image::ExrReader& exr, const ChannelSyntax& syntax = kCliChannelSyntax);
 
 // Per-pixel guides, after apply_camera_conversions: where a pixel is not a
 // mirror by guides' rule — its key (roughness) at or above guides.from or not

@@ -595,13 +595,19 @@ bool plan_needs_camera(const protocol::PipelineInfo* pipeline, const std::vector
          std::any_of(plan.begin(), plan.end(), [](const ResolvedChannel& c) { return needs_camera(c.convert); });
 }
 
-const ChannelSyntax kCliChannelSyntax{"--channels", "--channel", "--channel NAME=LAYER"};
-const ChannelSyntax kPythonChannelSyntax{"channels=[...]", "channels={...}", "channels={..., 'NAME': 'LAYER'}"};
+const ChannelSyntax kCliChannelSyntax{"--channels", "--channel", "--channel NAME=LAYER", "--camera FILE"};
+const ChannelSyntax kPythonChannelSyntax{"channels=[...]", "channels={...}", "channels={..., 'NAME': 'LAYER'}",
+                                         "camera_file=PATH"};
 
-std::string ChannelSyntax::map_example(const std::string& name) const {
+std::string ChannelSyntax::map_example(const std::string& name, const std::string& layer) const {
   std::string out = example;
   if (const size_t at = out.find("NAME"); at != std::string::npos) out.replace(at, 4, name);
+  if (const size_t at = out.find("LAYER"); at != std::string::npos) out.replace(at, 5, layer);
   return out;
+}
+
+std::string ChannelSyntax::camera_hint() const {
+  return "give the cameras with " + camera + " (examples/blender/export_camera.py writes one)";
 }
 
 protocol::Format wire_format(ChannelId id, bool fp16) {

@@ -117,13 +117,17 @@ inline constexpr float kPastPrimaryDepth = 0.02f;
 Preset make_preset(const std::string& name, const std::vector<std::string>& exr_channels,
                    const std::string& view_layer = {});
 
-// How the caller's interface names its channel choices, for error messages:
-// `dn denoise`'s options or dn.read_frame's keyword.
+// How the caller's interface names its input choices, for error messages:
+// `dn denoise`'s options or dn.read_frame's keywords.
 struct ChannelSyntax {
   std::string list;  // the exact channel list: "--channels"
   std::string map;   // one mapping: "--channel"
   std::string example;  // mapping channel NAME by hand: "--channel NAME=LAYER"
-  std::string map_example(const std::string& name) const;  // `example` for channel `name`
+  std::string camera;   // a file of the frames' cameras: "--camera FILE"
+  // `example` for channel `name` from `layer`.
+  std::string map_example(const std::string& name, const std::string& layer = "LAYER") const;
+  // "give the cameras with --camera FILE (... writes one)".
+  std::string camera_hint() const;
 };
 extern const ChannelSyntax kCliChannelSyntax;     // --channels LIST, --channel NAME=SPEC
 extern const ChannelSyntax kPythonChannelSyntax;  // channels=[...], channels={NAME: SPEC}

@@ -44,7 +44,7 @@ double schlick(double f0, double c) { return f0 + (1.0 - f0) * std::pow(1.0 - st
 }  // namespace
 
 void derive_reflection_features(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
-                                const dn::image::ExrReader& exr) {
+                                const dn::image::ExrReader& exr, const ChannelSyntax& syntax) {
   std::vector<float>* dir = plane_with(frame, plan, Convert::CyclesMirrorDirection);
   std::vector<float>* length = plane_with(frame, plan, Convert::CyclesChainLength);
   std::vector<float>* vdepth = plane_with(frame, plan, Convert::CyclesChainDepth);
@@ -53,7 +53,7 @@ void derive_reflection_features(LoadedFrame& frame, const std::vector<ResolvedCh
   if (!dir && !length && !vdepth && !hit && !cam_normal) return;
   if (!frame.camera.view || !frame.camera.projection)
     throw std::runtime_error(frame.path + ": the reflection features need the frame's camera: give the Position "
-                             "pass (View Layer Properties > Passes > Data > Position) or --camera FILE");
+                             "pass (View Layer Properties > Passes > Data > Position) or " + syntax.camera);
   const glm::dmat4 view = glm::dmat4(glm::make_mat4(frame.camera.view->data()));
   const glm::dmat4 to_world = glm::inverse(view);
   const glm::dvec3 eye = glm::dvec3(to_world[3]);

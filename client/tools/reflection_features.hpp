@@ -35,8 +35,9 @@ namespace dn::cli {
 //  - CyclesCameraNormal (Denoising Normal, in Cycles' camera space: x right,
 //    y up, z forward): to world space with the frame's view.
 // The raw Denoising Depth is read from `exr`.
-// Throws std::runtime_error naming the frame when it has no camera.
+// Throws std::runtime_error naming the frame when it has no camera, in
+// `syntax`'s words.
 void derive_reflection_features(LoadedFrame& frame, const std::vector<ResolvedChannel>& plan,
-                                const dn::image::ExrReader& exr);
+                                const dn::image::ExrReader& exr, const ChannelSyntax& syntax = kCliChannelSyntax);
 
 }  // namespace dn::cli

@@ -112,7 +112,7 @@ void bind_errors(py::module_& m) {
     } catch (const cli::ChannelMapError& e) {
       PyErr_SetString(classes.channel_map, e.what());
     } catch (const cli::CameraRecoveryError& e) {
-      PyErr_SetString(classes.channel_map, e.what());
+      PyErr_SetString(classes.channel_map, (e.reason() + "; " + cli::kPythonChannelSyntax.camera_hint()).c_str());
     }
   });
 }

@@ -183,13 +183,13 @@ LoadedFrame read_frame(const std::string& path, const py::object& pipeline_obj, 
     if (given_jitter) n.frame.camera.jitter = given_jitter;
     // As with `dn denoise`: a camera is looked for only when the pipeline or a planned channel uses it.
     cli::FrameCameras cameras(camera_file.value_or(""), n.preset, exr.channels(),
-                              cli::plan_needs_camera(pipeline, n.plan));
+                              cli::plan_needs_camera(pipeline, n.plan), cli::kPythonChannelSyntax);
     const cli::FrameCameras::Source source = cameras.apply(exr, number, n.frame.camera);
     n.source = given_view ? "given" : cli::to_string(source);
     if (auto rec = cameras.record(number)) n.residual = rec->rms_px;
-    cli::apply_camera_conversions(n.frame, n.plan, exr);
+    cli::apply_camera_conversions(n.frame, n.plan, exr, cli::kPythonChannelSyntax);
     if (n.rough) cli::apply_rough_guides(n.frame, *n.rough);
-    cli::derive_reflection_features(n.frame, n.plan, exr);
+    cli::derive_reflection_features(n.frame, n.plan, exr, cli::kPythonChannelSyntax);
   }
 
   LoadedFrame out;

@@ -63,3 +63,14 @@ def test_a_missing_channel_is_mapped_with_channels(conn, tmp_path):
         dn.read_frame(path, svgf, channels=["radiance", "albedoo"])
     with pytest.raises(TypeError, match="channels"):
         dn.read_frame(path, svgf, channels="radiance")
+
+
+def test_a_missing_camera_is_given_with_camera_file(conn, tmp_path):
+    path = str(tmp_path / "no_position.exr")
+    without(os.path.join(CYCLES, "frame_0000.exr"), path, ".Position.")
+    with pytest.raises(Exception) as e:
+        dn.read_frame(path, conn.find_pipeline("svgf-fb"), preset="cycles")
+    message = str(e.value)
+    assert "has no camera" in message
+    assert "give the cameras with camera_file=PATH" in message
+    assert "--camera" not in message
