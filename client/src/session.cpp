@@ -6,6 +6,7 @@
 #include "result_from_message.hpp"
 #include "dn/protocol/channels.hpp"
 #include "dn/protocol/codec.hpp"
+#include "dn/client/watch_file.hpp"
 
 namespace dn::client {
 
@@ -119,11 +120,7 @@ const std::string& Session::watch_url() const {
 
 std::string Session::watch_server() const { return watch_url().empty() ? state_->endpoint() : watch_url(); }
 
-std::string Session::watch_command() const {
-  std::string cmd = "dn watch --server " + watch_server() + " --session " + std::to_string(info_.session_id);
-  if (!watch_key().empty()) cmd += " --key " + watch_key();
-  return cmd;
-}
+std::string Session::watch_command() const { return watch_hint(*this, ""); }
 
 Session::Session(Session&& o) noexcept
     : state_(std::move(o.state_)),

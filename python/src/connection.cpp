@@ -197,7 +197,7 @@ void bind_connection(py::module_& m) {
       .def_property_readonly("watch_key", [](PySession& s) { return s.get().watch_key(); },
                              "the key a watcher needs (Connection.attach); empty from a server older than 1.6")
       .def_property_readonly("watch_command", [](PySession& s) { return s.get().watch_command(); },
-                             "'dn watch --server URL --session ID --key KEY', ready to paste")
+                             "'DN_WATCH_KEY=KEY dn watch --server URL --session ID', ready to paste (the key stays off the command line)")
       .def_property_readonly("max_in_flight", [](PySession& s) { return s.get().max_in_flight(); })
       .def_property_readonly("in_flight",
                              [](PySession& s) {

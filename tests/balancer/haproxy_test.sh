@@ -107,6 +107,10 @@ while kill -0 "$clients" 2>/dev/null; do
   if [ -s "$work/watch" ]; then
     # The owner's own `dn watch` command: --server is the session's watch URL.
     read -r -a cmd < "$work/watch"
+    # "DN_WATCH_KEY=KEY dn watch ...": the key goes to dn's environment.
+    [ "${cmd[0]%%=*}" = DN_WATCH_KEY ] || fail "no watch key in the environment: ${cmd[*]}"
+    export "${cmd[0]}"
+    cmd=("${cmd[@]:1}")
     [ "${cmd[0]}" = dn ] || fail "no watch command: ${cmd[*]}"
     echo "watching: ${cmd[*]}"
     "$dn" "${cmd[@]:1}" --count 2 --timeout 60 --output "$work/w_%04d.pfm" --quiet || fail "dn watch through the balancer failed"

@@ -27,8 +27,13 @@ TEST(AdvertiseUrl, OwnerAndWatcherLearnWhereToWatch) {
   client::Connection owner = client::Connection::connect(server.tcp_url(), {});
   client::Session session = open_passthrough(owner);
   EXPECT_EQ(session.watch_url(), kAdvertised);
-  EXPECT_EQ(session.watch_command().rfind(std::string("dn watch --server ") + kAdvertised + " --session ", 0), 0u)
+  // The key travels in the environment, never on dn's command line.
+  EXPECT_EQ(session.watch_command().rfind("DN_WATCH_KEY=" + session.watch_key() + " dn watch --server " +
+                                              kAdvertised + " --session ",
+                                          0),
+            0u)
       << session.watch_command();
+  EXPECT_EQ(session.watch_command().find("--key"), std::string::npos) << session.watch_command();
 
   RawClient watcher(server.tcp_url());
   watcher.hello();

@@ -200,7 +200,7 @@ DN_API void dnResetFilterHistory(DNFilter filter);
  * Strings stay valid until the next commit or release of the filter. */
 DN_API uint64_t dnGetFilterSessionId(DNFilter filter);
 DN_API const char* dnGetFilterWatchKey(DNFilter filter);     /* 32 hex digits ("" from a server before 1.6) */
-DN_API const char* dnGetFilterWatchCommand(DNFilter filter); /* "dn watch --server URL --session ID --key KEY" */
+DN_API const char* dnGetFilterWatchCommand(DNFilter filter); /* "DN_WATCH_KEY=KEY dn watch --server URL --session ID" */
 
 #ifdef __cplusplus
 }

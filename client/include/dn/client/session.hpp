@@ -109,9 +109,10 @@ class Session {
   const std::string& watch_url() const;
   // The server address watchers use: watch_url(), else this connection's.
   std::string watch_server() const;
-  // The `dn watch` command line that watches this session, ready to paste:
-  // "dn watch --server URL --session ID --key KEY" (no --key from an older
-  // server), URL being watch_url() when the server gives one.
+  // The `dn watch` command that watches this session, ready to paste into a
+  // shell: "DN_WATCH_KEY=KEY dn watch --server URL --session ID" (the key in
+  // dn's environment, not on its command line; none from an older server),
+  // URL being watch_url() when the server gives one.
   std::string watch_command() const;
   uint32_t max_in_flight() const { return max_in_flight_; }
   // Submitted and not yet returned by wait()/poll() (answered or not).
