@@ -128,6 +128,17 @@ void Kernel::record_dispatch(VkCommandBuffer cmd, VkDescriptorSet set, const Gri
   vkCmdDispatch(cmd, g[0], g[1], 1);
 }
 
+bool Kernel::prepared_at(uint32_t width, uint32_t height) const {
+  std::lock_guard lock(prepared_mutex_);
+  return prepared_sizes_.contains({width, height});
+}
+
+void Kernel::mark_prepared(uint32_t width, uint32_t height) const {
+  std::lock_guard lock(prepared_mutex_);
+  prepared_sizes_.insert({width, height});
+  prepared_.store(true);
+}
+
 void Kernel::note_dispatch() const {
   if (dispatched_.load(std::memory_order_relaxed) || dispatched_.exchange(true)) return;
   if (!first_runs_) return;

@@ -97,10 +97,13 @@ class Kernel {
   }
   // Whether a dispatch of this kernel has been recorded on this device.
   bool dispatched() const { return dispatched_.load(); }
-  // Prepared: run once off the frame path (the warm-up, or a run on a private
-  // device whose machine code reaches this one through Mesa's shader cache).
-  bool prepared() const { return prepared_.load(); }
-  void mark_prepared() const { prepared_.store(true); }
+  // Prepared: run once off the frame path at a session's frame size (the
+  // warm-up, or a run on a private device whose machine code reaches this one
+  // through Mesa's shader cache). Per size: lavapipe makes new machine code
+  // for some frame sizes.
+  bool prepared() const { return prepared_.load(); }  // at any size
+  bool prepared_at(uint32_t width, uint32_t height) const;
+  void mark_prepared(uint32_t width, uint32_t height) const;
   // Workgroup shape (x, y); (0, 0) for kernels whose constant 0 the caller set.
   std::array<uint32_t, 2> local_size() const { return {local_size_x_, local_size_y_}; }
   uint32_t push_constant_bytes() const { return push_constant_bytes_; }
@@ -130,6 +133,8 @@ class Kernel {
   VkPipeline pipeline_ = VK_NULL_HANDLE;
   mutable std::atomic<bool> dispatched_{false};
   mutable std::atomic<bool> prepared_{false};
+  mutable std::mutex prepared_mutex_;
+  mutable std::set<std::pair<uint32_t, uint32_t>> prepared_sizes_;
   FirstRunCounter* first_runs_ = nullptr;  // the cache's, set when it hands the kernel out
 };
 

@@ -57,9 +57,10 @@ bool can_prepare_off_queue(const gpu::Context& context) {
 
 }  // namespace
 
-bool PipelineBuilder::needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels) {
+bool PipelineBuilder::needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels,
+                                      uint32_t width, uint32_t height) {
   for (const auto& k : kernels)
-    if (!k->dispatched() && !k->prepared()) return true;
+    if (!k->prepared_at(width, height)) return true;
   return false;
 }
 
@@ -77,7 +78,7 @@ double PipelineBuilder::run_off_queue(const pipelines::PreparedPipeline& prepare
     const gpu::KernelCache::Recording its_own;  // keeps its kernels out of the caller's recording; gone before the device
     run_one_frame(*pipelines::create(private_device, prepared), prepared.config());
   }
-  for (const auto& k : kernels) k->mark_prepared();
+  for (const auto& k : kernels) k->mark_prepared(prepared.config().width, prepared.config().height);
   return ms_since(start);
 }
 
@@ -142,7 +143,8 @@ void PipelineBuilder::submit(BuildRequest&& request) {
       out.error = e.what();
     }
     out.compile_ms = gpu::KernelCache::compile_ms_of_this_thread() - compiled_before;
-    if (out.pipeline && off_queue_ && needs_first_run(used.kernels())) {
+    if (out.pipeline && off_queue_ && needs_first_run(used.kernels(), out.request.prepared.config().width,
+                                                         out.request.prepared.config().height)) {
       try {
         out.first_run_ms = run_off_queue(out.request.prepared, used.kernels());
       } catch (const std::exception& e) {  // the session still works: its first frame compiles in the shared queue
@@ -179,7 +181,7 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
         // Built, run once and dropped: its kernels stay in the cache, compiled and dispatched.
         gpu::KernelCache::Recording used;
         auto pipeline = pipelines::create(context_, std::get<pipelines::PreparedPipeline>(prepared));
-        for (const auto& k : used.kernels()) k->mark_prepared();
+        for (const auto& k : used.kernels()) k->mark_prepared(config.width, config.height);
         run_one_frame(*pipeline, config);
         ++report.configs;
       } catch (const std::exception& e) {

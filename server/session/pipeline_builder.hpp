@@ -91,8 +91,9 @@ class PipelineBuilder {
   // The warm-up takes a size of the first kind, the common one.
   static constexpr uint32_t kWarmUpWidth = 256, kWarmUpHeight = 144;
 
-  // Whether any of these kernels has never been dispatched on the device nor prepared.
-  static bool needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels);
+  // Whether any of these kernels has not been prepared at this frame size.
+  static bool needs_first_run(const std::vector<std::shared_ptr<const gpu::Kernel>>& kernels, uint32_t width,
+                              uint32_t height);
 
  private:
   void loop();

@@ -154,6 +154,18 @@ TEST(FirstFrame, AfterTheWarmUpNoInputFormCompilesAKernel) {
   EXPECT_EQ(after.at("kernel_unprepared_first_runs"), warm.at("kernel_unprepared_first_runs"));
   EXPECT_EQ(after.at("session_build_first_run_ms"), 0.0);  // nothing was new to the device
   EXPECT_EQ(after.at("frames_failed"), 0.0);
+
+  // A frame size the warm-up did not run: lavapipe may make new machine code
+  // for it, so the kernels run first on a private device, once per size.
+  const Form& passthrough = forms.front();
+  ASSERT_EQ(passthrough.pipeline, "passthrough");
+  open_and_run_one_frame(c, session_of(passthrough, Format::F32, 48, 36), id);
+  const auto small = stats(c);
+  EXPECT_GT(small.at("session_build_first_run_ms"), 0.0);
+  EXPECT_EQ(small.at("kernels_compiled"), warm.at("kernels_compiled"));  // same kernels, new size
+  open_and_run_one_frame(c, session_of(passthrough, Format::F32, 48, 36), id + 10);
+  EXPECT_EQ(stats(c).at("session_build_first_run_ms"), small.at("session_build_first_run_ms"));
+  EXPECT_EQ(stats(c).at("frames_failed"), 0.0);
 }
 
 // Without a warm-up and with a cold Mesa shader cache, each pipeline in each
