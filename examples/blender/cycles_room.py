@@ -2,15 +2,24 @@
 
     blender -b --factory-startup --python examples/blender/cycles_room.py -- \
         --out DIR [--width 320] [--height 180] [--frames 8] [--spp 1] [--seed 0] [--start 0]
-        [--name frame] [--half] [--threads N]
+        [--name frame] [--half] [--threads N] [--passes preset|denoising|all]
 
 Writes DIR/frame_0000.exr, frame_0001.exr, ... (NAME_%04d.exr; frame numbers --start ..
 --start+frames-1): one multilayer OpenEXR per frame (ZIP, full float unless
---half), view layer "ViewLayer", with every pass a user would turn on for a
-denoiser: Combined, Depth, Mist, Normal, Position, Vector, Diffuse / Glossy /
-Transmission Direct, Indirect and Color, Emission, Environment, Volume Direct
-and Indirect, Denoising Data (Denoising Albedo / Normal / Depth), and two
-shader AOVs: "Roughness" (value) and "SpecularF0" (colour). Read them with
+--half), view layer "ViewLayer". --passes picks the passes:
+
+  preset     the passes `dn denoise --preset cycles` reads when Denoising Data
+             is absent, and no more: Combined, Depth, Normal, Position,
+             Vector, Diffuse / Glossy / Transmission Direct, Indirect and
+             Color, Emission, Environment, Volume Direct and Indirect
+             (Blender's defaults otherwise: no Denoising Data, no AOVs)
+  denoising  preset + Denoising Data (Denoising Albedo / Normal / Depth)
+  all        (default) denoising + Mist + two shader AOVs: "Roughness"
+             (value) and "SpecularF0" (colour)
+
+The passes change only what is written, not the render: Combined is the
+same for every --passes value, up to Cycles' run-to-run float noise (two
+runs with the same settings differ as much). Read the files with
 `dn denoise --preset cycles --input 'DIR/frame_%04d.exr'`.
 
 The scene: a small room (diffuse walls, floor and ceiling; the wall behind
@@ -38,6 +47,14 @@ import time
 import bpy
 
 
+PASS_SETS = ("preset", "denoising", "all")
+
+# Data and light passes the cycles preset reads (client/tools/presets.cpp, p.settings).
+PRESET_PASSES = ("combined", "z", "normal", "position", "vector", "diffuse_direct", "diffuse_indirect",
+                 "diffuse_color", "glossy_direct", "glossy_indirect", "glossy_color", "transmission_direct",
+                 "transmission_indirect", "transmission_color", "emit", "environment")
+
+
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="cycles_room.py", description=__doc__.split("\n")[0])
@@ -51,6 +68,9 @@ def parse_args():
     p.add_argument("--name", default="frame", help="file name prefix: DIR/NAME_%%04d.exr")
     p.add_argument("--half", action="store_true", help="half-float EXR instead of full float")
     p.add_argument("--threads", type=int, default=0, help="render threads (0 = all cores)")
+    p.add_argument("--passes", choices=PASS_SETS, default="all",
+                   help="preset: what --preset cycles reads without Denoising Data; denoising: + Denoising Data; "
+                        "all: + Denoising Data, Mist and the Roughness / SpecularF0 AOVs")
     a = p.parse_args(argv)
     if a.width < 1 or a.height < 1 or a.frames < 1 or a.spp < 1:
         p.error("--width, --height, --frames and --spp must be >= 1")
@@ -251,18 +271,24 @@ def configure(scene, a):
     r.use_file_extension = True
     r.filepath = os.path.join(os.path.abspath(a.out), a.name + "_####")
 
+    set_passes(scene, a.passes)
+
+
+def set_passes(scene, passes):
+    """The view layer's passes for --passes (set explicitly: no reliance on Blender's defaults)."""
     vl = scene.view_layers[0]
     vl.name = "ViewLayer"
-    for p in ("combined", "z", "mist", "normal", "position", "vector", "diffuse_direct", "diffuse_indirect",
-              "diffuse_color", "glossy_direct", "glossy_indirect", "glossy_color", "transmission_direct",
-              "transmission_indirect", "transmission_color", "emit", "environment"):
+    for p in PRESET_PASSES:
         setattr(vl, "use_pass_" + p, True)
     vl.cycles.use_pass_volume_direct = True
     vl.cycles.use_pass_volume_indirect = True
-    vl.cycles.denoising_store_passes = True
-    for name, kind in (("Roughness", "VALUE"), ("SpecularF0", "COLOR")):
-        aov = vl.aovs.add()
-        aov.name, aov.type = name, kind
+    vl.use_pass_mist = passes == "all"
+    vl.cycles.denoising_store_passes = passes in ("denoising", "all")
+    # The materials' AOV Output nodes write only AOVs the view layer declares.
+    if passes == "all":
+        for name, kind in (("Roughness", "VALUE"), ("SpecularF0", "COLOR")):
+            aov = vl.aovs.add()
+            aov.name, aov.type = name, kind
     scene.world.mist_settings.start, scene.world.mist_settings.depth = 0.5, 8.0
 
 
@@ -274,8 +300,9 @@ def main():
     t0 = time.time()
     bpy.ops.render.render(animation=True)
     total = time.time() - t0
-    print("cycles_room: %d frames %dx%d at %d spp (seed %d) -> %s in %.2f s (%.3f s/frame), Blender %s" %
-          (a.frames, a.width, a.height, a.spp, a.seed, a.out, total, total / a.frames, bpy.app.version_string))
+    print("cycles_room: %d frames %dx%d at %d spp (seed %d, passes %s) -> %s in %.2f s (%.3f s/frame), Blender %s" %
+          (a.frames, a.width, a.height, a.spp, a.seed, a.passes, a.out, total, total / a.frames,
+           bpy.app.version_string))
 
 
 if __name__ == "__main__":
