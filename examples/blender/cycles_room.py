@@ -55,9 +55,9 @@ PRESET_PASSES = ("combined", "z", "normal", "position", "vector", "diffuse_direc
                  "transmission_indirect", "transmission_color", "emit", "environment")
 
 
-def parse_args():
+def parse_args(prog="cycles_room", doc=__doc__):
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    p = argparse.ArgumentParser(prog="cycles_room.py", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog=prog + ".py", description=doc.split("\n")[0])
     p.add_argument("--out", required=True, help="output directory (frame_%%04d.exr)")
     p.add_argument("--width", type=int, default=320)
     p.add_argument("--height", type=int, default=180)
@@ -110,10 +110,15 @@ def add_aovs(nt, roughness_socket_or_value, f0):
     c.inputs["Color"].default_value = (*f0, 1.0)
 
 
-def principled(name, base, metallic, roughness, specular=0.5, roughness_socket=None, f0=None):
+def principled(name, base, metallic, roughness, specular=0.5, roughness_socket=None, f0=None, **inputs):
+    """Principled BSDF; `inputs`: other inputs by name with spaces as underscores (transmission=1.0, ior=1.45)."""
     m, nt = new_material(name)
     bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
     out = nt.nodes.new("ShaderNodeOutputMaterial")
+    for key, value in inputs.items():
+        sock = next(i for i in bsdf.inputs if i.identifier.lower() == key.lower() or
+                    i.name.lower() == key.replace("_", " ").lower())
+        sock.default_value = value
     bsdf.inputs["Base Color"].default_value = (*base, 1.0)
     bsdf.inputs["Metallic"].default_value = metallic
     bsdf.inputs["Specular"].default_value = specular
@@ -292,18 +297,19 @@ def set_passes(scene, passes):
     scene.world.mist_settings.start, scene.world.mist_settings.depth = 0.5, 8.0
 
 
-def main():
-    a = parse_args()
+def run(prog, doc, build):
+    """A scene script's main: options, build(a) -> scene, render settings and passes, render."""
+    a = parse_args(prog, doc)
     os.makedirs(a.out, exist_ok=True)
-    scene = build_scene(a)
+    scene = build(a)
     configure(scene, a)
     t0 = time.time()
     bpy.ops.render.render(animation=True)
     total = time.time() - t0
-    print("cycles_room: %d frames %dx%d at %d spp (seed %d, passes %s) -> %s in %.2f s (%.3f s/frame), Blender %s" %
+    print(prog + ": %d frames %dx%d at %d spp (seed %d, passes %s) -> %s in %.2f s (%.3f s/frame), Blender %s" %
           (a.frames, a.width, a.height, a.spp, a.seed, a.passes, a.out, total, total / a.frames,
            bpy.app.version_string))
 
 
 if __name__ == "__main__":
-    main()
+    run("cycles_room", __doc__, build_scene)
