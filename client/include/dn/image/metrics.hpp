@@ -25,6 +25,7 @@
 //                    one reference against the truth (the floor the references'
 //                    noise puts under the plain MSE; the mean of both references
 //                    has half of it).
+//  - flip_ldr, flip_hdr (LDR- and HDR-ꟻLIP): in dn/image/flip.hpp.
 #pragma once
 
 #include <cstddef>
