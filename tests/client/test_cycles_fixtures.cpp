@@ -318,6 +318,98 @@ TEST(CyclesFixtures, ReflectionHitNeedsTheDenoisingDepth) {
   EXPECT_TRUE(plan_needs_camera(&p, plan));
 }
 
+// The layers of a file: its channel names less the component, sorted, once each.
+std::vector<std::string> layers_of(const std::vector<std::string>& channels) {
+  std::vector<std::string> out;
+  for (const auto& c : channels) out.push_back(c.substr(0, c.rfind('.')));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+// What cycles_room.py --passes preset writes: the passes the cycles preset
+// reads without Denoising Data, no Mist, no shader AOVs (README of the fixtures).
+const std::vector<std::string> kPresetLayers = {
+    "ViewLayer.Combined", "ViewLayer.Depth",     "ViewLayer.DiffCol",  "ViewLayer.DiffDir",  "ViewLayer.DiffInd",
+    "ViewLayer.Emit",     "ViewLayer.Env",       "ViewLayer.GlossCol", "ViewLayer.GlossDir", "ViewLayer.GlossInd",
+    "ViewLayer.Normal",   "ViewLayer.Position",  "ViewLayer.TransCol", "ViewLayer.TransDir", "ViewLayer.TransInd",
+    "ViewLayer.Vector",   "ViewLayer.VolumeDir", "ViewLayer.VolumeInd"};
+
+TEST(CyclesFixtures, NoDenoisingDataFilesHoldOnlyThePresetPasses) {
+  for (const char* name : {"nodd_0000.exr", "nodd_0001.exr", "nodd_0002.exr"}) {
+    SCOPED_TRACE(name);
+    const dn::image::ExrReader exr(fixture(name));
+    EXPECT_EQ(layers_of(exr.channels()), kPresetLayers);
+    EXPECT_EQ(exr.channels().size(), 54u);  // Combined RGBA, Vector XYZW, 1 each for Depth, 3 for the rest
+    EXPECT_EQ(exr.width(), 64);
+    EXPECT_EQ(exr.height(), 36);
+  }
+}
+
+TEST(CyclesFixtures, FourSppFilesHoldEveryPass) {
+  std::vector<std::string> want = kPresetLayers;
+  for (const char* l : {"Denoising Albedo", "Denoising Depth", "Denoising Normal", "Mist", "Roughness", "SpecularF0"})
+    want.push_back(std::string("ViewLayer.") + l);
+  std::sort(want.begin(), want.end());
+  const dn::image::ExrReader frame(fixture("frame_0000.exr"));
+  for (const char* name : {"spp4_0000.exr", "spp4_0001.exr", "spp4_0002.exr"}) {
+    SCOPED_TRACE(name);
+    const dn::image::ExrReader exr(fixture(name));
+    EXPECT_EQ(layers_of(exr.channels()), want);
+    EXPECT_EQ(exr.channels(), frame.channels()) << "the 1-spp fixtures' channels, all 67";
+    EXPECT_EQ(exr.channels().size(), 67u);
+  }
+}
+
+// The passes a file holds do not change the render: the Combined pass of the
+// no-Denoising-Data files is the 1-spp input's (same seed, same samples) up to
+// Cycles' run-to-run float noise, which two renders with the same settings show
+// as well (a fraction of a percent of the values, at most ~5e-4 relative).
+// A render with other samples (the 4-spp files, same seed) is far from it.
+TEST(CyclesFixtures, DenoisingDataDoesNotChangeTheRender) {
+  const std::vector<std::string> rgba = {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+                                         "ViewLayer.Combined.A"};
+  for (const char* n : {"0000", "0001", "0002"}) {
+    SCOPED_TRACE(n);
+    const auto a = dn::image::ExrReader(fixture(std::string("nodd_") + n + ".exr")).read(rgba);
+    const auto b = dn::image::ExrReader(fixture(std::string("frame_") + n + ".exr")).read(rgba);
+    const auto c = dn::image::ExrReader(fixture(std::string("spp4_") + n + ".exr")).read(rgba);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(c.size(), b.size());
+    double diff = 0.0, other = 0.0, total = 0.0;
+    size_t far = 0;
+    for (size_t i = 0; i < b.size(); ++i) {
+      const double d = std::fabs(double(a[i]) - b[i]);
+      far += d > 2e-3 * std::max(0.01, double(std::fabs(b[i])));
+      diff += d;
+      other += std::fabs(double(c[i]) - b[i]);
+      total += std::fabs(b[i]);
+    }
+    EXPECT_EQ(far, 0u) << "values differing by more than 2e-3 relative";
+    EXPECT_LE(diff, 1e-5 * total) << "sum |nodd - frame| over sum |frame|";
+    EXPECT_GE(other, 0.05 * total) << "sum |spp4 - frame| over sum |frame|: other samples";
+  }
+}
+
+// Without Denoising Data and AOVs (Blender's defaults plus the light passes)
+// svgf runs on the primary hit's guides: DiffCol as albedo, the Depth pass,
+// no mirror guides.
+TEST(CyclesFixtures, WithoutDenoisingDataSvgfTakesThePrimaryHitsGuides) {
+  const dn::image::ExrReader exr(fixture("nodd_0001.exr"));
+  const Preset preset = make_preset("auto", exr.channels());
+  ASSERT_EQ(preset.name, "cycles");
+  const auto p = svgf_like();
+  const auto plan = plan_channels(preset, {}, &p, std::nullopt, exr.channels(), fixture("nodd_0001.exr"));
+  std::string albedo, depth;
+  for (const auto& c : plan) {
+    if (c.id == ChannelId::Albedo) albedo = c.describe();
+    if (c.id == ChannelId::Depth) depth = c.describe();
+  }
+  EXPECT_EQ(albedo, "ViewLayer.DiffCol.{R,G,B}");
+  EXPECT_EQ(depth, "ViewLayer.Depth.Z (Cycles depth)");
+  EXPECT_FALSE(plan_rough_guides(preset, plan, exr.channels()));
+}
+
 }  // namespace
 
 namespace reflect_features {
