@@ -12,7 +12,9 @@
 # a seed of its own; the noisy inputs are rendered with seed 3, so they share
 # random numbers with neither) give the noise-corrected MSE and the references'
 # own noise (dn denoise --reference2, metrics.hpp); --no-reference2 skips the
-# second one.
+# second one. Also per method: LDR- and HDR-FLIP (dn/image/flip.hpp; LDR on the
+# ACES-tone-mapped frames) and in how many frames the output's RMSE / relMSE is
+# above the noisy input's own (dn denoise -r: worse_rmse, worse_relmse).
 # --docs also copies the images to docs/images/ and puts the section into
 # docs/results.md between its speed-error markers.
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
@@ -95,7 +97,7 @@ region_temporal="$out/region_temporal.tsv"
 printf 'scene\tregion\tmethod\ttemporal\tpixels\n' > "$region_temporal"
 
 results="$out/results.tsv"
-printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\tnc_mse\tnc_relmse\tref_noise_mse\n' > "$results"
+printf 'scene\tmethod\trmse\trelmse\tssim\ttemporal\tdevice_ms\tframe_ms\tbytes_per_pixel\tnc_mse\tnc_relmse\tref_noise_mse\tflip_ldr\tflip_hdr\tworse_rmse\tworse_relmse\n' > "$results"
 last=$(printf '%04d' $((frames - 1)))
 for s in $scenes; do
   dir="$out/scene$s"
@@ -140,11 +142,12 @@ for s in $scenes; do
       --first $((still / 2 + 1)) --frames $((still - still / 2 - 1)) --method "$label" --region glossy |
       awk -v s="$s" 'NR > 1 { print s "\t" $0 }' >> "$region_temporal"
     m="$dir/$label/moving.tsv"
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" \
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$s" "$label" "$(column "$m" rmse)" \
       "$(column "$m" relmse)" "$(column "$m" ssim)" "$(column "$dir/$label/still.tsv" temporal)" \
       "$(column "$m" device_ms)" "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" \
       "$(column "$m" device_bytes_per_pixel)" "$(column "$m" nc_mse)" "$(column "$m" nc_relmse)" \
-      "$(column "$m" ref_noise_mse)" >> "$results"
+      "$(column "$m" ref_noise_mse)" "$(column "$m" flip_ldr)" "$(column "$m" flip_hdr)" \
+      "$(column "$m" worse_rmse)" "$(column "$m" worse_relmse)" >> "$results"
     panels+=("$dir/$label/frame_$last.exr")
     panel_labels+=(--label "$label")
     region_args=(--region glossy,highlights,disocclusion)
@@ -171,9 +174,9 @@ done
 labels=""
 for row in "${rows[@]}"; do labels+="${row%% *} "; done
 {
-  echo "| scene | method | RMSE | relMSE | SSIM | nc MSE | nc relMSE | reference noise MSE | temporal | device ms/frame | end-to-end ms/frame | device B/pixel |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
-  awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $10, $11, $12, $6, $7, $8, $9 }' "$results"
+  echo "| scene | method | RMSE | relMSE | SSIM | ꟻLIP LDR | ꟻLIP HDR | nc MSE | nc relMSE | reference noise MSE | frames worse than input (RMSE / relMSE) | temporal | device ms/frame | end-to-end ms/frame | device B/pixel |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  awk -F'\t' -v n="$frames" 'NR > 1 { printf "| %s | %s | %.4f | %.4f | %.4f | %.4f | %.4f | %.5f | %.4f | %.5f | %s / %s of %s | %.5f | %.1f | %.1f | %.0f |\n", $1, $2, $3, $4, $5, $13, $14, $10, $11, $12, $15, $16, n, $6, $7, $8, $9 }' "$results"
 } > "$out/results.md"
 
 # The plot: relMSE against device time, one colour per scene, each point

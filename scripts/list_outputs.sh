@@ -12,7 +12,7 @@ for d in "$out"/scene1/*/; do
   case "$m" in input | refs | still) ;; *) methods+="${methods:+, }$m" ;; esac
 done
 outputs=(
-  "metrics.md|the metrics table (markdown): RMSE, relMSE, SSIM, temporal error, device and end-to-end ms per frame, device bytes per pixel of every method"
+  "metrics.md|the metrics table (markdown): RMSE, relMSE, SSIM, FLIP (LDR, HDR), frames worse than the noisy input, temporal error, device and end-to-end ms per frame, device bytes per pixel of every method"
   "results.tsv|the same numbers as TSV, one row per method"
   "region.tsv|the error over regions of the frame only: glossy, highlights, disocclusions, roughness-mapped"
   "region_temporal.tsv|the still shot's temporal error over glossy surfaces"

@@ -20,6 +20,7 @@
 #include "output_image.hpp"
 #include "presets.hpp"
 #include "progress.hpp"
+#include "reference_metrics.hpp"
 #include "reference_threshold.hpp"
 #include "reflection_features.hpp"
 #include "sequence_metrics.hpp"
@@ -52,7 +53,7 @@ const std::vector<Args::Spec> kSpecs = {
     {"fp16", "", false, false, "send input planes and receive the output as fp16", ""},
     {"output-format", "", true, false, "f32 | f16 output on the wire (default f16 with --fp16, else f32)", "FMT"},
     {"param", "", true, true, "pipeline parameter NAME=VALUE", "NAME=VALUE"},
-    {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE and SSIM per frame", "PATTERN"},
+    {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE, SSIM, FLIP and the input's error per frame", "PATTERN"},
     {"fail", "", true, false,
      "with -r: a frame fails when its --fail-metric is above X; too many failing frames make dn exit 3", "X"},
     {"fail-metric", "", true, false, "relmse | rmse: the metric --fail bounds (default relmse)", "NAME"},
@@ -61,7 +62,7 @@ const std::vector<Args::Spec> kSpecs = {
      "second reference independent of -r: noise-corrected MSE and the references' noise floor", "PATTERN"},
     {"in-flight", "", true, false, "frames kept in flight (default 3)", "K"},
     {"token-file", "", true, false, "file holding the auth token (default $DN_TOKEN / $DN_TOKEN_FILE)", "FILE"},
-    {"tonemap", "", true, false, "PNG and SSIM tone map: aces | reinhard | clamp (default aces)", "OP"},
+    {"tonemap", "", true, false, "PNG, SSIM and LDR-FLIP tone map: aces | reinhard | clamp (default aces)", "OP"},
     {"exposure", "", true, false, "exposure multiplier before tone mapping (default 1)", "X"},
     {"exr-float", "", false, false, "write 32-bit float output EXRs", ""},
     {"motion-convention", "", true, false,
@@ -333,6 +334,19 @@ int run_denoise(const std::vector<std::string>& argv) {
   Progress progress(frames.size(), Progress::stderr_is_tty(), quiet);
   Totals totals;
   NoiseCorrectedTotals nc_totals;
+  ReferenceExtrasTotals extras;
+  // The noisy radiance of each frame in flight (with -r), for its own error.
+  std::map<long long, std::vector<float>> inputs;
+  // ꟻLIP runs after the last frame so that its cost stays out of the timings: the
+  // outputs wait here, up to a memory budget past which they are measured at once.
+  struct PendingFlip {
+    long long number;
+    std::vector<float> rgb;
+  };
+  std::vector<PendingFlip> pending_flip;
+  size_t pending_flip_bytes = 0;
+  constexpr size_t kPendingFlipBudget = size_t(512) << 20;
+  std::vector<std::string> flip_lines;
   const auto t_begin = std::chrono::steady_clock::now();
   std::deque<long long> submitted;  // frame numbers in flight, in order
   std::vector<float> previous_rgb;  // the last output, for the temporal error
@@ -355,6 +369,8 @@ int run_denoise(const std::vector<std::string>& argv) {
                   write_options);
     std::optional<Metrics> m;
     std::optional<NoiseCorrected> nc;
+    std::optional<InputError> in_err;
+    std::optional<FlipMetrics> flip_now;
     if (reference) {
       int rw = 0, rh = 0;
       const std::string path = format_frame_path(*reference, number);
@@ -370,6 +386,21 @@ int run_denoise(const std::vector<std::string>& argv) {
         if (measured) nc_totals.add(*nc);
       }
       if (measured && threshold) threshold->add(number, m->rmse, m->relmse);
+      if (auto it = inputs.find(number); it != inputs.end()) {
+        in_err = input_error(it->second, ref);
+        inputs.erase(it);
+        if (measured) extras.add_input(*in_err, m->rmse, m->relmse);
+      }
+      if (measured) {
+        const size_t bytes = rgb.size() * sizeof(float);
+        if (pending_flip_bytes + bytes <= kPendingFlipBudget) {
+          pending_flip.push_back({number, rgb});
+          pending_flip_bytes += bytes;
+        } else {
+          flip_now = flip_metrics(rgb, ref, rw, rh, tonemap, exposure);
+          extras.add_flip(*flip_now);
+        }
+      }
       if (measured) {
         totals.with_ref++;
         totals.rmse += m->rmse;
@@ -406,6 +437,8 @@ int run_denoise(const std::vector<std::string>& argv) {
       const std::string q = fmt("  rmse %.5f", m->rmse) + fmt("  relmse %.5f", m->relmse) + fmt("  ssim %.4f", m->ssim);
       line += q;
       if (nc) line += noise_corrected_status(*nc);
+      if (in_err) line += input_error_status(*in_err);
+      if (flip_now) line += flip_status(*flip_now);
       status += fmt("  rmse %.5f", m->rmse) + fmt("  ssim %.4f", m->ssim);
     }
     progress.frame_done(line, status);
@@ -441,6 +474,7 @@ int run_denoise(const std::vector<std::string>& argv) {
       in.info.prev_jitter = f.camera.prev_jitter.value_or(std::array<float, 2>{});
     }
     if (i == 0) in.reset();
+    if (reference) inputs[f.number] = input_radiance(f.planes);
     for (const auto& p : f.planes) in.add(p.id, std::span<const float>(p.data));
     submitted.push_back(f.number);
     collect(true, [&] { return session.submit(in); });
@@ -450,6 +484,17 @@ int run_denoise(const std::vector<std::string>& argv) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
   progress.finish();
   session.close();
+  for (const auto& p : pending_flip) {
+    int rw = 0, rh = 0;
+    const std::vector<float> ref = image::read_exr_rgb(format_frame_path(*reference, p.number), rw, rh);
+    const FlipMetrics f = flip_metrics(p.rgb, ref, rw, rh, tonemap, exposure);
+    extras.add_flip(f);
+    char head[32];
+    std::snprintf(head, sizeof head, "frame %04lld", p.number);
+    flip_lines.push_back(head + flip_status(f));
+  }
+  if (!quiet)
+    for (const auto& l : flip_lines) std::fprintf(stderr, "%s\n", l.c_str());
 
   if (!quiet) {
     const double n = double(std::max<size_t>(totals.frames, 1));
@@ -462,6 +507,13 @@ int run_denoise(const std::vector<std::string>& argv) {
     std::printf("mean rmse %.6f  relmse %.6f  ssim %.5f  (%zu frames, ssim on %s-tone-mapped luma)\n",
                 totals.rmse / n, totals.relmse / n, totals.ssim / n, totals.with_ref, image::to_string(tonemap));
     if (nc_totals.frames) std::printf("mean%s\n", noise_corrected_status(nc_totals.mean()).c_str());
+    if (extras.flip_frames)
+      std::printf("mean%s  (%zu frames, ldr on %s-tone-mapped images)\n", flip_status(extras.flip_mean()).c_str(),
+                  extras.flip_frames, image::to_string(tonemap));
+    if (extras.input_frames)
+      std::printf("mean%s  output worse than input: %zu (rmse), %zu (relmse) of %zu frames\n",
+                  input_error_status(extras.input_mean()).c_str(), extras.worse_rmse, extras.worse_relmse,
+                  extras.input_frames);
   }
   if (threshold) std::printf("%s\n", threshold->verdict().c_str());
   if (auto summary = args.get("summary")) {
@@ -472,14 +524,15 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double r = double(std::max<size_t>(totals.with_ref, 1));
     const bool have_ref = totals.with_ref > 0;
     const double pixels = double(session.info().width) * session.info().height;
-    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel%s\n",
-                 noise_corrected_summary_header());
-    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f%s\n", have_ref ? totals.rmse / r : NAN,
+    std::fprintf(f, "rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\tdevice_bytes_per_pixel%s%s\n",
+                 noise_corrected_summary_header(), reference_extras_summary_header());
+    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.3f\t%.3f\t%zu\t%.3f\t%.3f\t%.6g\t%.1f%s%s\n", have_ref ? totals.rmse / r : NAN,
                  have_ref ? totals.relmse / r : NAN, have_ref ? totals.ssim / r : NAN, totals.latency_ms / n,
                  totals.server_ms / n, totals.frames, wall > 0 ? double(handled) / wall : 0.0,
                  totals.device_ms / n, totals.temporal_pairs ? totals.temporal / double(totals.temporal_pairs) : NAN,
                  pixels > 0 ? double(session.info().device_bytes) / pixels : 0.0,
-                 noise_corrected_summary_values(nc_totals.mean()).c_str());
+                 noise_corrected_summary_values(nc_totals.mean()).c_str(),
+                 reference_extras_summary_values(extras).c_str());
     std::fclose(f);
   }
   return threshold && threshold->failed() ? kExitThresholdExceeded : kExitOk;

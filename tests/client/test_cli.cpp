@@ -5,20 +5,26 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "args.hpp"
 #include "dn/client/endpoint.hpp"
 #include "commands.hpp"
 #include "dn/image/exr_io.hpp"
+#include "dn/image/flip.hpp"
+#include "dn/image/metrics.hpp"
 #include "dn/image/pfm.hpp"
 #include "dn/protocol/codec.hpp"
 #include "fake_server.hpp"
 #include "frame_source.hpp"
+#include "reference_metrics.hpp"
 
 namespace {
 
@@ -388,6 +394,104 @@ TEST_F(DnCli, FailThresholdDecidesTheExitStatus) {
   far_server.join();
   EXPECT_NE(out.find("FAILURE: 4 of 4 frames (100 %) have relmse above 0.05"), std::string::npos) << out;
   EXPECT_TRUE(log_far.closed) << "the whole run is denoised before the verdict";
+}
+
+// Column NAME of a two-line --summary TSV.
+double summary_column(const fs::path& file, const std::string& name) {
+  std::ifstream in(file);
+  std::string header, values;
+  std::getline(in, header);
+  std::getline(in, values);
+  std::istringstream h(header), v(values);
+  std::string key, value;
+  while (std::getline(h, key, '\t') && std::getline(v, value, '\t'))
+    if (key == name) return std::stod(value);
+  ADD_FAILURE() << "no column " << name << " in " << header;
+  return NAN;
+}
+
+TEST_F(DnCli, ReferenceReportsFlipAndTheInputsOwnError) {
+  // The echo server's output is 2 x radiance. Against references of 1.2 x radiance
+  // (frames 1, 2) the input is closer than the output; against 2.5 x (frames 3, 4)
+  // the output is.
+  fs::create_directories(dir / "ref_far");
+  std::vector<std::vector<float>> inputs, outputs, refs;
+  for (int frame = 1; frame <= 4; ++frame) {
+    std::vector<float> rad(size_t(W * H * 3));
+    for (size_t i = 0; i < rad.size(); ++i) rad[i] = radiance_value(frame, i);
+    std::vector<float> ref(rad), out(rad);
+    for (auto& v : ref) v *= frame <= 2 ? 1.2f : 2.5f;
+    for (auto& v : out) v *= 2.0f;
+    image::write_exr_rgb(cli::format_frame_path((dir / "ref_far/ref_%04d.exr").string(), frame), W, H, ref.data(),
+                         image::ExrPixelType::Float);
+    inputs.push_back(rad), outputs.push_back(out), refs.push_back(ref);
+  }
+  EchoLog log;
+  FakeServer server([&](Peer& peer) { echo_server(peer, log); });
+  auto args = base_args(server.url());
+  args.erase(std::find(args.begin(), args.end(), "--quiet"));
+  for (const std::string& a : {std::string("-r"), (dir / "ref_far/ref_%04d.exr").string(), std::string("--tonemap"),
+                               std::string("reinhard"), std::string("--summary"), (dir / "summary.tsv").string()})
+    args.push_back(a);
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cli::run_denoise(args), 0);
+  const std::string out = testing::internal::GetCapturedStdout(), err = testing::internal::GetCapturedStderr();
+  server.join();
+
+  double ldr = 0, hdr = 0, in_rmse = 0, in_relmse = 0;
+  for (size_t k = 0; k < 4; ++k) {
+    const double l = image::flip_ldr_tonemapped(outputs[k].data(), refs[k].data(), W, H, image::Tonemap::Reinhard).mean;
+    const double h = image::flip_hdr(outputs[k].data(), refs[k].data(), W, H).mean;
+    const double r = image::rmse(inputs[k].data(), refs[k].data(), refs[k].size());
+    ASSERT_GT(l, 0.0);
+    ASSERT_GT(h, 0.0);
+    ldr += l / 4, hdr += h / 4, in_rmse += r / 4;
+    in_relmse += image::relative_mse(inputs[k].data(), refs[k].data(), refs[k].size()) / 4;
+    // Per frame: the input's error on the frame's line, ꟻLIP on a line of its own after the last frame.
+    char want[160];
+    std::snprintf(want, sizeof want, "input_rmse %.5f", r);
+    EXPECT_NE(err.find(want), std::string::npos) << want << "\n" << err;
+    std::snprintf(want, sizeof want, "frame %04zu  flip_ldr %.5f  flip_hdr %.5f", k + 1, l, h);
+    EXPECT_NE(err.find(want), std::string::npos) << want << "\n" << err;
+  }
+  const fs::path summary = dir / "summary.tsv";
+  EXPECT_NEAR(summary_column(summary, "flip_ldr"), ldr, 1e-5 * ldr);
+  EXPECT_NEAR(summary_column(summary, "flip_hdr"), hdr, 1e-5 * hdr);
+  EXPECT_NEAR(summary_column(summary, "input_rmse"), in_rmse, 1e-5 * in_rmse);
+  EXPECT_NEAR(summary_column(summary, "input_relmse"), in_relmse, 1e-5 * in_relmse);
+  EXPECT_EQ(summary_column(summary, "worse_rmse"), 2.0);
+  EXPECT_EQ(summary_column(summary, "worse_relmse"), 2.0);
+  // The existing columns keep their places; the new ones come after them.
+  std::ifstream in(summary);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("rmse\trelmse\tssim\te2e_ms\tserver_ms\tframes\tfps\tdevice_ms\ttemporal\t"
+                         "device_bytes_per_pixel\tnc_mse\tnc_relmse\tref_noise_mse\tflip_ldr\tflip_hdr\tinput_rmse\t"
+                         "input_relmse\tworse_rmse\tworse_relmse",
+                         0),
+            0u)
+      << header;
+  EXPECT_NE(out.find("output worse than input: 2 (rmse), 2 (relmse) of 4 frames"), std::string::npos) << out;
+  EXPECT_NE(out.find("mean  flip_ldr "), std::string::npos) << out;
+}
+
+TEST(ReferenceMetrics, InputRadianceIsRadianceElseTheSplitSum) {
+  using cli::LoadedPlane;
+  const std::vector<float> r{1, 2, 3}, d{0.5f, 0.25f, 1}, s{0.25f, 0.5f, 2}, e{1, 0, 0};
+  EXPECT_EQ(cli::input_radiance({{ChannelId::Diffuse, d}, {ChannelId::Radiance, r}}), r);
+  EXPECT_EQ(cli::input_radiance({{ChannelId::Diffuse, d}, {ChannelId::Specular, s}}),
+            (std::vector<float>{0.75f, 0.75f, 3}));
+  EXPECT_EQ(cli::input_radiance({{ChannelId::Diffuse, d}, {ChannelId::Specular, s}, {ChannelId::Emission, e}}),
+            (std::vector<float>{1.75f, 0.75f, 3}));
+  EXPECT_TRUE(cli::input_radiance({{ChannelId::DiffuseLighting, d}, {ChannelId::Specular, s}}).empty());
+  // Not measured: no input error, and such frames count in neither worse_* column.
+  cli::ReferenceExtrasTotals t;
+  t.add_input(cli::input_error({}, r), 5.0, 5.0);
+  t.add_input(cli::input_error(r, r), 1.0, NAN);  // input exact: any output error, and NaN, is worse
+  EXPECT_EQ(t.input_frames, 1u);
+  EXPECT_EQ(t.worse_rmse, 1u);
+  EXPECT_EQ(t.worse_relmse, 1u);
 }
 
 // Each of these is a bad command line (exit status 2), found before any file is read or server reached.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 namespace dn::image {
 
@@ -322,16 +323,28 @@ FlipResult flip_hdr(const float* rgb, const float* ref_rgb, int width, int heigh
 FlipResult flip_hdr(const float* rgb, const float* ref_rgb, int width, int height, const FlipExposures& exposures,
                     double ppd) {
   const size_t n = size_t(width) * size_t(height), c = n * 3;
-  std::vector<float> best(n, 0.0f), a(c), b(c);
   const int count = std::max(exposures.count, 2);
   const float step = (exposures.stop - exposures.start) / float(count - 1);
-  for (int k = 0; k < count; ++k) {
-    const float m = std::exp2(exposures.start + float(k) * step);
-    for (size_t i = 0; i < c; ++i) a[i] = clamp01(flip_aces(rgb[i] * m)), b[i] = clamp01(flip_aces(ref_rgb[i] * m));
-    const auto map = ldr_map(a.data(), b.data(), width, height, float(ppd));
-    for (size_t i = 0; i < n; ++i) best[i] = std::max(best[i], map[i]);
-  }
-  return with_mean(std::move(best));
+  // The exposures are independent: spread over the cores (the maximum does not depend on the order).
+  const int workers = std::clamp(int(std::thread::hardware_concurrency()), 1, count);
+  std::vector<std::vector<float>> best(size_t(workers), std::vector<float>(n, 0.0f));
+  auto run = [&](int worker) {
+    std::vector<float> a(c), b(c);
+    for (int k = worker; k < count; k += workers) {
+      const float m = std::exp2(exposures.start + float(k) * step);
+      for (size_t i = 0; i < c; ++i) a[i] = clamp01(flip_aces(rgb[i] * m)), b[i] = clamp01(flip_aces(ref_rgb[i] * m));
+      const auto map = ldr_map(a.data(), b.data(), width, height, float(ppd));
+      auto& mine = best[size_t(worker)];
+      for (size_t i = 0; i < n; ++i) mine[i] = std::max(mine[i], map[i]);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int w = 1; w < workers; ++w) threads.emplace_back(run, w);
+  run(0);
+  for (auto& t : threads) t.join();
+  for (size_t w = 1; w < best.size(); ++w)
+    for (size_t i = 0; i < n; ++i) best[0][i] = std::max(best[0][i], best[w][i]);
+  return with_mean(std::move(best[0]));
 }
 
 }  // namespace dn::image

@@ -68,6 +68,7 @@ struct FlipExposures {
 // replaced by the smallest positive luminance (the paper's formula is undefined there).
 FlipExposures flip_hdr_exposures(const float* ref_rgb, size_t pixels);
 
+// The exposures run on std::thread::hardware_concurrency() threads.
 FlipResult flip_hdr(const float* rgb, const float* ref_rgb, int width, int height, double ppd = kFlipDefaultPpd);
 FlipResult flip_hdr(const float* rgb, const float* ref_rgb, int width, int height, const FlipExposures& exposures,
                     double ppd = kFlipDefaultPpd);
