@@ -9,8 +9,9 @@
 
 namespace dn::test {
 
+// Defaults: the pipeline's (falloff 4, alpha 0.05); paper() gives paper 003's.
 struct StatParams {
-  double alpha = 0.005;
+  double alpha = 0.05;
   int radius = 20;
   double sigma_spatial = 10.0, sigma_albedo = 0.02, sigma_normal = 0.1;
   double variance_floor = 0.0;
@@ -18,10 +19,18 @@ struct StatParams {
   bool base_only = false;  // every tap with statistics is a member (the t -> infinity limit)
   // A member's weight times (1 - r)^falloff, r the largest channel's share of
   // the test's bound (0: all or nothing).
-  double falloff = 0.0;
+  double falloff = 4.0;
   // The statistics are demodulated: the filter averages the demodulated
   // means from the moments and multiplies by p's modulation.
   bool demodulated = false;
+
+  // Paper 003's setting: alpha 0.005, all-or-nothing membership.
+  static StatParams paper() {
+    StatParams p;
+    p.alpha = 0.005;
+    p.falloff = 0.0;
+    return p;
+  }
 };
 
 // One frame's planes as floats: radiance, albedo, normal, mean, m2, m3 3 per

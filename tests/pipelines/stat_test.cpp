@@ -102,6 +102,14 @@ std::unique_ptr<pipelines::Pipeline> make(gpu::Context& ctx, int w, int h, std::
   return pipelines::create(ctx, config);
 }
 
+// Paper 003's setting, which a session gets only by asking for it.
+const std::vector<protocol::Parameter> kPaper = {{"alpha", 0.005}, {"membership_falloff", 0}};
+
+std::vector<protocol::Parameter> with_paper(std::vector<protocol::Parameter> params) {
+  params.insert(params.end(), kPaper.begin(), kPaper.end());
+  return params;
+}
+
 struct Variant {
   const char* name;
   int w, h;
@@ -111,6 +119,10 @@ struct Variant {
 };
 
 TEST_F(StatTest, MatchesCpuReference) {
+  // A session without parameters: membership falloff 4 at alpha 0.05.
+  test::StatParams defaults;
+  defaults.alpha = 0.05;
+  defaults.falloff = 4.0;
   test::StatParams r6;
   r6.radius = 6;
   r6.sigma_spatial = 3.0;
@@ -127,9 +139,17 @@ TEST_F(StatTest, MatchesCpuReference) {
   falloff.falloff = 2.0;
   test::StatParams falloff_asym = asym;
   falloff_asym.falloff = 0.5;
+  const test::StatParams paper = test::StatParams::paper();
+  test::StatParams paper_asym = paper;
+  paper_asym.radius = 6;
+  paper_asym.sigma_spatial = 3.0;
+  paper_asym.asymmetric = true;
   const std::vector<protocol::Parameter> p6 = {{"radius", 6}, {"sigma_spatial", 3}};
   const Variant variants[] = {
-      {"defaults", 48, 32, Format::F32, {}, test::StatParams{}},
+      {"defaults", 48, 32, Format::F32, {}, defaults},
+      {"paper", 48, 32, Format::F32, kPaper, paper},
+      {"paper_asymmetric_tiled", 64, 40, Format::F32,
+       with_paper({{"radius", 6}, {"sigma_spatial", 3}, {"asymmetric", 1}}), paper_asym},
       {"radius6", 64, 40, Format::F32, p6, r6},
       {"asymmetric", 64, 40, Format::F32, {{"radius", 6}, {"sigma_spatial", 3}, {"asymmetric", 1}}, asym},
       {"floor_alpha_fp16", 61, 37, Format::F16,
@@ -194,7 +214,9 @@ TEST_F(StatTest, MatchesCpuReference) {
 // demodulated statistics see one lighting, so every neighbour is a member
 // and the result, remodulated by each pixel's albedo, keeps the texture
 // (measured: RMSE 0.0017 against the input's 0.0157 and 0.0186 over radiance). The
-// base weight ignores albedo here (sigma_albedo 10), so only the test differs.
+// base weight ignores albedo here (sigma_albedo 10), so only the test differs;
+// at the paper's setting, where every accepted neighbour counts fully (the
+// defaults' falloff and alpha 0.05 give 0.0089 against 0.0149).
 TEST_F(StatTest, DemodulatedStatisticsAverageAcrossTexture) {
   const int w = 40, h = 24, spp = 1024;
   auto frame = [&](bool demodulated) {
@@ -216,7 +238,7 @@ TEST_F(StatTest, DemodulatedStatisticsAverageAcrossTexture) {
     }
     return f;
   };
-  const std::vector<protocol::Parameter> base = {{"radius", 6}, {"sigma_spatial", 3}, {"sigma_albedo", 10}};
+  const std::vector<protocol::Parameter> base = with_paper({{"radius", 6}, {"sigma_spatial", 3}, {"sigma_albedo", 10}});
   std::vector<protocol::Parameter> with = base;
   with.push_back({"demodulated", 1});
   const test::StatFrame plain_frame = frame(false), demodulated_frame = frame(true);
@@ -260,13 +282,14 @@ TEST_F(StatTest, ConstantInputIsReturnedExactly) {
   for (size_t k = 0; k < got.size(); ++k) ASSERT_EQ(got[k], f.radiance[k]) << "component " << k;
 }
 
-// Where the test accepts every tap (n = 2 per pixel: nu = 2, and alpha
-// 1e-6 makes t about 707), the output is the base filter's: the reference
-// with membership switched off.
+// Paper 003's t -> infinity limit: with all-or-nothing membership, where
+// the test accepts every tap (n = 2 per pixel: nu = 2, and alpha 1e-6 makes
+// t about 707), the output is the base filter's: the reference with
+// membership switched off.
 TEST_F(StatTest, AcceptingEveryTapIsTheBaseFilter) {
   const int w = 48, h = 32;
   const test::StatFrame f = shadow_frame(w, h, 2, 9);
-  test::StatParams p;
+  test::StatParams p = test::StatParams::paper();
   p.alpha = 1e-6;
   p.radius = 6;
   p.sigma_spatial = 3.0;
@@ -278,7 +301,7 @@ TEST_F(StatTest, AcceptingEveryTapIsTheBaseFilter) {
   ASSERT_EQ(rejected, 0) << "the frame must be one where the test accepts every tap";
   p.base_only = true;
   const test::StatResult base = test::stat_filter(f, prep, p, table);
-  auto pipe = make(ctx(), w, h, {{"alpha", 1e-6}, {"radius", 6}, {"sigma_spatial", 3}});
+  auto pipe = make(ctx(), w, h, {{"alpha", 1e-6}, {"membership_falloff", 0}, {"radius", 6}, {"sigma_spatial", 3}});
   const auto got = svgf_inputs::run(*pipe, host_frame(f));
   EXPECT_LE(test::relative_rms(got, base.output), 1e-5);
   // membership 0 is that base filter on any frame (here one with rejections).
@@ -441,6 +464,37 @@ TEST_F(StatTest, NonFiniteGuidesNeverReachTheOutput) {
       EXPECT_EQ(bad, 0u) << "non-finite output components";
     }
   }
+}
+
+// What a session without parameters runs with, for stat and stat-temporal
+// (the WELCOME listing and the values resolved for the constants block):
+// membership falloff 4 at alpha 0.05; the paper's values are one request away.
+TEST(StatParameters, SessionsWithoutParametersGetFalloff4AtAlpha005) {
+  for (const char* name : {"stat", "stat-temporal"}) {
+    SCOPED_TRACE(name);
+    const pipelines::PipelineDescription* description = nullptr;
+    for (const auto& d : pipelines::available_pipelines())
+      if (d.name == name) description = &d;
+    ASSERT_NE(description, nullptr);
+    auto value_of = [&](const std::vector<float>& values, const std::string& parameter) {
+      for (size_t i = 0; i < description->parameters.size(); ++i)
+        if (description->parameters[i].name == parameter) return values.at(i);
+      ADD_FAILURE() << "no parameter " << parameter;
+      return -1.0f;
+    };
+    std::vector<float> listed;
+    for (const auto& p : description->parameters) listed.push_back(static_cast<float>(p.default_value));
+    EXPECT_EQ(value_of(listed, "alpha"), 0.05f);
+    EXPECT_EQ(value_of(listed, "membership_falloff"), 4.0f);
+    const auto resolved = pipelines::resolve_parameters(name, {});
+    EXPECT_EQ(value_of(resolved, "alpha"), 0.05f);
+    EXPECT_EQ(value_of(resolved, "membership_falloff"), 4.0f);
+    const auto paper = pipelines::resolve_parameters(name, kPaper);
+    EXPECT_EQ(value_of(paper, "alpha"), 0.005f);
+    EXPECT_EQ(value_of(paper, "membership_falloff"), 0.0f);
+  }
+  auto config = test::make_config("stat", 16, 16, stat_channels(), Format::F32, kPaper);
+  EXPECT_FALSE(pipelines::validate(config).has_value()) << "the paper's values must be accepted";
 }
 
 TEST(StatValidate, StatisticsOnlyInFp32) {
