@@ -13,16 +13,54 @@
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
+#include "luminance.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
 #include "passes/svgf_remodulate.pass"
 
 #include "svgf_guards.glsl"
 
-vec3 remodulate(uint p) {
-  vec3 c = illum_at(p).rgb * dn_guarded_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
+// Do no harm (svgf harm_guard g): the filtered value f may leave the pixel's
+// own temporal mean m (variance v) by g standard deviations; beyond, the
+// MSE-optimal blend of the unbiased m and the biased f under the bias
+// estimate d^2 - g^2 v. Only where the mean has DN_GUARD_MIN_LENGTH samples,
+// so that v is the pixel's own (younger pixels' is a spatial estimate, and a
+// lone bright sample may be a firefly); pixels without data keep f.
+const float DN_GUARD_MIN_LENGTH = 4.0;
+vec3 dn_harm_guard(vec3 f, vec4 m, float len) {
+  float g = DN_PARAM_VALUE(svgf, harm_guard);
+  if (!HARM_GUARD || g <= 0.0 || !(m.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
+  vec3 d = f - m.rgb;
+  float dl = dn_luminance(d);
+  float allowed = g * g * m.w;
+  return dl * dl > allowed ? m.rgb + d * (allowed / (dl * dl)) : f;
+}
+
+// A radiance pixel whose albedo is not a reflectance, below DN_ALBEDO_MIN in
+// every component (a mirror or metal when the albedo is a diffuse colour) or
+// above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light seen
+// in a mirror), or not finite: the guides cannot tell what it shows from its
+// neighbours, so it keeps its own current radiance (less emission, added below).
+const float DN_REFLECTANCE_MAX = 1.5;
+bool dn_unexplained(vec3 a) {
+  float m = max(a.r, max(a.g, a.b));
+  return !(m >= DN_ALBEDO_MIN && m <= DN_REFLECTANCE_MAX);
+}
+
+vec3 remodulate(uint p, out bool kept) {
+  vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
+  kept = false;
+  vec3 c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
+                         HARM_GUARD ? colour_history.data[p].a : 0.0) *
+           dn_guarded_albedo(a);
+  if (KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && dn_unexplained(a)) {
+    kept = true;
+    c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p));
+    if (HAS_EMISSION) c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
+  }
   if (HAS_SPECULAR)
-    c += specular_at(p).rgb * (SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0));
+    c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
+                       HARM_GUARD ? colour_history2.data[p].a : 0.0) * (SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0));
   if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;
 }
@@ -33,8 +71,10 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // pixel moves (1, no blend, when 0), at most taa_static_alpha where it is
 // static: nothing moved, so averaging the output over frames only takes out
 // the flicker the a-trous leaves (docs/pipelines.md, "svgf in detail", 5).
-float taa_weight(vec2 mv) {
-  float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
+// A pixel kept as rendered blends only where it is still (its motion, that
+// of its surface, is not that of what it shows).
+float taa_weight(vec2 mv, bool kept) {
+  float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
   if (still <= 0.0 || still >= moving) return moving;
   return mix(moving, still, dn_stillness(mv));
@@ -60,13 +100,13 @@ float display_lag(uint p, bool valid, float weight, vec2 mv, float prev_s) {
 // image (renormalized); none (weight 1) when reset, background, motion not
 // finite or the accepted weight < DN_MIN_TAP_WEIGHT (off-screen), and not
 // read where the blend weight is 1 anyway (a moving pixel without taa_alpha).
-void taa_prepare(uint p, vec3 c) {
+void taa_prepare(uint p, vec3 c, bool kept) {
   uvec2 size = frame.size.xy;
   vec3 prev = vec3(0.0);
   float prev_lag = 0.0;
   bool valid = false;
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-  float weight = dn_motion_usable(mv) ? taa_weight(mv) : 1.0;
+  float weight = dn_motion_usable(mv) ? taa_weight(mv, kept) : 1.0;
   ivec2 origin;
   vec4 weights;
   if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&
@@ -90,7 +130,8 @@ void taa_prepare(uint p, vec3 c) {
     }
   }
   float lag = DISPLAY_LAG ? display_lag(p, valid, weight, mv, prev_lag) : 0.0;
-  taa_current.data[p] = vec4(c, valid ? weight : 1.0);
+  // Negative for a pixel kept as rendered: svgf_taa leaves it out of its neighbours' 3x3 boxes.
+  taa_current.data[p] = vec4(c, (valid ? weight : 1.0) * (kept ? -1.0 : 1.0));
   taa_previous.data[p] = vec4(prev, lag);
 }
 
@@ -100,12 +141,13 @@ void main() {
   uint p0 = 2u * pair;
   if (p0 >= n) return;
   bool has_b = p0 + 1u < n;
-  vec3 a = remodulate(p0);
+  bool kept_a, kept_b = false;
+  vec3 a = remodulate(p0, kept_a);
   vec3 b = vec3(0.0);
-  if (has_b) b = remodulate(p0 + 1u);
+  if (has_b) b = remodulate(p0 + 1u, kept_b);
   if (TAA) {
-    taa_prepare(p0, a);
-    if (has_b) taa_prepare(p0 + 1u, b);
+    taa_prepare(p0, a, kept_a);
+    if (has_b) taa_prepare(p0 + 1u, b, kept_b);
     return;
   }
   if (TO_DISPLAY) {

@@ -4,7 +4,9 @@
 // where svgf_remodulate found a usable history (its blend weight a < 1), the
 // reprojected previous final output is clamped per RGB channel to the
 // min/max of the current colour over the 3x3 neighbourhood (the taps inside
-// the image) and out = mix(clamped, current, a); elsewhere out = current.
+// the image, but no neighbour kept as rendered: svgf_remodulate marks those
+// with a negative weight, -a, and what they show does not belong to the
+// surface) and out = mix(clamped, current, a); elsewhere out = current.
 // out goes to Output (session format; with TO_DISPLAY to the caller's vec4
 // display frame) and to the TAA history, vec4(out, lag state) fp32.
 // DISPLAY_LAG: the clamped value gives way to the unclamped one by
@@ -20,6 +22,7 @@
 
 vec3 blend(uint p) {
   vec4 c = current_at(p);
+  c.a = abs(c.a);
   vec3 out_c = c.rgb;
   if (c.a < 1.0) {
     ivec2 size = ivec2(frame.size.xy);
@@ -29,7 +32,9 @@ vec3 blend(uint p) {
       for (int dx = -1; dx <= 1; ++dx) {
         ivec2 q = pos + ivec2(dx, dy);
         if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-        vec3 v = current_at(uint(q.y) * frame.size.x + uint(q.x)).rgb;
+        vec4 cq = current_at(uint(q.y) * frame.size.x + uint(q.x));
+        if (cq.a < 0.0) continue;  // kept as rendered (p itself is already in)
+        vec3 v = cq.rgb;
         lo = min(lo, v);
         hi = max(hi, v);
       }

@@ -40,6 +40,10 @@ constexpr const char* kIllumA = "svgf_illum_a";
 constexpr const char* kIllumB = "svgf_illum_b";
 constexpr const char* kIllumC = "svgf_illum_c";
 constexpr const char* kIllumD = "svgf_illum_d";
+// With the harm guard, the a-trous iterations after the first ping-pong
+// between b and e (d and f), so a (c) keeps the variance pass's output.
+constexpr const char* kIllumE = "svgf_illum_e";
+constexpr const char* kIllumF = "svgf_illum_f";
 // The first signal's guide and temporal; the second's temporal, and its
 // guide when it has its own features, are these names + its suffix (both
 // signals' are read by the joint a-trous passes).
@@ -287,6 +291,8 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
     atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
     for (SignalBuffers& b : buffers) std::swap(b.illum, b.other);
+    if (i == 0 && v.harm_guard)
+      for (size_t s = 0; s < buffers.size(); ++s) buffers[s].other = s == 0 ? kIllumE : kIllumF;
   }
   std::vector<std::string> results;
   for (const SignalBuffers& b : buffers) results.push_back(b.illum);
@@ -323,6 +329,8 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   v.extra_samples = extra_samples(config);
   v.normal_power = normal_power_of(p.svgf_phi_normal);
   v.luminance_ramp = p.svgf_luminance_ramp != 0.0f;
+  v.harm_guard = p.svgf_harm_guard > 0.0f;
+  v.keep_unexplained = p.svgf_keep_unexplained != 0.0f;
   return v;
 }
 
@@ -383,11 +391,14 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     add_supersample_buffers(g, inputs);
     g.add_scratch(kSupersampleDisplay, kSupersampleDisplayBytes);
   }
+  const bool third = v.harm_guard && v.iterations > 1;  // the guard's own ping-pong partner
   g.add_scratch(kIllumA, kIlluminationBytes);
   if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
+  if (third) g.add_scratch(kIllumE, kIlluminationBytes);
   if (v.signals.size() > 1) {
     g.add_scratch(kIllumC, kIlluminationBytes);
     if (v.iterations > 0) g.add_scratch(kIllumD, kIlluminationBytes);
+    if (third) g.add_scratch(kIllumF, kIlluminationBytes);
   }
   if (v.sparse_gbuffer) {
     const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
@@ -462,8 +473,22 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .bind("taa_previous", kGuide)
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)))
         .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
-  if (v.display_lag)
-    remodulate.bind("colour_history", v.signals[0].history + "_colour").set("DISPLAY_LAG", 1u);
+  const bool guard = v.harm_guard && v.iterations > 0;
+  // The first chain's history (its length): read by the display lag and the harm guard.
+  if (v.display_lag || guard) remodulate.bind("colour_history", v.signals[0].history + "_colour");
+  if (v.display_lag) remodulate.set("DISPLAY_LAG", 1u);
+  const SvgfSignal& only = v.signals[0];
+  // Not with a validity mask: an unsampled pixel has no current radiance to keep.
+  if (v.keep_unexplained && v.signals.size() == 1 && only.channel == ChannelId::Radiance && !v.extra_samples &&
+      !v.validity_mask && first.plane && !first.client_divided)
+    remodulate.bind("raw", only.input)
+        .set("KEEP_UNEXPLAINED", 1u)
+        .set("RAW_HALF", is_half(channel_format(config, ChannelId::Radiance)));
+  if (guard) {
+    remodulate.bind("own", signal_buffers(v, 0).illum).set("HARM_GUARD", 1u);
+    if (v.signals.size() > 1)
+      remodulate.bind("own2", signal_buffers(v, 1).illum).bind("colour_history2", v.signals[1].history + "_colour");
+  }
 
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");

@@ -113,6 +113,13 @@ struct SvgfVariant {
   // exp2(phi_normal * log2(cos)) (svgf_atrous.pass, NORMAL_POWER).
   int32_t normal_power = -1;
   bool luminance_ramp = false;       // luminance_ramp != 0 (svgf_atrous.pass, LUMINANCE_RAMP)
+  // harm_guard > 0: svgf_remodulate pulls each filtered signal back toward
+  // its own temporal mean (the variance pass's output, which the a-trous
+  // ping-pong then leaves intact).
+  bool harm_guard = false;
+  // keep_unexplained != 0: with one radiance signal, zero-albedo pixels show
+  // their own current radiance (svgf_remodulate's KEEP_UNEXPLAINED).
+  bool keep_unexplained = false;
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (vec4(rgb, 0) fp32, read as texels; add_svgf_buffers adds
   // it) for a pass of the caller's that writes Output (reflect's median; with

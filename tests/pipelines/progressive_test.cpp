@@ -174,6 +174,7 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
   auto edge_error = [&](std::vector<protocol::Parameter> params) {
     params.push_back({"taa_alpha", 0});
     params.push_back({"taa_static_alpha", 0});
+    params.push_back({"harm_guard", 0});  // the filter's own behaviour: the guard would keep the noise-free step
     auto pipe = pipelines::create(ctx(), progressive_config(w, h, params));
     std::vector<float> out;
     for (int t = 0; t < 64; ++t) out = run(*pipe, scene.frame(grey(step)));
@@ -199,6 +200,7 @@ TEST_F(ProgressiveTest, TheDisplayFollowsTheHistorySwitchContinuously) {
   FlatFrames scene{w, h};
   const std::vector<double> step = luminance_step(w, h);
   auto frames = [&](std::vector<protocol::Parameter> params) {
+    params.push_back({"harm_guard", 0});  // the filter's own blur: the guard would keep the noise-free step
     auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params)));
     std::vector<std::vector<float>> out;
     for (int t = 0; t < 64; ++t) out.push_back(run(*pipe, scene.frame(grey(step))));

@@ -74,6 +74,8 @@ void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& val
     if (q.name == "clip_roughness") p.clip_roughness = q.value;
     if (q.name == "variance_of_mean") p.variance_of_mean = static_cast<int>(q.value);
     if (q.name == "luminance_ramp") p.luminance_ramp = static_cast<int>(q.value);
+    if (q.name == "harm_guard") p.harm_guard = q.value;
+    if (q.name == "keep_unexplained") p.keep_unexplained = static_cast<int>(q.value);
     if (q.name == "propagate_variance") p.propagate_variance = static_cast<int>(q.value);
     if (q.name == "step_order") p.finest_first = q.value == 0.0;
     if (q.name == "luminance_form") p.luminance_form = static_cast<int>(q.value);
@@ -597,7 +599,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     for (int i = 0; i < 3 * n; ++i) {
       sf[i] = guarded(f.specular_factor[i]);
     }
-  std::vector<double> cur, spec;
+  std::vector<double> cur, spec, raw;
   if (split) {
     const std::vector<double> one(3 * n, 1.0);
     cur = filter(chains_[0], sanitize(f.diffuse), f.diffuse_lighting ? one : a, false);
@@ -607,7 +609,40 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     std::vector<double> c = sanitize(f.radiance);
     for (int i = 0; i < 3 * n; ++i) c[i] = std::max(c[i] - e[i], 0.0);
     cur = filter(chains_[0], c, a, true);
+    raw = std::move(c);
   }
+
+  // Pass 4a (harm_guard g > 0, with a-trous): each chain's filtered value f
+  // moves back toward its temporal mean m of variance v where the luminance
+  // of f - m exceeds g sqrt(v): m + (f - m) g^2 v / Y(f - m)^2; only where
+  // the history length is at least 4 (v from the pixel's own moments).
+  auto guard = [&](std::vector<double>& filtered, const Chain& ch) {
+    const double g = p_.harm_guard;
+    if (!(g > 0.0) || iterations == 0) return;
+    for (int i = 0; i < n; ++i) {
+      const double v = ch.variance[i];
+      if (!(v >= 0.0) || ch.length[i] < 4.0) continue;  // no data, or a variance not the pixel's own
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = filtered[4 * i + k] - ch.temporal[3 * i + k];
+      const double dl = luminance(d), allowed = g * g * v;
+      if (dl * dl > allowed)
+        for (int k = 0; k < 3; ++k) filtered[4 * i + k] = ch.temporal[3 * i + k] + d[k] * allowed / (dl * dl);
+    }
+  };
+  guard(cur, chains_[0]);
+  if (split) guard(spec, chains_[1]);
+  // Pass 4b (keep_unexplained, radiance): a pixel whose albedo is below 1e-3
+  // in every component or above 1.5 in one (or not finite: not a reflectance)
+  // keeps its current radiance - emission.
+  std::vector<bool> kept(n, false);
+  if (!split && p_.keep_unexplained && !masked)
+    for (int i = 0; i < n; ++i) {
+      const double m = std::max({double(float(f.albedo[3 * i])), double(float(f.albedo[3 * i + 1])),
+                                 double(float(f.albedo[3 * i + 2]))});
+      kept[i] = !(m >= static_cast<double>(1e-3f) && m <= 1.5);
+      if (kept[i])
+        for (int k = 0; k < 3; ++k) cur[4 * i + k] = raw[3 * i + k];
+    }
 
   // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
@@ -628,13 +663,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // is below 0, else that state x (1 - a)) x the stillness; the clamped value
   // moves toward the unclamped one by max(s, 0).
   if (p_.taa_alpha > 0.0 || p_.taa_static_alpha > 0.0) {
-    const double moving = p_.taa_alpha > 0.0 ? p_.taa_alpha : 1.0;
     const std::vector<double>& cur_c = remodulated_;
     std::vector<double> lag(n, 0.0);
     if (lag_.empty()) lag_.assign(n, 0.0);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const int i = y * w + x;
+        // A pixel kept as rendered blends only where it is still (taa_alpha 1).
+        const double moving = p_.taa_alpha > 0.0 && !kept[i] ? p_.taa_alpha : 1.0;
         const bool young = p_.display_lag && chains_[0].length[i] < p_.luminance_min_age;
         if (young) lag[i] = -1.0;
         const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
@@ -669,6 +705,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
             for (int dx = -1; dx <= 1; ++dx) {
               const int qx = x + dx, qy = y + dy;
               if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+              if ((dx != 0 || dy != 0) && kept[qy * w + qx]) continue;  // what it shows is not the surface's
               lo = std::min(lo, cur_c[3 * (qy * w + qx) + c]);
               hi = std::max(hi, cur_c[3 * (qy * w + qx) + c]);
             }

@@ -397,13 +397,17 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the TAA blend's, fp32 vec4(rgb, lag)), scratch 4*16
-  // (2 illumination, guide, temporal), output 12 = 172 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+2+4 + 48 + 64 + 6 = 142 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 142 + pipelines::GraphSpec::kConstantBytes);
-  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 156 B/px.
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the TAA blend's, fp32 vec4(rgb, lag)), scratch 5*16
+  // (3 illumination: the harm guard keeps the first, guide, temporal), output 12 = 188 B/px, + the constants
+  // block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+2+4 + 48 + 80 + 6 = 158 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 158 + pipelines::GraphSpec::kConstantBytes);
+  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 172 B/px; without the harm guard 156.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
+            64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(
+                svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"harm_guard", 0}})),
             64u * 48 * 156 + pipelines::GraphSpec::kConstantBytes);
 }
 
@@ -537,8 +541,9 @@ TEST_F(SvgfTest, JointChainKeepsTheSignalsApart) {
       EXPECT_NE(ga->captured("svgf_variance", buffer), gb->captured("svgf_variance", buffer)) << buffer;
     for (int i = 0; i < iterations; ++i) {
       const std::string pass = "svgf_atrous_" + std::to_string(i);
-      const std::string diffuse = i % 2 == 0 ? "svgf_illum_b" : "svgf_illum_a";
-      const std::string specular = i % 2 == 0 ? "svgf_illum_d" : "svgf_illum_c";
+      // After the first iteration b and e (d and f) alternate: a (c) keeps the harm guard's temporal mean.
+      const std::string diffuse = i % 2 == 0 ? "svgf_illum_b" : "svgf_illum_e";
+      const std::string specular = i % 2 == 0 ? "svgf_illum_d" : "svgf_illum_f";
       EXPECT_EQ(ga->captured(pass, diffuse), gb->captured(pass, diffuse)) << pass;
       EXPECT_NE(ga->captured(pass, specular), gb->captured(pass, specular)) << pass;
     }
@@ -567,13 +572,13 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 16 (TAA), scratch 7*16
-  // (4 illumination: a ping-pong per signal, the shared guide, 2 temporal: the joint a-trous passes
-  // read both signals'), output 12 = 264 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 264 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 80 + 112 + 6 = 228 B/px.
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 16 (TAA), scratch 9*16
+  // (6 illumination: three per signal, the harm guard keeping the first, the shared guide, 2 temporal:
+  // the joint a-trous passes read both signals'), output 12 = 296 B/px, + the constants block.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 296 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+6+2+4 + 80 + 144 + 6 = 260 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 228 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 260 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -712,11 +717,11 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // 156 B/px without TAA + 16 B/px of TAA history.
+  // 172 B/px without TAA + 16 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 142 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 158 + pipelines::GraphSpec::kConstantBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

@@ -1,0 +1,40 @@
+#include "unexplained_note.hpp"
+
+#include <algorithm>
+
+namespace dn::cli {
+namespace {
+
+constexpr const char* kKeepUnexplained = "keep_unexplained";
+
+bool takes(const protocol::PipelineInfo* pipeline, const char* name) {
+  return pipeline && std::any_of(pipeline->parameters.begin(), pipeline->parameters.end(),
+                                 [&](const protocol::ParameterInfo& p) { return p.name == name; });
+}
+
+const protocol::Parameter* given(const std::vector<protocol::Parameter>& params, const char* name) {
+  auto it = std::find_if(params.begin(), params.end(), [&](const protocol::Parameter& p) { return p.name == name; });
+  return it == params.end() ? nullptr : &*it;
+}
+
+const ResolvedChannel* planned(const std::vector<ResolvedChannel>& plan, protocol::ChannelId id) {
+  auto it = std::find_if(plan.begin(), plan.end(), [&](const ResolvedChannel& c) { return c.id == id; });
+  return it == plan.end() ? nullptr : &*it;
+}
+
+}  // namespace
+
+std::string unexplained_pixels_note(const Preset& preset, const std::vector<ResolvedChannel>& plan,
+                                    const protocol::PipelineInfo* pipeline,
+                                    const std::vector<protocol::Parameter>& params) {
+  const ResolvedChannel* albedo = planned(plan, protocol::ChannelId::Albedo);
+  const bool radiance = planned(plan, protocol::ChannelId::Radiance) != nullptr;
+  if (preset.name != "cycles" || !albedo || albedo->past_specular || !radiance || !takes(pipeline, kKeepUnexplained))
+    return {};
+  if (const auto* p = given(params, kKeepUnexplained); p && p->value == 0.0) return {};
+  return "note: the albedo (" + albedo->describe() +
+         ") is 0 on mirrors and metals, so those pixels are kept as rendered (noisy); enable View Layer > Passes > "
+         "Data > Denoising Data to denoise them too";
+}
+
+}  // namespace dn::cli
