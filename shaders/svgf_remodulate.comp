@@ -40,7 +40,10 @@ vec3 dn_harm_guard(vec3 f, vec4 m, float len) {
 // every component (a mirror or metal when the albedo is a diffuse colour) or
 // above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light seen
 // in a mirror), or not finite: the guides cannot tell what it shows from its
-// neighbours, so it keeps its own current radiance (less emission, added below).
+// neighbours, so it keeps its own current radiance (less emission, added
+// below), or where it is still its own unfiltered temporal mean (with albedo
+// 1 the same quantity): what a mirror shows moves with the camera, not with
+// the mirror's surface, but a still view's history holds the same point.
 const float DN_REFLECTANCE_MAX = 1.5;
 bool dn_unexplained(vec3 a) {
   float m = max(a.r, max(a.g, a.b));
@@ -57,6 +60,11 @@ vec3 remodulate(uint p, out bool kept) {
     kept = true;
     c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p));
     if (HAS_EMISSION) c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
+    if (HARM_GUARD) {
+      vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+      vec4 m = own.data[p];
+      if (dn_motion_usable(mv) && m.w >= 0.0) c = mix(c, m.rgb, dn_stillness(mv));
+    }
   }
   if (HAS_SPECULAR)
     c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),

@@ -465,23 +465,23 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
           .set("SPECULAR_FACTOR", 1u)
           .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
   }
+  const bool keep = v.keep_unexplained && v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance &&
+                    !v.extra_samples && !v.validity_mask && first.plane && !first.client_divided;
+  // Motion: the TAA reprojection's, and a still unexplained pixel's history (with the guard's buffer).
+  if (v.taa || keep) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.taa)
     remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
-        .bind("motion", "motion")
         .bind("taa_history", kTaaHistory)
         .bind("taa_current", kTemporal)
         .bind("taa_previous", kGuide)
-        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)))
-        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
   const bool guard = v.harm_guard && v.iterations > 0;
   // The first chain's history (its length): read by the display lag and the harm guard.
   if (v.display_lag || guard) remodulate.bind("colour_history", v.signals[0].history + "_colour");
   if (v.display_lag) remodulate.set("DISPLAY_LAG", 1u);
-  const SvgfSignal& only = v.signals[0];
-  // Not with a validity mask: an unsampled pixel has no current radiance to keep.
-  if (v.keep_unexplained && v.signals.size() == 1 && only.channel == ChannelId::Radiance && !v.extra_samples &&
-      !v.validity_mask && first.plane && !first.client_divided)
-    remodulate.bind("raw", only.input)
+  // keep: not with a validity mask, where an unsampled pixel has no current radiance to keep.
+  if (keep)
+    remodulate.bind("raw", v.signals[0].input)
         .set("KEEP_UNEXPLAINED", 1u)
         .set("RAW_HALF", is_half(channel_format(config, ChannelId::Radiance)));
   if (guard) {

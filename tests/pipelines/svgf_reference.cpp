@@ -633,15 +633,20 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   if (split) guard(spec, chains_[1]);
   // Pass 4b (keep_unexplained, radiance): a pixel whose albedo is below 1e-3
   // in every component or above 1.5 in one (or not finite: not a reflectance)
-  // keeps its current radiance - emission.
+  // keeps its current radiance - emission, blended by its stillness toward
+  // its unfiltered temporal mean.
   std::vector<bool> kept(n, false);
   if (!split && p_.keep_unexplained && !masked)
     for (int i = 0; i < n; ++i) {
       const double m = std::max({double(float(f.albedo[3 * i])), double(float(f.albedo[3 * i + 1])),
                                  double(float(f.albedo[3 * i + 2]))});
       kept[i] = !(m >= static_cast<double>(1e-3f) && m <= 1.5);
-      if (kept[i])
-        for (int k = 0; k < 3; ++k) cur[4 * i + k] = raw[3 * i + k];
+      if (!kept[i]) continue;
+      // Where still (and with the guard's buffer: harm_guard, a-trous), toward its unfiltered temporal mean.
+      const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
+      const bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
+      const double s = own && usable_motion(mx, my) ? std::clamp(1.0 - std::hypot(mx, my) / 0.05, 0.0, 1.0) : 0.0;
+      for (int k = 0; k < 3; ++k) cur[4 * i + k] = raw[3 * i + k] * (1.0 - s) + chains_[0].temporal[3 * i + k] * s;
     }
 
   // Pass 4: remodulate (+ specular, + emission).
