@@ -1,64 +1,115 @@
 #!/usr/bin/env bash
-# A real client: Blender Cycles. Renders the project's Cycles scene
-# (examples/blender/cycles_room.py: mirror sphere, gold sphere, floor with
-# checker-mapped roughness, small area light, moving camera) three times —
-# the noisy input (--spp, seed 0) and two independent references (--ref-spp,
-# seeds 1 and 2) — then streams the input through every pipeline a dnserver
-# offers with `dn denoise --preset cycles`, exactly as a user would, and
-# writes to OUT: results.tsv, results.md (the table), section.md (the docs
-# section) and cycles.png (side by side: the whole frame and crops of the
-# mirror sphere and the floor). A pipeline that fails is reported in the
-# table and the run goes on.
+# A real client: Blender Cycles. Renders one of the project's Cycles scenes
+# (--scene room: examples/blender/cycles_room.py, mirror sphere, gold sphere,
+# floor with checker-mapped roughness, small area light; --scene window:
+# examples/blender/cycles_window.py, a room lit through a window, glass and
+# glossy objects, textured walls; both with a moving camera), then streams
+# the noisy renders through every pipeline a dnserver offers with
+# `dn denoise --preset cycles`, exactly as a user would.
 #
-# The error columns: RMSE, relMSE and SSIM against reference 1, and the
-# noise-corrected MSE and relMSE. With a dn that has `dn denoise --reference2`
-# they are its nc_mse / nc_relmse (mean of (x - r1)(x - r2), unbiased);
-# otherwise the approximation MSE(x, r1) - MSE(r2, r1)/2 (E[(x - r1)^2] =
-# (x - truth)^2 + var(r), E[(r2 - r1)^2] = 2 var(r)), from the means of the
-# per-frame values, marked "approx." in the table.
+# Inputs: each pass variant (--variants; cycles_*.py --passes: preset = only
+# what the preset reads without Denoising Data, as a user with Blender's
+# defaults has; denoising = + Denoising Data; all = + Denoising Data and the
+# Roughness / SpecularF0 AOVs) at each sample count (--spp-list), seed 0, each
+# rendered on its own as a user would. References: two independent renders
+# (--ref-spp, seeds 1 and 2, --passes all). One table per variant and sample
+# count; rows: the noisy input and every pipeline (a pipeline that fails is
+# reported in the table and the run goes on), then svgf on the split
+# lighting.
 #
-# --docs also copies the picture to docs/images/cycles.png and puts the
-# section into docs/results.md between its cycles markers.
+# The error columns: RMSE, relMSE and SSIM against reference 1; the
+# noise-corrected MSE and relMSE (with a dn that has `dn denoise --reference2`
+# its nc_mse / nc_relmse, the mean of (x - r1)(x - r2), unbiased; otherwise
+# MSE(x, r1) - MSE(r2, r1)/2 from the means of the per-frame values, marked
+# "approx."); the frames worse than the noisy input by RMSE / relMSE and
+# ꟻLIP LDR / HDR, read from dn's --summary columns worse_rmse, worse_relmse,
+# flip_ldr and flip_hdr where this dn writes them ("—" otherwise).
+#
+# OUT (default out/cycles/SCENE) gets render/ (the cached renders),
+# VARIANT-sSPP/ (per table: results.tsv, results.md, side.png: the last frame
+# of every pipeline that ran and reference 1, whole and cropped, and a folder
+# per row), section.md (the docs section of this scene) and render_times.tsv.
+# --docs also copies the first table's picture to docs/images/ (cycles.png for
+# the room, cycles_window.png) and puts the section into docs/results.md
+# between the scene's markers inside the cycles markers, keeping the other
+# scene's section.
 # Environment: BLENDER (default blender), DN_BUILD_DIR (default build) holds
 # the binaries; DN_SKIP_SETUP=1 skips scripts/setup.sh. Renders are cached in
-# OUT/render and reused while the scene script and the settings are unchanged.
+# OUT/render and reused while the scene scripts (sha1), the settings, the
+# passes and the Blender version are unchanged.
 # Blender is not a dependency of the build or of CI: without it this script
 # says so and exits with status 77 (skipped).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . bench/lib/bench_server.sh
 
+scene=room
 frames=8
 size=320x180
-spp=1
+spp_list=1,4,16
+variants=preset,denoising,all
 ref_spp=256
-out=out/cycles
+out=""
 docs=0
+render_only=0
 threads=0
 usage() {
   cat <<EOF
-usage: bench/cycles.sh [--frames N] [--size WxH] [--spp S] [--ref-spp S] [--threads N] [--out DIR] [--docs]
-defaults: --frames $frames --size $size --spp $spp --ref-spp $ref_spp --out $out (threads 0: all cores)
+usage: bench/cycles.sh [--scene room|window] [--variants LIST] [--spp-list LIST] [--spp S] [--ref-spp S]
+                       [--frames N] [--size WxH] [--threads N] [--out DIR] [--docs | --render-only]
+defaults: --scene $scene --variants $variants --spp-list $spp_list --ref-spp $ref_spp --frames $frames
+          --size $size --out out/cycles/SCENE (threads 0: all cores); --spp S is --spp-list S
+variants: preset (no Denoising Data, no AOVs), denoising (+ Denoising Data), all (+ Roughness/SpecularF0 AOVs)
+--render-only: render (or find cached) the inputs and references, then stop (no dnserver needed)
 Blender: \$BLENDER or 'blender' on PATH (Debian: apt-get install blender).
 EOF
 }
 while [ $# -gt 0 ]; do
   case "$1" in
+    --scene) scene=$2; shift 2 ;;
+    --variants) variants=$2; shift 2 ;;
+    --spp-list | --spp) spp_list=$2; shift 2 ;;
+    --ref-spp) ref_spp=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --size) size=$2; shift 2 ;;
-    --spp) spp=$2; shift 2 ;;
-    --ref-spp) ref_spp=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --docs) docs=1; shift ;;
+    --render-only) render_only=1; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "cycles: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
 width=${size%x*}
 height=${size#*x}
-case "$width$height$frames$spp$ref_spp$threads" in *[!0-9]* | "") echo "cycles: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
+case "$width$height$frames$ref_spp$threads" in *[!0-9]* | "") echo "cycles: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
 [ "$frames" -ge 2 ] || { echo "cycles: need --frames >= 2" >&2; exit 2; }
+IFS=, read -r -a spps <<< "$spp_list"
+IFS=, read -r -a vars <<< "$variants"
+for s in "${spps[@]}"; do case "$s" in "" | *[!0-9]* | 0) echo "cycles: --spp-list wants positive integers, got '$spp_list'" >&2; exit 2 ;; esac; done
+for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "cycles: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
+[ ${#spps[@]} -gt 0 ] && [ ${#vars[@]} -gt 0 ] || { echo "cycles: empty --variants or --spp-list" >&2; exit 2; }
+
+# Per scene: its script, the scripts its renders depend on, the side-by-side
+# crops (X,Y,W,H fractions) and what they show, the picture's name in docs/images.
+case "$scene" in
+  room)
+    script=examples/blender/cycles_room.py
+    depends=("$script")
+    crops=(--crop 0.24,0.28,0.3,0.5 --crop 0.5,0.62,0.3,0.38)
+    crop_what="mirror sphere, floor"
+    picture=cycles.png
+    ;;
+  window)
+    script=examples/blender/cycles_window.py
+    depends=("$script" examples/blender/cycles_room.py)
+    crops=(--crop 0.3,0.35,0.3,0.45 --crop 0.0,0.1,0.35,0.5)
+    crop_what="glass and glossy objects, the window wall"
+    picture=cycles_window.png
+    ;;
+  *) echo "cycles: unknown scene '$scene' (room, window)" >&2; exit 2 ;;
+esac
+out=${out:-out/cycles/$scene}
 
 blender=${BLENDER:-blender}
 if ! command -v "$blender" > /dev/null 2>&1; then
@@ -68,33 +119,35 @@ if ! command -v "$blender" > /dev/null 2>&1; then
 fi
 blender_version=$("$blender" --version 2>/dev/null | awk 'NR == 1 { print $2 }')
 
-[ "${DN_SKIP_SETUP:-0}" = 1 ] || ./scripts/setup.sh
 bin=${DN_BUILD_DIR:-build}
 dn=$bin/client/dn
-for b in "$dn" "$bin/server/dnserver" "$bin/bench/side_by_side"; do
-  [ -x "$b" ] || { echo "cycles: $b is missing (build first, or set DN_BUILD_DIR)" >&2; exit 1; }
-done
+if [ "$render_only" = 0 ]; then
+  [ "${DN_SKIP_SETUP:-0}" = 1 ] || ./scripts/setup.sh
+  for b in "$dn" "$bin/server/dnserver" "$bin/bench/side_by_side"; do
+    [ -x "$b" ] || { echo "cycles: $b is missing (build first, or set DN_BUILD_DIR)" >&2; exit 1; }
+  done
+fi
 mkdir -p "$out"
 last=$((frames - 1))
 lastf=$(printf '%04d' "$last")
 
 # --- render (cached) -------------------------------------------------------
-script=examples/blender/cycles_room.py
-script_sum=$(sha1sum "$script" | cut -c1-12)
+script_sum=$(cat "${depends[@]}" | sha1sum | cut -c1-12)
 render_times="$out/render_times.tsv"
-printf 'what\tspp\tseed\tframes\tseconds\tseconds_per_frame\n' > "$render_times"
-render() {  # name spp seed
-  local dir="$out/render/$1" stamp="$1 ${width}x$height frames=$frames spp=$2 seed=$3 script=$script_sum blender=$blender_version"
+printf 'what\tspp\tseed\tpasses\tframes\tseconds\tseconds_per_frame\n' > "$render_times"
+render() {  # name spp seed passes
+  local dir="$out/render/$1"
+  local stamp="$1 $scene ${width}x$height frames=$frames spp=$2 seed=$3 passes=$4 script=$script_sum blender=$blender_version"
   if [ -f "$dir/stamp" ] && [ "$(head -1 "$dir/stamp")" = "$stamp" ] && [ -f "$dir/frame_$lastf.exr" ]; then
     echo "cycles: $1: cached ($dir)"
   else
     rm -rf "$dir"
     mkdir -p "$dir"
-    echo "cycles: rendering $1: $frames frames at ${width}x$height, $2 spp, seed $3 (Blender $blender_version)"
+    echo "cycles: rendering $1: $scene, $frames frames at ${width}x$height, $2 spp, seed $3, passes $4 (Blender $blender_version)"
     local t0 t1
     t0=$(date +%s.%N)
     "$blender" -b --factory-startup --python "$script" -- --out "$dir" --width "$width" --height "$height" \
-      --frames "$frames" --spp "$2" --seed "$3" --threads "$threads" > "$dir/blender.log" 2>&1 ||
+      --frames "$frames" --spp "$2" --seed "$3" --passes "$4" --threads "$threads" > "$dir/blender.log" 2>&1 ||
       { echo "cycles: Blender failed rendering $1; the end of $dir/blender.log:" >&2; tail -20 "$dir/blender.log" >&2; exit 1; }
     t1=$(date +%s.%N)
     [ -f "$dir/frame_$lastf.exr" ] || { echo "cycles: Blender wrote no $dir/frame_$lastf.exr" >&2; exit 1; }
@@ -102,28 +155,21 @@ render() {  # name spp seed
   fi
   local s
   s=$(sed -n 2p "$dir/stamp")
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$frames" "$s" "$(awk -v s="$s" -v n="$frames" 'BEGIN { printf "%.2f", s / n }')" >> "$render_times"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" "$frames" "$s" \
+    "$(awk -v s="$s" -v n="$frames" 'BEGIN { printf "%.2f", s / n }')" >> "$render_times"
 }
-render input "$spp" 0
-render ref "$ref_spp" 1
-render ref2 "$ref_spp" 2
-input="$out/render/input/frame_%04d.exr"
+for v in "${vars[@]}"; do
+  for s in "${spps[@]}"; do render "input-$v-s$s" "$s" 0 "$v"; done
+done
+render ref "$ref_spp" 1 all
+render ref2 "$ref_spp" 2 all
 ref="$out/render/ref/frame_%04d.exr"
 ref2="$out/render/ref2/frame_%04d.exr"
+[ "$render_only" = 0 ] || { echo "cycles: renders in $out/render"; exit 0; }
 
 # --- server ----------------------------------------------------------------
-start_bench_server cycles "$bin" "$dn" "$out/dnserver.log"
-
-# Rows: "label pipeline [NAME=VALUE | channels=LIST ...]": the noisy input,
-# every pipeline the server offers (new ones are picked up without changes),
-# then svgf on the split lighting (DiffDir+DiffInd over DiffCol, GlossDir+GlossInd
-# over GlossCol: the lighting forms, docs/protocol.md §7.4).
-rows=("noisy passthrough")
-for p in $("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" { print $2 }'); do
-  case "$p" in passthrough) ;; *) rows+=("$p $p") ;; esac
-done
-rows+=("svgf-split svgf channels=diffuse_lighting,specular_lighting,specular_albedo,albedo,normal,depth,motion,emission,roughness")
-
+start_bench_server "cycles-$scene" "$bin" "$dn" "$out/dnserver.log"
+pipelines=$("$dn" ping --server "$server_url" --count 1 | awk '$1 == "pipeline" && $2 != "passthrough" { print $2 }')
 
 # Why dn failed, on one line: its last non-empty output line (dn's error), or its exit status.
 failure() {  # log status
@@ -132,11 +178,16 @@ failure() {  # log status
   case "$2" in 1 | 2) ;; *) why="dn exited with status $2$([ "$2" -gt 128 ] && echo " (signal $(($2 - 128)))")${why:+; last line: $why}" ;; esac
   echo "${why:-dn exited with status $2}"
 }
+# A --summary column this dn may not write yet: its value, or nothing.
+optional_column() {  # file name
+  awk -F'\t' -v name="$2" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i } NR == 2 && c { print $c }' "$1"
+}
 
 # Reference 2 against reference 1: the references' own noise.
 echo "cycles: reference 2 against reference 1"
 rm -f "$out/refs.tsv"
 status=0
+ref_failed=""
 "$dn" denoise -q --server "$server_url" --pipeline passthrough --preset cycles --input "$ref2" --start 0 --end "$last" \
   -r "$ref" --summary "$out/refs.tsv" > "$out/refs.log" 2>&1 || status=$?
 if [ "$status" = 0 ]; then
@@ -152,79 +203,120 @@ nc_args=()
 nc_kind="approx."
 if "$dn" denoise --help 2>&1 | grep -q -- '--reference2'; then nc_args=(--reference2 "$ref2"); nc_kind="--reference2"; fi
 
-results="$out/results.tsv"
-printf 'method\tstatus\trmse\trelmse\tssim\tnc_mse\tnc_relmse\tdevice_ms\tframe_ms\n' > "$results"
-panels=()
-panel_labels=()
-labels=""
-for row in "${rows[@]}"; do
-  read -r label pipeline params <<< "$row"
-  param_args=()
-  for p in $params; do
-    case "$p" in channels=*) param_args+=(--channels "${p#channels=}") ;; *) param_args+=(--param "$p") ;; esac
-  done
-  dir="$out/$label"
-  rm -rf "$dir"
-  mkdir -p "$dir"
-  echo "cycles: $label"
-  # One untimed frame in a session of its own first, as bench/speed_error.sh
-  # does: llvmpipe compiles a kernel at its first dispatch, inside that frame's
-  # device time, and the server keeps compiled kernels for later sessions. A
-  # pipeline that cannot run fails here too; the measured run reports why.
-  "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
-    --input "$input" --start 0 --end 0 > /dev/null 2>&1 || true
-  status=0
-  "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
-    --input "$input" --start 0 --end "$last" --output "$dir/frame_%04d.exr" -r "$ref" "${nc_args[@]}" \
-    --summary "$dir/summary.tsv" > "$dir/dn.log" 2>&1 || status=$?
-  if [ "$status" = 0 ]; then
-    m="$dir/summary.tsv"
-    rmse=$(column "$m" rmse)
-    relmse=$(column "$m" relmse)
-    if [ ${#nc_args[@]} -gt 0 ]; then
-      nc_mse=$(column "$m" nc_mse)
-      nc_relmse=$(column "$m" nc_relmse)
-    elif [ -n "${ref_failed:-}" ]; then
-      nc_mse=nan
-      nc_relmse=nan
+# One table: every row on one input variant and sample count.
+run_table() {  # variant spp
+  local variant=$1 spp=$2 dir_t="$out/$1-s$2"
+  local input="$out/render/input-$variant-s$spp/frame_%04d.exr"
+  # Rows: "label pipeline [NAME=VALUE | channels=LIST ...]": the noisy input,
+  # every pipeline the server offers (new ones are picked up without changes),
+  # then svgf on the split lighting (DiffDir+DiffInd over DiffCol, GlossDir+GlossInd
+  # over GlossCol: the lighting forms, docs/protocol.md §7.4; roughness where the file has the AOV).
+  local split=diffuse_lighting,specular_lighting,specular_albedo,albedo,normal,depth,motion,emission
+  [ "$variant" = all ] && split+=,roughness
+  local rows=("noisy passthrough") p
+  for p in $pipelines; do rows+=("$p $p"); done
+  rows+=("svgf-split svgf channels=$split")
+
+  rm -rf "$dir_t"
+  mkdir -p "$dir_t"
+  local results="$dir_t/results.tsv"
+  printf 'method\tstatus\trmse\trelmse\tssim\tnc_mse\tnc_relmse\tworse_rmse\tworse_relmse\tflip_ldr\tflip_hdr\tdevice_ms\tframe_ms\n' > "$results"
+  local panels=() panel_labels=() row label pipeline params param_args dir status m rmse relmse nc_mse nc_relmse why
+  local labels=""
+  for row in "${rows[@]}"; do
+    read -r label pipeline params <<< "$row"
+    param_args=()
+    for p in $params; do
+      case "$p" in channels=*) param_args+=(--channels "${p#channels=}") ;; *) param_args+=(--param "$p") ;; esac
+    done
+    dir="$dir_t/$label"
+    mkdir -p "$dir"
+    echo "cycles: $scene $variant ${spp} spp: $label"
+    # One untimed frame in a session of its own first, as bench/speed_error.sh
+    # does: llvmpipe compiles a kernel at its first dispatch, inside that frame's
+    # device time, and the server keeps compiled kernels for later sessions. A
+    # pipeline that cannot run fails here too; the measured run reports why.
+    "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
+      --input "$input" --start 0 --end 0 > /dev/null 2>&1 || true
+    status=0
+    "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" "${param_args[@]}" --preset cycles \
+      --input "$input" --start 0 --end "$last" --output "$dir/frame_%04d.exr" -r "$ref" "${nc_args[@]}" \
+      --summary "$dir/summary.tsv" > "$dir/dn.log" 2>&1 || status=$?
+    if [ "$status" = 0 ]; then
+      m="$dir/summary.tsv"
+      rmse=$(column "$m" rmse)
+      relmse=$(column "$m" relmse)
+      if [ ${#nc_args[@]} -gt 0 ]; then
+        nc_mse=$(column "$m" nc_mse)
+        nc_relmse=$(column "$m" nc_relmse)
+      elif [ -n "$ref_failed" ]; then
+        nc_mse=nan
+        nc_relmse=nan
+      else
+        nc_mse=$(awk -v a="$rmse" -v r="$ref_rmse" 'BEGIN { print a * a - r * r / 2 }')
+        nc_relmse=$(awk -v a="$relmse" -v r="$ref_relmse" 'BEGIN { print a - r / 2 }')
+      fi
+      printf '%s\tok\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$rmse" "$relmse" "$(column "$m" ssim)" \
+        "$nc_mse" "$nc_relmse" "$(optional_column "$m" worse_rmse)" "$(optional_column "$m" worse_relmse)" \
+        "$(optional_column "$m" flip_ldr)" "$(optional_column "$m" flip_hdr)" "$(column "$m" device_ms)" \
+        "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" >> "$results"
+      panels+=("$dir/frame_$lastf.exr")
+      panel_labels+=(--label "$label")
+      labels+="$label | "
     else
-      nc_mse=$(awk -v a="$rmse" -v r="$ref_rmse" 'BEGIN { print a * a - r * r / 2 }')
-      nc_relmse=$(awk -v a="$relmse" -v r="$ref_relmse" 'BEGIN { print a - r / 2 }')
+      why=$(failure "$dir/dn.log" "$status")
+      echo "cycles: $label FAILED: $why" >&2
+      printf '%s\tfailed: %s\t\t\t\t\t\t\t\t\t\t\t\n' "$label" "$why" >> "$results"
     fi
-    printf '%s\tok\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$rmse" "$relmse" "$(column "$m" ssim)" \
-      "$nc_mse" "$nc_relmse" "$(column "$m" device_ms)" \
-      "$(awk -v fps="$(column "$m" fps)" 'BEGIN { print (fps > 0 ? 1000 / fps : "nan") }')" >> "$results"
-    panels+=("$dir/frame_$lastf.exr")
-    panel_labels+=(--label "$label")
-    labels+="$label | "
-  else
-    why=$(failure "$dir/dn.log" "$status")
-    echo "cycles: $label FAILED: $why" >&2
-    printf '%s\tfailed: %s\t\t\t\t\t\t\t\n' "$label" "$why" >> "$results"
-  fi
+  done
+
+  # Side by side: the last frame of every row that ran, then reference 1, and the scene's crops.
+  "$bin/bench/side_by_side" --out "$dir_t/side.png" "${crops[@]}" "${panel_labels[@]}" --label reference \
+    "${panels[@]}" "$out/render/ref/frame_$lastf.exr" > /dev/null ||
+    echo "cycles: side_by_side failed (the table is still written)" >&2
+  echo "${labels}reference 1" > "$dir_t/side.txt"
+
+  # "—" where this dn does not write the column; worse: frames out of $frames.
+  awk -F'\t' -v nc="$nc_kind" -v n="$frames" '
+    function num(x, f) { return x == "" ? "—" : sprintf(f, x) }
+    function worse(a, b) { return a == "" && b == "" ? "—" : sprintf("%s / %s", a == "" ? "—" : a, b == "" ? "—" : b) }
+    NR == 1 {
+      printf "| method | RMSE | relMSE | SSIM | nc MSE (%s) | nc relMSE (%s) | frames worse than input of %d (RMSE / relMSE) | ꟻLIP LDR | ꟻLIP HDR | device ms/frame | end-to-end ms/frame |\n", nc, nc, n
+      print "|---|---|---|---|---|---|---|---|---|---|---|"
+      next
+    }
+    $2 == "ok" { printf "| %s | %.4f | %.4f | %.4f | %.4g | %.4g | %s | %s | %s | %.1f | %.1f |\n", $1, $3, $4, $5, $6, $7,
+                 worse($8, $9), num($10, "%.4f"), num($11, "%.4f"), $12, $13; next }
+    { why = $2  # the table keeps the gist of the usual refusal; results.tsv and dn.log have it all
+      sub(/dn denoise: error: /, "", why)
+      if (match(why, /requires channel [^,]*, but /)) why = substr(why, 1, RSTART + RLENGTH - 7) " (not in the file)"
+      printf "| %s | %s | | | | | | | | | |\n", $1, why }' "$results" > "$dir_t/results.md"
+}
+
+for v in "${vars[@]}"; do
+  for s in "${spps[@]}"; do run_table "$v" "$s"; done
 done
+first="$out/${vars[0]}-s${spps[0]}"
 
-# Side by side: the last frame of every pipeline that ran, then reference 1;
-# crops: the mirror sphere (with the light's highlight) and the floor under the gold sphere.
-"$bin/bench/side_by_side" --out "$out/cycles.png" --crop 0.24,0.28,0.3,0.5 --crop 0.5,0.62,0.3,0.38 \
-  "${panel_labels[@]}" --label reference "${panels[@]}" "$out/render/ref/frame_$lastf.exr" || echo "cycles: side_by_side failed (the table is still written)" >&2
-
-{
-  echo "| method | RMSE | relMSE | SSIM | nc MSE ($nc_kind) | nc relMSE ($nc_kind) | device ms/frame | end-to-end ms/frame |"
-  echo "|---|---|---|---|---|---|---|---|"
-  awk -F'\t' 'NR > 1 {
-    if ($2 == "ok") printf "| %s | %.4f | %.4f | %.4f | %.4g | %.4g | %.1f | %.1f |\n", $1, $3, $4, $5, $6, $7, $8, $9
-    else printf "| %s | %s | | | | | | |\n", $1, $2 }' "$results"
-} > "$out/results.md"
-
+# --- the docs section --------------------------------------------------------
 cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
+variant_text() {
+  case "$1" in
+    preset) echo "\`--passes preset\`: only the passes \`--preset cycles\` reads without Denoising Data (no Denoising Data, no AOVs: Blender's defaults otherwise)" ;;
+    denoising) echo "\`--passes denoising\`: + Denoising Data" ;;
+    all) echo "\`--passes all\`: + Denoising Data and the Roughness / SpecularF0 AOVs" ;;
+  esac
+}
 {
+  echo "<!-- cycles-$scene:begin -->"
+  echo "### Scene \`$scene\` ($script)"
+  echo
   echo "Machine: $(nproc) cores of ${cpu:-unknown CPU}, device \`$device\`; Blender $blender_version; $(date -u +%Y-%m-%d)."
-  echo "Command: \`bench/cycles.sh --frames $frames --size $size --spp $spp --ref-spp $ref_spp\`:"
-  echo "examples/blender/cycles_room.py rendered at ${width}×${height}, $frames frames of a moving camera; input $spp spp"
-  echo "(seed 0), reference 1 and reference 2 at $ref_spp spp (seeds 1 and 2); every row is"
+  echo "Command: \`bench/cycles.sh --scene $scene --variants $variants --spp-list $spp_list --ref-spp $ref_spp --frames $frames --size $size\`:"
+  echo "rendered at ${width}×${height}, $frames frames of a moving camera; inputs seed 0, each pass variant rendered on its own;"
+  echo "reference 1 and reference 2 at $ref_spp spp (seeds 1 and 2, \`--passes all\`); every row is"
   echo "\`dn denoise --preset cycles --pipeline P --input ... -r ref1\` (means over the $frames frames)."
-  if [ -z "${ref_failed:-}" ]; then
+  if [ -z "$ref_failed" ]; then
     echo "Reference 2 against reference 1: RMSE $(printf '%.4f' "$ref_rmse"), relMSE $(printf '%.4f' "$ref_relmse")"
     echo "(so one reference's own noise adds about $(awk -v r="$ref_rmse" 'BEGIN { printf "%.3g", r * r / 2 }') to every MSE against it)."
   else
@@ -235,30 +327,50 @@ cpu=$(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)
   else
     echo "nc MSE, nc relMSE (approx.): MSE(x, ref1) − MSE(ref2, ref1)/2 from the means of the per-frame values (this dn has no --reference2)."
   fi
-  echo
-  cat "$out/results.md"
+  echo "Frames worse than input, ꟻLIP: dn's summary columns; \"—\" where the dn that ran does not write them."
+  for v in "${vars[@]}"; do
+    for s in "${spps[@]}"; do
+      echo
+      echo "#### \`$scene\`, input $s spp, $(variant_text "$v")"
+      echo
+      cat "$out/$v-s$s/results.md"
+    done
+  done
   echo
   echo "Cycles render times (CPU, Blender start-up included):"
-  awk -F'\t' 'NR > 1 { printf "%s%s %s spp %.1f s (%.2f s/frame)", (NR > 2 ? "; " : ""), $1, $2, $5, $6 } END { print "." }' "$render_times"
+  awk -F'\t' 'NR > 1 { printf "%s%s %s spp %.1f s (%.2f s/frame)", (NR > 2 ? "; " : ""), $1, $2, $6, $7 } END { print "." }' "$render_times"
   echo
-  echo "Last frame and crops (mirror sphere, floor): ${labels}reference 1"
+  echo "Last frame and crops ($crop_what), input $(variant_text "${vars[0]}" | cut -d: -f1) at ${spps[0]} spp: $(cat "$first/side.txt")"
   echo
-  echo "![cycles](images/cycles.png)"
+  echo "![cycles $scene](images/$picture)"
+  echo "<!-- cycles-$scene:end -->"
 } > "$out/section.md"
 
 if [ "$docs" = 1 ]; then
   grep -q '<!-- cycles:begin -->' docs/results.md || { echo "cycles: docs/results.md has no cycles markers" >&2; exit 1; }
   mkdir -p docs/images
-  cp "$out/cycles.png" docs/images/cycles.png
-  awk -v section="$out/section.md" '
-    /<!-- cycles:begin -->/ { print; while ((getline line < section) > 0) print line; skip = 1; next }
+  cp "$first/side.png" "docs/images/$picture"
+  # Inside the cycles markers: one block per scene, in the order room, window;
+  # this run's scene replaced, the other kept as it is.
+  for s in room window; do
+    if [ "$s" = "$scene" ]; then
+      cp "$out/section.md" "$out/block-$s.md"
+    else
+      awk -v b="<!-- cycles-$s:begin -->" -v e="<!-- cycles-$s:end -->" \
+        '$0 == b { on = 1 } on { print } $0 == e { on = 0 }' docs/results.md > "$out/block-$s.md"
+    fi
+  done
+  awk -v a="$out/block-room.md" -v b="$out/block-window.md" '
+    function emit(f, first, line) { first = 1; while ((getline line < f) > 0) { if (first && printed) print ""; print line; first = 0; printed = 1 } }
+    /<!-- cycles:begin -->/ { print; emit(a); emit(b); skip = 1; next }
     /<!-- cycles:end -->/ { skip = 0 }
     !skip { print }' docs/results.md > "$out/results.md.new"
   mv "$out/results.md.new" docs/results.md
-  echo "cycles: docs/results.md and docs/images/cycles.png updated"
+  rm -f "$out/block-room.md" "$out/block-window.md"
+  echo "cycles: docs/results.md and docs/images/$picture updated"
 fi
 
 echo
 cat "$out/section.md"
 echo
-echo "cycles: table $out/results.md, side by side $out/cycles.png (${labels}reference 1)"
+echo "cycles: tables $out/*-s*/results.md, side by side $out/*-s*/side.png"
