@@ -17,6 +17,7 @@
 #include "dn/image/pfm.hpp"
 #include "raw_client.hpp"
 #include "server_process.hpp"
+#include "summary_file.hpp"
 
 namespace dn::test {
 namespace {
@@ -50,19 +51,6 @@ double summary_rmse(const std::string& path) {
   std::getline(in, header);
   std::getline(in, values);
   return std::stod(values.substr(0, values.find('\t')));
-}
-
-// Every column of a `dn denoise --summary` file by its header name.
-std::map<std::string, double> summary_columns(const std::string& path) {
-  std::ifstream in(path);
-  std::string header, values;
-  std::getline(in, header);
-  std::getline(in, values);
-  std::stringstream h(header), v(values);
-  std::map<std::string, double> columns;
-  std::string name, value;
-  while (std::getline(h, name, '\t') && std::getline(v, value, '\t')) columns[name] = std::stod(value);
-  return columns;
 }
 
 class Cli : public ::testing::Test {

@@ -12,30 +12,17 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
+#include <string>
 
 #include "command.hpp"
 #include "server_process.hpp"
+#include "summary_file.hpp"
 
 namespace dn::test {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The two-line TSV of dn denoise --summary as name -> value.
-std::map<std::string, double> read_summary(const fs::path& file) {
-  std::ifstream in(file);
-  std::string header, values;
-  std::getline(in, header);
-  std::getline(in, values);
-  std::istringstream h(header), v(values);
-  std::map<std::string, double> out;
-  std::string name, value;
-  while (std::getline(h, name, '\t') && std::getline(v, value, '\t')) out[name] = std::stod(value);
-  return out;
-}
 
 struct Case {
   const char* stem;      // fixture files <stem>_%04d.exr
@@ -53,7 +40,7 @@ std::map<std::string, double> denoise(const ServerProcess& server, const Case& c
                                      summary.string() + "' " + c.params,
                                  log);
   EXPECT_EQ(status, 0) << log;
-  return read_summary(summary);
+  return summary_columns(summary.string());
 }
 
 class DoNoHarm : public ::testing::Test {
