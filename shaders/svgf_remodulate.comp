@@ -36,39 +36,56 @@ vec3 dn_harm_guard(vec3 f, vec4 m, float len) {
   return dl * dl > allowed ? m.rgb + d * (allowed / (dl * dl)) : f;
 }
 
-// A radiance pixel whose albedo is not a reflectance, below DN_ALBEDO_MIN in
-// every component (a mirror or metal when the albedo is a diffuse colour) or
-// above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light seen
-// in a mirror), or not finite: the guides cannot tell what it shows from its
-// neighbours, so it keeps its own current radiance (less emission, added
-// below), or where it is still its own unfiltered temporal mean (with albedo
-// 1 the same quantity): what a mirror shows moves with the camera, not with
-// the mirror's surface, but a still view's history holds the same point.
+// A pixel whose (diffuse) albedo is not a reflectance, below DN_ALBEDO_MIN
+// in every component (a mirror or metal when the albedo is a diffuse colour)
+// or above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light
+// seen in a mirror), or not finite: the guides cannot tell what it shows
+// from its neighbours, so it keeps its own current radiance (split: diffuse +
+// specular; less emission, added below), or where it is still its own
+// unfiltered temporal mean: what a mirror shows moves with the camera, not
+// with the mirror's surface, but a still view's history holds the same point.
 const float DN_REFLECTANCE_MAX = 1.5;
 bool dn_unexplained(vec3 a) {
   float m = max(a.r, max(a.g, a.b));
   return !(m >= DN_ALBEDO_MIN && m <= DN_REFLECTANCE_MAX);
 }
 
+vec3 specular_modulator(uint p) {
+  return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0);
+}
+
+// The current radiance of an unexplained pixel, less emission; ga: its guarded albedo.
+vec3 kept_radiance(uint p, vec3 ga) {
+  vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
+  if (HAS_SPECULAR) {
+    c += dn_sanitize_radiance(DN_LOAD3(raw2, RAW2_HALF, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
+  } else if (HAS_EMISSION) {
+    c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
+  }
+  if (HARM_GUARD) {
+    vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+    vec4 m = own.data[p];
+    vec4 m2 = HAS_SPECULAR ? own2.data[p] : vec4(0.0);
+    if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
+      c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
+  }
+  return c;
+}
+
 vec3 remodulate(uint p, out bool kept) {
   vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
-  kept = false;
-  vec3 c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
-                         HARM_GUARD ? colour_history.data[p].a : 0.0) *
-           dn_guarded_albedo(a);
-  if (KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && dn_unexplained(a)) {
-    kept = true;
-    c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p));
-    if (HAS_EMISSION) c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
-    if (HARM_GUARD) {
-      vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-      vec4 m = own.data[p];
-      if (dn_motion_usable(mv) && m.w >= 0.0) c = mix(c, m.rgb, dn_stillness(mv));
-    }
+  vec3 ga = dn_guarded_albedo(a);
+  kept = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && dn_unexplained(a);
+  vec3 c;
+  if (kept) {
+    c = kept_radiance(p, ga);
+  } else {
+    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
+                      HARM_GUARD ? colour_history.data[p].a : 0.0) * ga;
+    if (HAS_SPECULAR)
+      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
+                         HARM_GUARD ? colour_history2.data[p].a : 0.0) * specular_modulator(p);
   }
-  if (HAS_SPECULAR)
-    c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
-                       HARM_GUARD ? colour_history2.data[p].a : 0.0) * (SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0));
   if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;
 }

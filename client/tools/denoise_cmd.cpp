@@ -275,7 +275,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
   const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
   apply_statistics_kind(first.string_attribute("dn.stat_samples"), first_path, plan, pipeline, params);
-  if (const std::string note = unexplained_pixels_note(preset, plan, pipeline, params); !note.empty())
+  if (const std::string note = unexplained_pixels_note(preset, plan, rough_guides ? &*rough_guides : nullptr, pipeline, params); !note.empty())
     std::fprintf(stderr, "dn: %s\n", note.c_str());
   // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp),
   // looked for only when the pipeline or a planned channel's conversion uses them.

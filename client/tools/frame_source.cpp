@@ -226,6 +226,14 @@ void apply_rough_guides(LoadedFrame& frame, const RoughGuidePlan& guides) {
     if (!past || !primary) throw std::logic_error("apply_rough_guides: no depth to compare");
     for (size_t i = 0; i < pixels; ++i)
       mirror[i] = std::isfinite((*primary)[i]) && (*past)[i] > (*primary)[i] * (1.0f + kPastPrimaryDepth);
+    // A surface without diffuse colour (a metal) may be glossy, not a mirror,
+    // and nothing here tells which: it keeps the diffuse colour, 0, and the
+    // server shows it as rendered.
+    if (const std::vector<float>* albedo = find_in(frame.primary_guides, protocol::ChannelId::Albedo))
+      for (size_t i = 0; i < pixels; ++i) {
+        const float* a = albedo->data() + 3 * i;
+        if (!(std::max({a[0], a[1], a[2]}) >= kReflectanceMin)) mirror[i] = 0;
+      }
   }
   for (const auto& ch : guides.channels) {
     const std::vector<float>* from = find_in(frame.primary_guides, ch.id);

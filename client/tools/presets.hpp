@@ -110,6 +110,8 @@ inline constexpr float kCyclesMirrorRoughness = 0.02f;
 // (where the path stops they agree to <= 1 % at 1 spp: the sample is not at
 // the pixel centre; CyclesFixtures.VirtualDepthIsTheViewDepth...).
 inline constexpr float kPastPrimaryDepth = 0.02f;
+// Below this in every component an albedo is no reflectance (the server's DN_ALBEDO_MIN).
+inline constexpr float kReflectanceMin = 1e-3f;
 
 // The preset for `name` ("dnrender", "cycles" or "auto": cycles when the file
 // has a "<layer>.Combined.R" channel). `view_layer` overrides the Cycles view

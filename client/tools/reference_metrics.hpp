@@ -16,20 +16,31 @@
 namespace dn::cli {
 
 // The noisy radiance a frame sent: its radiance plane, else diffuse + specular
-// (+ emission), the protocol's radiance of split inputs; empty when the frame
-// sent neither (lighting forms only), and then the input is not measured.
+// (+ emission), the protocol's radiance of split inputs, each signal in either
+// form (lighting x its albedo); empty when the frame sent neither, and then
+// the input is not measured.
 inline std::vector<float> input_radiance(const std::vector<LoadedPlane>& planes) {
-  auto find = [&](protocol::ChannelId id) -> const LoadedPlane* {
+  using protocol::ChannelId;
+  auto find = [&](ChannelId id) -> const LoadedPlane* {
     for (const auto& p : planes)
       if (p.id == id) return &p;
     return nullptr;
   };
-  if (const auto* r = find(protocol::ChannelId::Radiance)) return r->data;
-  const auto *d = find(protocol::ChannelId::Diffuse), *s = find(protocol::ChannelId::Specular);
-  if (!d || !s || d->data.size() != s->data.size()) return {};
-  std::vector<float> sum = d->data;
-  for (size_t i = 0; i < sum.size(); ++i) sum[i] += s->data[i];
-  if (const auto* e = find(protocol::ChannelId::Emission); e && e->data.size() == sum.size())
+  if (const auto* r = find(ChannelId::Radiance)) return r->data;
+  // A signal's radiance: the radiance form, else lighting x albedo; empty if neither.
+  auto signal = [&](ChannelId radiance, ChannelId lighting, ChannelId albedo) -> std::vector<float> {
+    if (const auto* r = find(radiance)) return r->data;
+    const auto *l = find(lighting), *a = find(albedo);
+    if (!l || !a || l->data.size() != a->data.size()) return {};
+    std::vector<float> out = l->data;
+    for (size_t i = 0; i < out.size(); ++i) out[i] *= a->data[i];
+    return out;
+  };
+  std::vector<float> sum = signal(ChannelId::Diffuse, ChannelId::DiffuseLighting, ChannelId::Albedo);
+  const std::vector<float> s = signal(ChannelId::Specular, ChannelId::SpecularLighting, ChannelId::SpecularAlbedo);
+  if (sum.empty() || sum.size() != s.size()) return {};
+  for (size_t i = 0; i < sum.size(); ++i) sum[i] += s[i];
+  if (const auto* e = find(ChannelId::Emission); e && e->data.size() == sum.size())
     for (size_t i = 0; i < sum.size(); ++i) sum[i] += e->data[i];
   return sum;
 }

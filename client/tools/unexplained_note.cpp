@@ -25,16 +25,22 @@ const ResolvedChannel* planned(const std::vector<ResolvedChannel>& plan, protoco
 }  // namespace
 
 std::string unexplained_pixels_note(const Preset& preset, const std::vector<ResolvedChannel>& plan,
-                                    const protocol::PipelineInfo* pipeline,
+                                    const RoughGuidePlan* guides, const protocol::PipelineInfo* pipeline,
                                     const std::vector<protocol::Parameter>& params) {
   const ResolvedChannel* albedo = planned(plan, protocol::ChannelId::Albedo);
   const bool radiance = planned(plan, protocol::ChannelId::Radiance) != nullptr;
-  if (preset.name != "cycles" || !albedo || albedo->past_specular || !radiance || !takes(pipeline, kKeepUnexplained))
-    return {};
+  if (preset.name != "cycles" || !albedo || !radiance || !takes(pipeline, kKeepUnexplained)) return {};
   if (const auto* p = given(params, kKeepUnexplained); p && p->value == 0.0) return {};
-  return "note: the albedo (" + albedo->describe() +
-         ") is 0 on mirrors and metals, so those pixels are kept as rendered (noisy); enable View Layer > Passes > "
-         "Data > Denoising Data to denoise them too";
+  if (!albedo->past_specular)
+    return "note: the albedo (" + albedo->describe() +
+           ") is 0 on mirrors and metals, so those pixels are kept as rendered (noisy); enable View Layer > Passes > "
+           "Data > Denoising Data to denoise them too";
+  if (guides && !guides->key)
+    return "note: without a Roughness AOV a mirror cannot be told from a glossy metal, so mirrors and metals keep "
+           "the diffuse colour (0) and are shown as rendered (noisy); add a Value AOV named Roughness (View Layer > "
+           "Passes > Shader AOV, written by an AOV Output node in each material) to denoise mirrors with the "
+           "Denoising Data";
+  return {};
 }
 
 }  // namespace dn::cli

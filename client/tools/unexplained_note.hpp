@@ -12,12 +12,13 @@
 
 namespace dn::cli {
 
-// The one-line note dn denoise prints for a Cycles file whose planned albedo
-// is the diffuse colour and whose pipeline keeps zero-albedo pixels raw
-// (mirrors and metals stay noisy), naming the passes that would explain
-// them; empty otherwise.
+// The one-line note dn denoise prints for a Cycles radiance session whose
+// pipeline keeps zero-albedo pixels raw (mirrors and metals stay noisy) when
+// the planned albedo is the diffuse colour there: everywhere (no Denoising
+// Data), or on metals (Denoising Data but `guides` without a roughness key).
+// It names the passes that would explain them; empty otherwise.
 std::string unexplained_pixels_note(const Preset& preset, const std::vector<ResolvedChannel>& plan,
-                                    const protocol::PipelineInfo* pipeline,
+                                    const RoughGuidePlan* guides, const protocol::PipelineInfo* pipeline,
                                     const std::vector<protocol::Parameter>& params);
 
 }  // namespace dn::cli

@@ -465,8 +465,11 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
           .set("SPECULAR_FACTOR", 1u)
           .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
   }
-  const bool keep = v.keep_unexplained && v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance &&
-                    !v.extra_samples && !v.validity_mask && first.plane && !first.client_divided;
+  // keep: the (diffuse) albedo must be a client plane, the test's input; not
+  // with a validity mask, where an unsampled pixel has no current radiance.
+  const bool radiance = v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance;
+  const bool keep = v.keep_unexplained && (radiance || v.signals.size() == 2) && !v.extra_samples &&
+                    !v.validity_mask && first.plane.has_value() && first.plane == ChannelId::Albedo;
   // Motion: the TAA reprojection's, and a still unexplained pixel's history (with the guard's buffer).
   if (v.taa || keep) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.taa)
@@ -479,11 +482,16 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   // The first chain's history (its length): read by the display lag and the harm guard.
   if (v.display_lag || guard) remodulate.bind("colour_history", v.signals[0].history + "_colour");
   if (v.display_lag) remodulate.set("DISPLAY_LAG", 1u);
-  // keep: not with a validity mask, where an unsampled pixel has no current radiance to keep.
-  if (keep)
+  if (keep) {
     remodulate.bind("raw", v.signals[0].input)
         .set("KEEP_UNEXPLAINED", 1u)
-        .set("RAW_HALF", is_half(channel_format(config, ChannelId::Radiance)));
+        .set("RAW_HALF", is_half(channel_format(config, v.signals[0].channel)))
+        .set("RAW_DIVIDED", first.client_divided);
+    if (v.signals.size() > 1)
+      remodulate.bind("raw2", v.signals[1].input)
+          .set("RAW2_HALF", is_half(channel_format(config, v.signals[1].channel)))
+          .set("RAW2_DIVIDED", v.signals[1].modulator.client_divided);
+  }
   if (guard) {
     remodulate.bind("own", signal_buffers(v, 0).illum).set("HARM_GUARD", 1u);
     if (v.signals.size() > 1)

@@ -117,8 +117,9 @@ struct SvgfVariant {
   // its own temporal mean (the variance pass's output, which the a-trous
   // ping-pong then leaves intact).
   bool harm_guard = false;
-  // keep_unexplained != 0: with one radiance signal, zero-albedo pixels show
-  // their own current radiance (svgf_remodulate's KEEP_UNEXPLAINED).
+  // keep_unexplained != 0: pixels whose albedo plane is not a reflectance
+  // (zero under a mirror or metal) show their own current radiance, split:
+  // diffuse + specular (svgf_remodulate's KEEP_UNEXPLAINED).
   bool keep_unexplained = false;
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (vec4(rgb, 0) fp32, read as texels; add_svgf_buffers adds

@@ -484,7 +484,16 @@ TEST(ReferenceMetrics, InputRadianceIsRadianceElseTheSplitSum) {
             (std::vector<float>{0.75f, 0.75f, 3}));
   EXPECT_EQ(cli::input_radiance({{ChannelId::Diffuse, d}, {ChannelId::Specular, s}, {ChannelId::Emission, e}}),
             (std::vector<float>{1.75f, 0.75f, 3}));
+  // Lighting forms count times their albedo (Cycles: DiffDir x DiffCol); without it, not measured.
+  const std::vector<float> a{2, 4, 0.5f};
+  EXPECT_EQ(cli::input_radiance({{ChannelId::DiffuseLighting, d}, {ChannelId::Albedo, a}, {ChannelId::Specular, s}}),
+            (std::vector<float>{1.25f, 1.5f, 2.5f}));
+  EXPECT_EQ(cli::input_radiance({{ChannelId::Diffuse, d},
+                                 {ChannelId::SpecularLighting, s},
+                                 {ChannelId::SpecularAlbedo, a}}),
+            (std::vector<float>{1, 2.25f, 2}));
   EXPECT_TRUE(cli::input_radiance({{ChannelId::DiffuseLighting, d}, {ChannelId::Specular, s}}).empty());
+  EXPECT_TRUE(cli::input_radiance({{ChannelId::Diffuse, d}, {ChannelId::SpecularLighting, s}}).empty());
   // Not measured: no input error, and such frames count in neither worse_* column.
   cli::ReferenceExtrasTotals t;
   t.add_input(cli::input_error({}, r), 5.0, 5.0);

@@ -15,6 +15,7 @@
 #include "frame_source.hpp"
 #include "presets.hpp"
 #include "reflection_features.hpp"
+#include "unexplained_note.hpp"
 
 namespace {
 
@@ -203,11 +204,13 @@ TEST(CyclesFixtures, MirrorsTakeTheAlbedoAndDepthOfWhatTheyReflect) {
 }
 
 // Without a Roughness AOV, a mirror is told by its path going on past the
-// primary hit (the Denoising Depth beyond Depth). The file's AOV is the
-// oracle: mirror pixels that show a surface take the Denoising Albedo, and
-// pixels where Cycles stops at the primary hit (roughness > 0.27) DiffCol
-// and Depth.
-TEST(CyclesFixtures, WithoutTheRoughnessAovTheDepthTellsMirrors) {
+// primary hit (the Denoising Depth beyond Depth), but only on a surface with
+// a diffuse colour: a metal (DiffCol 0) may be glossy as well as a mirror
+// (the gold sphere, roughness 0.2, whose one sampled reflection the
+// Denoising passes follow too), and nothing in the file tells which, so it
+// keeps DiffCol (0: the server shows it as rendered) and Depth. The file's
+// AOV is the oracle for the rough pixels: DiffCol and Depth.
+TEST(CyclesFixtures, WithoutTheRoughnessAovMetalsKeepTheDiffuseColour) {
   const RadianceFrame r = load_radiance_frame("frame_0001.exr", true, ".Roughness.");
   ASSERT_TRUE(r.guides.has_value());
   EXPECT_FALSE(r.guides->key.has_value());
@@ -216,25 +219,53 @@ TEST(CyclesFixtures, WithoutTheRoughnessAovTheDepthTellsMirrors) {
   const auto &z = f.z, &rough = f.rough, &diffcol = f.diffcol, &dalb = f.dalb;
   const auto& depth = plane(r.frame, ChannelId::Depth);
   const auto& albedo = plane(r.frame, ChannelId::Albedo);
-  size_t mirrors = 0, as_mirror = 0, rough_pixels = 0;
+  size_t metals = 0, past_primary = 0, rough_pixels = 0;
   for (size_t i = 0; i < z.size(); ++i) {
     if (!(z[i] < 1e9f)) continue;
-    if (rough[i] < kCyclesMirrorRoughness && !f.shows_world(i)) {
-      ++mirrors;
-      bool same = depth[i] > z[i];
-      for (int k = 0; k < 3; ++k) same = same && albedo[3 * i + k] == dalb[3 * i + k];
-      as_mirror += same;
+    const float* d = &diffcol[3 * i];
+    if (std::max({d[0], d[1], d[2]}) < kReflectanceMin) {
+      ++metals;
+      bool differs = false;  // the Denoising Albedo would have differed
+      for (int k = 0; k < 3; ++k) differs = differs || dalb[3 * i + k] != d[k];
+      past_primary += differs;
+      ASSERT_EQ(depth[i], z[i]) << "pixel " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], d[k]) << "pixel " << i;
     } else if (rough[i] > 0.3f) {
       ++rough_pixels;
       ASSERT_EQ(depth[i], z[i]) << "pixel " << i;
-      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], diffcol[3 * i + k]) << "pixel " << i;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(albedo[3 * i + k], d[k]) << "pixel " << i;
     }
   }
-  EXPECT_GT(mirrors, 20u);
-  EXPECT_GT(rough_pixels, mirrors);
-  // A mirror pixel reflecting something within 2 % of its own depth (its
-  // contact with the floor) is taken as primary: allow a few.
-  EXPECT_GE(double(as_mirror), 0.9 * double(mirrors)) << as_mirror << " of " << mirrors;
+  // The spheres are in view, and their Denoising Albedo (what the test would see taken) is not DiffCol.
+  EXPECT_GT(metals, 40u);
+  EXPECT_GT(past_primary, metals / 2);
+  EXPECT_GT(rough_pixels, metals);
+}
+
+// dn denoise's note on pixels kept as rendered: without Denoising Data every
+// mirror and metal; with it but without the Roughness AOV the metals; with
+// both none, and none when the pipeline does not keep them or the user
+// turned keep_unexplained off.
+TEST(CyclesFixtures, NoteNamesThePassesThatWouldDenoiseKeptPixels) {
+  auto note = [](const std::string& name, const std::string& without, bool takes_keep,
+                 std::vector<dn::protocol::Parameter> params = {}) {
+    const dn::image::ExrReader exr(fixture(name));
+    std::vector<std::string> channels;
+    for (const auto& c : exr.channels())
+      if (without.empty() || c.find(without) == std::string::npos) channels.push_back(c);
+    const Preset preset = make_preset("cycles", channels);
+    auto p = svgf_like();
+    if (takes_keep) p.parameters.push_back({"keep_unexplained"});
+    const auto plan = plan_channels(preset, {}, &p, std::nullopt, channels, fixture(name));
+    const auto guides = plan_rough_guides(preset, plan, channels);
+    return unexplained_pixels_note(preset, plan, guides ? &*guides : nullptr, &p, params);
+  };
+  EXPECT_NE(note("nodd_0000.exr", "", true).find("enable View Layer > Passes > Data > Denoising Data"),
+            std::string::npos);
+  EXPECT_NE(note("frame_0000.exr", ".Roughness.", true).find("add a Value AOV named Roughness"), std::string::npos);
+  EXPECT_EQ(note("frame_0000.exr", "", true), "");
+  EXPECT_EQ(note("nodd_0000.exr", "", false), "");
+  EXPECT_EQ(note("nodd_0000.exr", "", true, {{"keep_unexplained", 0.0}}), "");
 }
 
 // A missing pass names the Blender setting that makes it.

@@ -39,8 +39,8 @@ struct SvgfScene {
 };
 
 // A panning camera over tiled surfaces (test::PanningScene) plus an albedo
-// that follows the world (some channels below the 1e-3 guard, some exactly 0)
-// and a few emissive tiles.
+// that follows the world (some channels below the 1e-3 guard, some exactly 0,
+// some tiles no reflectance: all 0, or one component 3) and a few emissive tiles.
 class SvgfSceneGen {
  public:
   SvgfSceneGen(int w, int h, uint32_t seed, float vx, float vy, float motion_noise, float radiance_noise,
@@ -61,6 +61,10 @@ class SvgfSceneGen {
         for (int k = 0; k < 3; ++k) f.albedo[3 * i + k] = 0.1f + 0.8f * static_cast<float>((hash >> (4 * k)) % 16) / 15.0f;
         if (hash % 7 == 0) f.albedo[3 * i + 1] = 0.0f;
         if (hash % 11 == 0) f.albedo[3 * i + 2] = 5e-4f;
+        // Albedos that are no reflectance (keep_unexplained): 0 (a mirror under a diffuse colour), 3.
+        if (hash % 17 == 0)
+          for (int k = 0; k < 3; ++k) f.albedo[3 * i + k] = 0.0f;
+        if (hash % 19 == 0) f.albedo[3 * i] = 3.0f;
         if (hash % 13 == 0)
           for (int k = 0; k < 3; ++k) f.emission[3 * i + k] = 2.0f + k;
       }

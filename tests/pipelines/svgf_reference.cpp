@@ -631,29 +631,50 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
-  // Pass 4b (keep_unexplained, radiance): a pixel whose albedo is below 1e-3
-  // in every component or above 1.5 in one (or not finite: not a reflectance)
-  // keeps its current radiance - emission, blended by its stillness toward
-  // its unfiltered temporal mean.
+  // Pass 4b (keep_unexplained, no validity mask): a pixel whose (diffuse)
+  // albedo is below 1e-3 in every component or above 1.5 in one (or not
+  // finite: not a reflectance) shows its current radiance - emission (split:
+  // diffuse + specular radiance), blended by its stillness toward its
+  // unfiltered temporal mean (remodulated), then + emission.
   std::vector<bool> kept(n, false);
-  if (!split && p_.keep_unexplained && !masked)
+  if (p_.keep_unexplained && !masked)
     for (int i = 0; i < n; ++i) {
       const double m = std::max({double(float(f.albedo[3 * i])), double(float(f.albedo[3 * i + 1])),
                                  double(float(f.albedo[3 * i + 2]))});
       kept[i] = !(m >= static_cast<double>(1e-3f) && m <= 1.5);
-      if (!kept[i]) continue;
-      // Where still (and with the guard's buffer: harm_guard, a-trous), toward its unfiltered temporal mean.
-      const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
-      const bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
-      const double s = own && usable_motion(mx, my) ? std::clamp(1.0 - std::hypot(mx, my) / 0.05, 0.0, 1.0) : 0.0;
-      for (int k = 0; k < 3; ++k) cur[4 * i + k] = raw[3 * i + k] * (1.0 - s) + chains_[0].temporal[3 * i + k] * s;
     }
+  std::vector<double> dsan, ssan;
+  if (split) {
+    dsan = sanitize(f.diffuse);
+    ssan = sanitize(f.specular);
+  }
+  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the unfiltered temporal mean.
+  auto stillness = [&](int i) {
+    bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
+    if (split) own = own && chains_[1].variance[i] >= 0.0;
+    const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
+    return own && usable_motion(mx, my) ? std::clamp(1.0 - std::hypot(mx, my) / 0.05, 0.0, 1.0) : 0.0;
+  };
 
   // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-      out[3 * i + k] = cur[4 * i + k] * a[3 * i + k] + (split ? spec[4 * i + k] * sf[3 * i + k] : 0.0) + e[3 * i + k];
+    for (int k = 0; k < 3; ++k) {
+      const int j = 3 * i + k;
+      if (!kept[i]) {
+        out[j] = cur[4 * i + k] * a[j] + (split ? spec[4 * i + k] * sf[j] : 0.0) + e[j];
+        continue;
+      }
+      const double s = stillness(i);
+      double now, mean = chains_[0].temporal[j] * a[j];
+      if (split) {
+        now = dsan[j] * (f.diffuse_lighting ? a[j] : 1.0) + ssan[j] * (f.specular_lighting ? sf[j] : 1.0);
+        mean += chains_[1].temporal[j] * sf[j];
+      } else {
+        now = raw[j];
+      }
+      out[j] = now * (1.0 - s) + mean * s + e[j];
+    }
 
   remodulated_ = out;
   // Pass 5 (taa_alpha or taa_static_alpha > 0): previous final output at

@@ -507,6 +507,50 @@ TEST_F(SvgfTest, SplitWithZeroSpecularEqualsRadianceMode) {
   }
 }
 
+// keep_unexplained in split mode: a moving pixel whose albedo is 0 in every
+// component (a metal or mirror under a diffuse colour) shows its own diffuse
+// + specular + emission as sent, a highlight among dark neighbours included;
+// with keep_unexplained 0 the filter spreads the highlight.
+TEST_F(SvgfTest, SplitKeepsPixelsWithoutAReflectanceAsRendered) {
+  const int w = 64, h = 48;
+  for (const double keep : {1.0, 0.0}) {
+    SCOPED_TRACE(testing::Message() << "keep_unexplained " << keep);
+    auto pipe = pipelines::create(
+        ctx(), svgf_split_config(w, h, Format::F32, Format::F32, {{"keep_unexplained", keep}}, true));
+    SvgfSceneGen scene(w, h, 5, 1.37f, -0.61f, 0.45f, 0.8f);
+    size_t kept = 0, checked = 0;
+    for (int t = 0; t < 5; ++t) {
+      SvgfScene s = scene.frame(t);
+      std::vector<float> spec = specular_of(s, 9 + t);
+      // A metal block, dark but for a one-pixel highlight 100x its neighbours.
+      for (int y = 16; y < 32; ++y)
+        for (int x = 20; x < 44; ++x) {
+          const int i = y * w + x;
+          for (int k = 0; k < 3; ++k) {
+            s.albedo[3 * i + k] = 0.0f;
+            spec[3 * i + k] = (x == 31 && y == 23) ? 50.0f : 0.5f;
+          }
+        }
+      const auto out = run(*pipe, host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, true, &spec));
+      for (int y = 16; y < 32; ++y)
+        for (int x = 20; x < 44; ++x) {
+          const int i = y * w + x;
+          if (!(std::hypot(s.motion[2 * i], s.motion[2 * i + 1]) >= 0.05f)) continue;  // moving: no blend toward history
+          ++checked;
+          bool same = true;
+          for (int k = 0; k < 3; ++k) {
+            const float sent = std::max(s.radiance[3 * i + k], 0.0f) + spec[3 * i + k] + s.emission[3 * i + k];
+            same = same && std::fabs(out[3 * i + k] - sent) <= 1e-5f * std::max(1.0f, sent);
+          }
+          kept += same;
+        }
+    }
+    ASSERT_GT(checked, 1000u);
+    if (keep != 0.0) EXPECT_EQ(kept, checked);
+    else EXPECT_LT(kept, checked / 2) << "without keep_unexplained the pixels are filtered";
+  }
+}
+
 // The joint chain filters diffuse and specular in the same variance and
 // a-trous passes with separate luminance weights and variances: a different
 // specular input leaves every diffuse result (variance, each iteration, the
