@@ -54,11 +54,19 @@ vec3 specular_modulator(uint p) {
   return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0);
 }
 
+// A modulator below DN_ALBEDO_MIN in every component (or not finite): no lobe of that kind.
+bool dn_no_reflectance(vec3 a) { return !(max(a.r, max(a.g, a.b)) >= DN_ALBEDO_MIN); }
+
+// The specular radiance sent for p (split sessions with KEEP_UNEXPLAINED).
+vec3 raw_specular(uint p) {
+  return dn_sanitize_radiance(DN_LOAD3(raw2, RAW2_HALF, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
+}
+
 // The current radiance of an unexplained pixel, less emission; ga: its guarded albedo.
 vec3 kept_radiance(uint p, vec3 ga) {
   vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
   if (HAS_SPECULAR) {
-    c += dn_sanitize_radiance(DN_LOAD3(raw2, RAW2_HALF, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
+    c += raw_specular(p);
   } else if (HAS_EMISSION) {
     c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
   }
@@ -82,7 +90,10 @@ vec3 remodulate(uint p, out bool kept) {
   } else {
     c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
                       HARM_GUARD ? colour_history.data[p].a : 0.0) * ga;
-    if (HAS_SPECULAR)
+    if (HAS_SPECULAR && KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && SPECULAR_FACTOR &&
+        dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
+      c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
+    else if (HAS_SPECULAR)
       c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
                          HARM_GUARD ? colour_history2.data[p].a : 0.0) * specular_modulator(p);
   }

@@ -1,10 +1,12 @@
 // progressive: progressive SVGF (Dundr 2018, paper 004; docs/pipelines.md
 // "progressive") as a variant of the SVGF chain (svgf_chain.hpp): svgf's
 // signals and passes with paper 004's constants (parameter_defaults), its
-// 3x3 a-trous kernel in its step order, its luminance weight (a parameter),
-// no luminance weight for young pixels instead of SVGF's spatial variance
-// estimate, and, with a sample_count plane, fewer than one sample per pixel:
-// unsampled pixels keep their history, pixels without data take no part.
+// 3x3 a-trous kernel, its luminance weight (a parameter) and, with a
+// sample_count plane, its regime below one sample per pixel: unsampled
+// pixels keep their history, pixels without data take no part, young pixels
+// have no luminance weight instead of SVGF's spatial variance estimate, the
+// steps go finest first and the display lags across the switch. Without the
+// plane (a sample everywhere) the chain keeps SVGF's estimate and order.
 #include <optional>
 #include <string>
 
@@ -23,12 +25,18 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   v.signals = radiance_or_split_signals(config, v.emission);
   for (SvgfSignal& s : v.signals) s.clip = false;  // paper 004 clips nothing (check_channels)
   v.kernel = AtrousKernel::Box3x3;
-  v.steps = p.progressive_step_order == 0.0f ? StepOrder::FinestFirst : StepOrder::Increasing;
+  // Paper 004's young pixels have no usable variance below one sample per
+  // pixel; a session without sample_count has a sample at every pixel every
+  // frame, and SVGF's 7x7 spatial estimate stands in for it (no luminance
+  // switch at coming of age, so no display lag across one).
+  const bool sparse = has_channel(config, ChannelId::SampleCount);
+  const bool finest_first = p.progressive_step_order == 0.0f || (p.progressive_step_order == 2.0f && sparse);
+  v.steps = finest_first ? StepOrder::FinestFirst : StepOrder::Increasing;
   v.luminance_weight = p.progressive_luminance_form == 0.0f ? LuminanceWeight::VarianceGuided : LuminanceWeight::Variance;
-  v.young_variance = YoungVariance::LuminanceOff;
-  if (has_channel(config, ChannelId::SampleCount)) v.validity_mask = ChannelId::SampleCount;
+  v.young_variance = sparse ? YoungVariance::LuminanceOff : YoungVariance::SpatialEstimate;
+  if (sparse) v.validity_mask = ChannelId::SampleCount;
   v.sparse_gbuffer = p.progressive_sparse_gbuffer != 0.0f;  // check_channels: only with sample_count
-  v.display_lag = v.taa && p.progressive_display_lag != 0.0f;
+  v.display_lag = sparse && v.taa && p.progressive_display_lag != 0.0f;
   return v;
 }
 
@@ -57,9 +65,9 @@ PipelineDefinition progressive_definition() {
   PipelineDefinition d;
   d.description.name = "progressive";
   d.description.summary =
-      "Progressive SVGF (Dundr 2018): the svgf chain with a 3x3 a-trous kernel (steps 1, 16, 8, 4, 2), blend "
-      "max(0.1, 1/age), no luminance weight for young pixels and a final clamped TAA blend; with sample_count, fewer "
-      "than one sample per pixel (unsampled pixels keep their history).";
+      "Progressive SVGF (Dundr 2018): the svgf chain with a 3x3 a-trous kernel, blend max(0.1, 1/age) and a final "
+      "clamped TAA blend; with sample_count, fewer than one sample per pixel (unsampled pixels keep their history, "
+      "young pixels have no luminance weight, steps 1, 16, 8, 4, 2).";
   // svgf's channels, without roughness (nothing is clipped) and the extra
   // samples (not combined with a validity mask), plus the mask.
   const PipelineDescription svgf = svgf_definition().description;

@@ -44,8 +44,11 @@ pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::
 }
 
 // The reference with the progressive pipeline's own defaults
-// (server/pipelines/progressive.cpp), then the session's parameters.
-test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps) {
+// (server/pipelines/progressive.cpp), then the session's parameters; with
+// `sparse` (a sample_count plane) paper 004's regime, without it SVGF's
+// young-pixel estimate and step order (the age gate and the display lag do
+// not apply).
+test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps, bool sparse) {
   test::SvgfParams p;
   p.alpha_colour = 0.1;
   p.alpha_moments = 0.1;
@@ -62,7 +65,15 @@ test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps) 
   p.epsilon_luminance = 0.05;
   p.luminance_min_age = 4;
   p.display_lag = true;
+  p.finest_first = sparse;  // step_order 2
   test::apply_parameters(p, ps);
+  for (const auto& q : ps)
+    if (q.name == "step_order" && q.value == 2.0) p.finest_first = sparse;
+  if (!sparse) {
+    p.spatial_estimate = true;
+    p.luminance_min_age = 0;
+    p.display_lag = false;
+  }
   return p;
 }
 
@@ -86,9 +97,15 @@ std::vector<float> quarter_spp(int w, int h, int t) {
   return count;
 }
 
+// Which pixels a frame samples: every one without a sample_count plane
+// (None), every one with the plane saying so (Full: paper 004's regime at
+// 1 spp), or quarter_spp's (Quarter).
+enum class Mask { None, Full, Quarter };
+
 struct Variant {
   const char* name;
-  bool split, emission, mask;
+  bool split, emission;
+  Mask mask;
   std::vector<protocol::Parameter> params;
   float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
   int w = 64, h = 40;
@@ -103,10 +120,11 @@ class ProgressiveReferenceTest : public test::GpuTest, public testing::WithParam
 TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
   const Variant& v = GetParam();
   const int w = v.w, h = v.h;
-  auto config = progressive_config(w, h, v.params, v.emission, v.split, v.mask);
+  const bool masked = v.mask != Mask::None;
+  auto config = progressive_config(w, h, v.params, v.emission, v.split, masked);
   ASSERT_FALSE(pipelines::validate(config).has_value());
   auto pipe = pipelines::create(ctx(), config);
-  test::SvgfReference ref(w, h, progressive_params(v.params));
+  test::SvgfReference ref(w, h, progressive_params(v.params, masked));
   SvgfSceneGen scene(w, h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
   const int frames = 8;
   double worst = 0.0;
@@ -116,8 +134,10 @@ TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
     const uint32_t flags = t == 5 ? protocol::kFrameReset : 0u;
     SvgfScene s = scene.frame(t);
     std::vector<float> spec = v.split ? specular_of(s, 77 + t) : std::vector<float>{};
-    const std::vector<float> count = v.mask ? quarter_spp(w, h, t) : std::vector<float>{};
-    if (v.mask)  // nothing rendered where nothing was sampled
+    const std::vector<float> count = v.mask == Mask::Quarter ? quarter_spp(w, h, t)
+                                     : v.mask == Mask::Full  ? std::vector<float>(w * h, 1.0f)
+                                                             : std::vector<float>{};
+    if (masked)  // nothing rendered where nothing was sampled
       for (int i = 0; i < w * h; ++i)
         if (!(count[i] > 0.0f))
           for (int k = 0; k < 3; ++k) {
@@ -127,7 +147,7 @@ TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
     test::HostFrame f = host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, flags, v.emission,
                                    v.split ? &spec : nullptr);
     test::SvgfFrame r = reference_frame(f, w, h, v.emission, v.split);
-    if (v.mask) {
+    if (masked) {
       f.add(ChannelId::SampleCount, Format::F32, count);
       const auto& plane = f.plane(ChannelId::SampleCount);
       r.sample_count = test::decode_plane(plane.bytes, plane.format);
@@ -151,8 +171,8 @@ TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
       }
     EXPECT_EQ(gross, 0u) << "pixels that disagree by more than 2% (a different discrete decision)";
   }
-  // The masked variants must exercise pixels without data (3/4 of the first frame's foreground).
-  if (v.mask) {
+  // The quarter-spp variants must exercise pixels without data (3/4 of the first frame's foreground).
+  if (v.mask == Mask::Quarter) {
     EXPECT_GT(no_data_first, size_t(w * h / 8));
   }
   std::printf("[ info     ] %s: worst relative RMS over %d frames %.3g\n", v.name, frames, worst);
@@ -161,26 +181,30 @@ TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
 INSTANTIATE_TEST_SUITE_P(
     Progressive, ProgressiveReferenceTest,
     testing::Values(
-        Variant{"defaults", false, true, false, {}},
-        Variant{"step_order_increasing", false, true, false, {{"step_order", 1}}},
-        Variant{"variance_form", false, true, false, {{"luminance_form", 1}}},
-        Variant{"six_iterations", false, false, false, {{"atrous_iterations", 6}}},
-        Variant{"split", true, true, false, {}},
+        // A sample at every pixel, no sample_count plane: SVGF's young-pixel estimate and step order.
+        Variant{"defaults", false, true, Mask::None, {}},
+        Variant{"step_order_finest_first", false, true, Mask::None, {{"step_order", 0}}},
+        Variant{"variance_form", false, true, Mask::None, {{"luminance_form", 1}}},
+        Variant{"six_iterations", false, false, Mask::None, {{"atrous_iterations", 6}}},
+        Variant{"split", true, true, Mask::None, {}},
+        // Paper 004's regime at 1 spp (sample_count 1 everywhere), moving.
+        Variant{"full_mask_moving", false, true, Mask::Full, {}},
+        Variant{"full_mask_step_order_increasing", false, true, Mask::Full, {{"step_order", 1}}},
         // 1/4 spp: a static camera (unsampled pixels keep their history
         // exactly) and a moving one (they keep the reprojected history).
-        Variant{"quarter_spp_static", false, true, true, {}, 0.0f, 0.0f, 0.0f},
-        Variant{"quarter_spp_moving", false, true, true, {}},
+        Variant{"quarter_spp_static", false, true, Mask::Quarter, {}, 0.0f, 0.0f, 0.0f},
+        Variant{"quarter_spp_moving", false, true, Mask::Quarter, {}},
         // A still camera at 1 spp: pixels come of age at frame 3, and the
         // display lags across the switch (display_lag) until the reset at 5;
         // and the same clamped throughout.
-        Variant{"still_display_lag", false, true, false, {}, 0.0f, 0.0f, 0.0f},
-        Variant{"still_no_display_lag", false, true, false, {{"display_lag", 0}}, 0.0f, 0.0f, 0.0f},
+        Variant{"still_display_lag", false, true, Mask::Full, {}, 0.0f, 0.0f, 0.0f},
+        Variant{"still_no_display_lag", false, true, Mask::Full, {{"display_lag", 0}}, 0.0f, 0.0f, 0.0f},
         // Sub-pixel motion: the lag shrinks with the stillness.
-        Variant{"creeping_display_lag", false, true, false, {}, 0.02f, 0.01f, 0.0f},
+        Variant{"creeping_display_lag", false, true, Mask::Full, {}, 0.02f, 0.01f, 0.0f},
         // The weight coming in over 3 samples past an age gate of 1 (so that
         // 8 frames at 1/4 spp reach it).
-        Variant{"quarter_spp_static_ramp_in", false, false, true, {{"luminance_min_age", 1}, {"luminance_ramp_in", 3}},
-                0.0f, 0.0f, 0.0f},
+        Variant{"quarter_spp_static_ramp_in", false, false, Mask::Quarter,
+                {{"luminance_min_age", 1}, {"luminance_ramp_in", 3}}, 0.0f, 0.0f, 0.0f},
         // The luminance weight at every age (at 1/4 spp a history reaches
         // length 4 only after 13 frames): p without data has none, and the
         // variance Gaussian skips taps without data. Whole-pixel motion only:
@@ -188,8 +212,9 @@ INSTANTIATE_TEST_SUITE_P(
         // with a rounding residual for a variance (exactly 0 or not, fp32 vs
         // double), which decides the HDR step rule and, in the std-dev form,
         // the luminance weight; the age gate is there for that.
-        Variant{"quarter_spp_static_luminance", false, false, true, {{"luminance_min_age", 0}}, 0.0f, 0.0f, 0.0f},
-        Variant{"quarter_spp_moving_variance_form", false, true, true,
+        Variant{"quarter_spp_static_luminance", false, false, Mask::Quarter, {{"luminance_min_age", 0}}, 0.0f, 0.0f,
+                0.0f},
+        Variant{"quarter_spp_moving_variance_form", false, true, Mask::Quarter,
                 {{"luminance_min_age", 0}, {"luminance_form", 1}}, 1.0f, -1.0f, 0.0f}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 

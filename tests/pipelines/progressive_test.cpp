@@ -159,7 +159,8 @@ TEST_F(ProgressiveTest, ConstantInputIsReturnedExactly) {
   }
 }
 
-// A noise-free step in luminance on one surface: once the pixels are old
+// Paper 004's regime (sample_count, here 1 everywhere). A noise-free step
+// in luminance on one surface: once the pixels are old
 // enough for the luminance weight (luminance_min_age), their variance is 0
 // and the weight stops every tap across the step. The first frames, younger
 // than that, are filtered without it, and the history takes that blur (it is
@@ -171,13 +172,14 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
   const int w = 48, h = 16, n = w * h;
   FlatFrames scene{w, h};
   const std::vector<double> step = luminance_step(w, h);
+  const std::vector<float> every_pixel(n, 1.0f);  // sample_count: paper 004's regime at 1 spp
   auto edge_error = [&](std::vector<protocol::Parameter> params) {
     params.push_back({"taa_alpha", 0});
     params.push_back({"taa_static_alpha", 0});
     params.push_back({"harm_guard", 0});  // the filter's own behaviour: the guard would keep the noise-free step
-    auto pipe = pipelines::create(ctx(), progressive_config(w, h, params));
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, params, /*masked=*/true));
     std::vector<float> out;
-    for (int t = 0; t < 64; ++t) out = run(*pipe, scene.frame(grey(step)));
+    for (int t = 0; t < 64; ++t) out = run(*pipe, scene.frame(grey(step), &every_pixel));
     double worst = 0.0;
     for (int i = 0; i < n; ++i) worst = std::max(worst, std::fabs(out[3 * i] - step[i]));
     return worst;
@@ -186,7 +188,7 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
   EXPECT_GT(edge_error({{"luminance_min_age", 1024}}), 0.05);
 }
 
-// Paper 004 5's buffer one step behind (display_lag): on the same noise-free
+// Paper 004 5's buffer one step behind (display_lag, with sample_count): on the same noise-free
 // step, still, at 1 spp, the young frames (0-2) show the blur of the filter
 // without a luminance weight, and at frame 3 every pixel comes of age and the
 // filter returns the step. The final blend (fixed ratio 0.1) must then move
@@ -199,11 +201,12 @@ TEST_F(ProgressiveTest, TheDisplayFollowsTheHistorySwitchContinuously) {
   const int w = 48, h = 16, n = w * h;
   FlatFrames scene{w, h};
   const std::vector<double> step = luminance_step(w, h);
+  const std::vector<float> every_pixel(n, 1.0f);  // sample_count: paper 004's regime at 1 spp
   auto frames = [&](std::vector<protocol::Parameter> params) {
     params.push_back({"harm_guard", 0});  // the filter's own blur: the guard would keep the noise-free step
-    auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params)));
+    auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params), /*masked=*/true));
     std::vector<std::vector<float>> out;
-    for (int t = 0; t < 64; ++t) out.push_back(run(*pipe, scene.frame(grey(step))));
+    for (int t = 0; t < 64; ++t) out.push_back(run(*pipe, scene.frame(grey(step), &every_pixel)));
     return out;
   };
   const auto lagged = frames({});
@@ -691,7 +694,7 @@ TEST(ProgressiveValidate, ChannelsAndParameters) {
   EXPECT_EQ(sparse->code, protocol::ErrorCode::InvalidParameter);
   EXPECT_NE(sparse->message.find("sample_count"), std::string::npos) << sparse->message;
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {{"sparse_gbuffer", 1}}, true)).has_value());
-  const auto bad_order = pipelines::validate(progressive_config(16, 16, {{"step_order", 2}}));
+  const auto bad_order = pipelines::validate(progressive_config(16, 16, {{"step_order", 3}}));
   ASSERT_TRUE(bad_order.has_value());
   EXPECT_EQ(bad_order->code, protocol::ErrorCode::InvalidParameter);
 }

@@ -656,13 +656,25 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     return own && usable_motion(mx, my) ? std::clamp(1.0 - std::hypot(mx, my) / 0.05, 0.0, 1.0) : 0.0;
   };
 
+  // keep_unexplained, split: a pixel whose specular factor is below 1e-3 in
+  // every component (or not finite) has no specular lobe, and its specular
+  // term is what it was sent, not what the filter brought in.
+  auto no_lobe = [&](int i) {
+    if (!split || !p_.keep_unexplained || masked || f.specular_factor.empty()) return false;
+    const double m = std::max({double(float(f.specular_factor[3 * i])), double(float(f.specular_factor[3 * i + 1])),
+                               double(float(f.specular_factor[3 * i + 2]))});
+    return !(m >= static_cast<double>(1e-3f));
+  };
+
   // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
       const int j = 3 * i + k;
       if (!kept[i]) {
-        out[j] = cur[4 * i + k] * a[j] + (split ? spec[4 * i + k] * sf[j] : 0.0) + e[j];
+        double s = 0.0;
+        if (split) s = no_lobe(i) ? ssan[j] * (f.specular_lighting ? sf[j] : 1.0) : spec[4 * i + k] * sf[j];
+        out[j] = cur[4 * i + k] * a[j] + s + e[j];
         continue;
       }
       const double s = stillness(i);

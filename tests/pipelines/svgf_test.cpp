@@ -551,6 +551,48 @@ TEST_F(SvgfTest, SplitKeepsPixelsWithoutAReflectanceAsRendered) {
   }
 }
 
+// keep_unexplained, split with a specular modulator: where the modulator
+// (here specular_albedo) is 0 the pixel has no specular lobe, and its
+// specular term is what it was sent (0), not the bright neighbours' light the
+// filter brings in across the same surface (times the guarded 1). So those
+// pixels come out exactly as in a session whose specular is 0 everywhere
+// (the diffuse chain does not see the specular one), and without keep not.
+TEST_F(SvgfTest, SplitPixelsWithoutASpecularLobeAddNoFilteredSpecular) {
+  const int w = 64, h = 48, n = w * h;
+  for (const double keep : {1.0, 0.0}) {
+    SCOPED_TRACE(testing::Message() << "keep_unexplained " << keep);
+    auto config = svgf_split_config(w, h, Format::F32, Format::F32, {{"keep_unexplained", keep}}, false);
+    config.channels.push_back({ChannelId::SpecularAlbedo, Format::F32});
+    auto lit = pipelines::create(ctx(), config);
+    auto dark = pipelines::create(ctx(), config);
+    SvgfSceneGen scene(w, h, 6, 1.37f, -0.61f, 0.45f, 0.8f);
+    size_t same = 0, checked = 0;
+    for (int t = 0; t < 4; ++t) {
+      const SvgfScene s = scene.frame(t);
+      std::vector<float> spec = specular_of(s, 31 + t), spec_albedo(3 * n, 0.5f);  // noisy: the filter mixes it
+      const std::vector<float> no_spec(3 * n, 0.0f);
+      for (int i = 0; i < n; ++i)
+        if ((i % w) % 8 < 4)  // columns without a specular lobe: nothing sent there
+          for (int k = 0; k < 3; ++k) spec[3 * i + k] = spec_albedo[3 * i + k] = 0.0f;
+      auto frame = [&](const std::vector<float>& sp) {
+        test::HostFrame f = host_frame(s, w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &sp);
+        f.add(ChannelId::SpecularAlbedo, Format::F32, spec_albedo);
+        return f;
+      };
+      const auto a = run(*lit, frame(spec));
+      const auto b = run(*dark, frame(no_spec));
+      for (int i = 0; i < n; ++i) {
+        if ((i % w) % 8 >= 4) continue;
+        ++checked;
+        same += a[3 * i] == b[3 * i] && a[3 * i + 1] == b[3 * i + 1] && a[3 * i + 2] == b[3 * i + 2];
+      }
+    }
+    ASSERT_GT(checked, 1000u);
+    if (keep != 0.0) EXPECT_EQ(same, checked);
+    else EXPECT_LT(same, checked / 2) << "without keep_unexplained the filter brings the lobe's light in";
+  }
+}
+
 // The joint chain filters diffuse and specular in the same variance and
 // a-trous passes with separate luminance weights and variances: a different
 // specular input leaves every diffuse result (variance, each iteration, the
