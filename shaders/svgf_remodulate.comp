@@ -45,17 +45,13 @@ vec3 dn_harm_guard(vec3 f, vec4 m, float len) {
 // unfiltered temporal mean: what a mirror shows moves with the camera, not
 // with the mirror's surface, but a still view's history holds the same point.
 const float DN_REFLECTANCE_MAX = 1.5;
-bool dn_unexplained(vec3 a) {
-  float m = max(a.r, max(a.g, a.b));
-  return !(m >= DN_ALBEDO_MIN && m <= DN_REFLECTANCE_MAX);
-}
+// A modulator below DN_ALBEDO_MIN in every component (or not finite): no lobe of that kind.
+bool dn_no_reflectance(vec3 a) { return !(max(a.r, max(a.g, a.b)) >= DN_ALBEDO_MIN); }
+bool dn_unexplained(vec3 a) { return dn_no_reflectance(a) || !(max(a.r, max(a.g, a.b)) <= DN_REFLECTANCE_MAX); }
 
 vec3 specular_modulator(uint p) {
   return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0);
 }
-
-// A modulator below DN_ALBEDO_MIN in every component (or not finite): no lobe of that kind.
-bool dn_no_reflectance(vec3 a) { return !(max(a.r, max(a.g, a.b)) >= DN_ALBEDO_MIN); }
 
 // The specular radiance sent for p (split sessions with KEEP_UNEXPLAINED).
 vec3 raw_specular(uint p) {
@@ -83,15 +79,15 @@ vec3 kept_radiance(uint p, vec3 ga) {
 vec3 remodulate(uint p, out bool kept) {
   vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 ga = dn_guarded_albedo(a);
-  kept = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && dn_unexplained(a);
+  bool keeping = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0;
+  kept = keeping && dn_unexplained(a);
   vec3 c;
   if (kept) {
     c = kept_radiance(p, ga);
   } else {
     c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
                       HARM_GUARD ? colour_history.data[p].a : 0.0) * ga;
-    if (HAS_SPECULAR && KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 && SPECULAR_FACTOR &&
-        dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
+    if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
       c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
     else if (HAS_SPECULAR)
       c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),

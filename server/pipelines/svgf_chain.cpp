@@ -469,7 +469,7 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   // with a validity mask, where an unsampled pixel has no current radiance.
   const bool radiance = v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance;
   const bool keep = v.keep_unexplained && (radiance || v.signals.size() == 2) && !v.extra_samples &&
-                    !v.validity_mask && first.plane.has_value() && first.plane == ChannelId::Albedo;
+                    !v.validity_mask && first.plane == ChannelId::Albedo;
   // Motion: the TAA reprojection's, and a still unexplained pixel's history (with the guard's buffer).
   if (v.taa || keep) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.taa)

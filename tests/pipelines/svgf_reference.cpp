@@ -15,6 +15,10 @@ double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.072
 // motion beyond 2^20 px is none, a non-finite roughness is 1.
 bool foreground(double z) { return std::isfinite(z) && z >= std::numeric_limits<float>::min() && z <= 1e18; }
 double guarded(double a) { return std::isfinite(a) && a >= static_cast<double>(1e-3f) && a <= 1e3 ? a : 1.0; }
+// The largest of pixel i's three components, each rounded to fp32 as the device reads it.
+double largest_f32(const std::vector<double>& v, int i) {
+  return std::max({double(float(v[3 * i])), double(float(v[3 * i + 1])), double(float(v[3 * i + 2]))});
+}
 bool usable_normal(const double* n) {
   const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
   return std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2]) && n2 <= std::numeric_limits<float>::max();
@@ -639,8 +643,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   std::vector<bool> kept(n, false);
   if (p_.keep_unexplained && !masked)
     for (int i = 0; i < n; ++i) {
-      const double m = std::max({double(float(f.albedo[3 * i])), double(float(f.albedo[3 * i + 1])),
-                                 double(float(f.albedo[3 * i + 2]))});
+      const double m = largest_f32(f.albedo, i);
       kept[i] = !(m >= static_cast<double>(1e-3f) && m <= 1.5);
     }
   std::vector<double> dsan, ssan;
@@ -661,9 +664,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // term is what it was sent, not what the filter brought in.
   auto no_lobe = [&](int i) {
     if (!split || !p_.keep_unexplained || masked || f.specular_factor.empty()) return false;
-    const double m = std::max({double(float(f.specular_factor[3 * i])), double(float(f.specular_factor[3 * i + 1])),
-                               double(float(f.specular_factor[3 * i + 2]))});
-    return !(m >= static_cast<double>(1e-3f));
+    return !(largest_f32(f.specular_factor, i) >= static_cast<double>(1e-3f));
   };
 
   // Pass 4: remodulate (+ specular, + emission).

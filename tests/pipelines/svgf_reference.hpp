@@ -22,7 +22,7 @@ struct SvgfParams {
   double taa_alpha = 0.0;         // > 0: the final TAA blend at moving pixels (pass 5)
   double taa_static_alpha = 0.5;  // > 0: its weight at static pixels (pass 5)
   double harm_guard = 2.0;      // > 0: pull the filtered signals back toward their temporal means (pass 4a)
-  int keep_unexplained = 1;     // radiance: zero-albedo pixels keep their current radiance (pass 4b)
+  int keep_unexplained = 1;     // pixels whose albedo is no reflectance keep their current radiance; split: no-lobe specular (pass 4b)
   double clip_roughness = 0.9;  // > 0: history clipping of the radiance / specular chain (pass 1)
   int variance_of_mean = 1;      // 1: the variance steering the a-trous is the temporal mean's (pass 2)
   int luminance_ramp = 0;        // 1: paper 001 Eq. 8, phi_l times 8 - min(7, length - 1) (pass 3)
