@@ -79,7 +79,9 @@ vec3 kept_radiance(uint p, vec3 ga) {
 vec3 remodulate(uint p, out bool kept) {
   vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 ga = dn_guarded_albedo(a);
-  bool keeping = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0;
+  // Below one sample per pixel an unsampled pixel has no radiance of its own: the filter's, as every pixel's.
+  bool keeping = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 &&
+                 (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, p)));
   kept = keeping && dn_unexplained(a);
   vec3 c;
   if (kept) {

@@ -465,11 +465,11 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
           .set("SPECULAR_FACTOR", 1u)
           .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
   }
-  // keep: the (diffuse) albedo must be a client plane, the test's input; not
-  // with a validity mask, where an unsampled pixel has no current radiance.
+  // keep: the (diffuse) albedo must be a client plane, the test's input; with
+  // a validity mask only sampled pixels have a current radiance to keep.
   const bool radiance = v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance;
   const bool keep = v.keep_unexplained && (radiance || v.signals.size() == 2) && !v.extra_samples &&
-                    !v.validity_mask && first.plane == ChannelId::Albedo;
+                    first.plane == ChannelId::Albedo;
   // Motion: the TAA reprojection's, and a still unexplained pixel's history (with the guard's buffer).
   if (v.taa || keep) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.taa)
@@ -487,6 +487,7 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
         .set("KEEP_UNEXPLAINED", 1u)
         .set("RAW_HALF", is_half(channel_format(config, v.signals[0].channel)))
         .set("RAW_DIVIDED", first.client_divided);
+    if (v.validity_mask) bind_validity_mask(config, *v.validity_mask, remodulate);
     if (v.signals.size() > 1)
       remodulate.bind("raw2", v.signals[1].input)
           .set("RAW2_HALF", is_half(channel_format(config, v.signals[1].channel)))
@@ -500,7 +501,9 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
 
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
-    taa.bind("current", kTemporal).bind("previous", kGuide).bind("history", kTaaHistory);
+    taa.bind("current", kTemporal).bind("previous", kGuide).bind("history", kTaaHistory)
+        .bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
+        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
     bind_result(taa);
     if (v.display_lag) taa.set("DISPLAY_LAG", 1u);
   }

@@ -41,9 +41,11 @@ bool dn_bilinear_footprint(vec2 p, uvec2 size, out ivec2 origin, out vec4 weight
 // Falcor's SVGF consistency test of a previous pixel (depth z_prev, normal
 // n_prev) against the current pixel (z, n, and its geometry gradients grad:
 // depth, normal distance; svgf.glsl's dn_svgf_gradients): the same surface
-// when the depth and normal differences are within 10 and 16 gradients.
+// when the depth and normal differences are within 10 and 16 gradients
+// (dn_same_depth: the depth half alone).
+bool dn_same_depth(float z, float grad_z, float z_other) { return !(abs(z - z_other) / (grad_z + 0.01) > 10.0); }
 bool dn_same_surface(float z, vec3 n, vec2 grad, float z_prev, vec3 n_prev) {
-  return !(abs(z - z_prev) / (grad.x + 0.01) > 10.0) && !(distance(n, n_prev) / (grad.y + 0.01) > 16.0);
+  return dn_same_depth(z, grad.x, z_prev) && !(distance(n, n_prev) / (grad.y + 0.01) > 16.0);
 }
 
 bool dn_inside(ivec2 q, uvec2 size) { return q.x >= 0 && q.y >= 0 && q.x < int(size.x) && q.y < int(size.y); }

@@ -635,17 +635,18 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
-  // Pass 4b (keep_unexplained, no validity mask): a pixel whose (diffuse)
-  // albedo is below 1e-3 in every component or above 1.5 in one (or not
-  // finite: not a reflectance) shows its current radiance - emission (split:
-  // diffuse + specular radiance), blended by its stillness toward its
-  // unfiltered temporal mean (remodulated), then + emission.
+  // Pass 4b (keep_unexplained; with a validity mask only at sampled pixels):
+  // a pixel whose (diffuse) albedo is below 1e-3 in every component or above
+  // 1.5 in one (or not finite: not a reflectance) shows its current radiance
+  // - emission (split: diffuse + specular radiance), blended by its
+  // stillness toward its unfiltered temporal mean (remodulated), then +
+  // emission.
+  auto keeping = [&](int i) { return p_.keep_unexplained && (!masked || sampled(f.sample_count[i])); };
   std::vector<bool> kept(n, false);
-  if (p_.keep_unexplained && !masked)
-    for (int i = 0; i < n; ++i) {
-      const double m = largest_f32(f.albedo, i);
-      kept[i] = !(m >= static_cast<double>(1e-3f) && m <= 1.5);
-    }
+  for (int i = 0; i < n; ++i) {
+    const double m = largest_f32(f.albedo, i);
+    kept[i] = keeping(i) && !(m >= static_cast<double>(1e-3f) && m <= 1.5);
+  }
   std::vector<double> dsan, ssan;
   if (split) {
     dsan = sanitize(f.diffuse);
@@ -663,7 +664,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // every component (or not finite) has no specular lobe, and its specular
   // term is what it was sent, not what the filter brought in.
   auto no_lobe = [&](int i) {
-    if (!split || !p_.keep_unexplained || masked || f.specular_factor.empty()) return false;
+    if (!split || !keeping(i) || f.specular_factor.empty()) return false;
     return !(largest_f32(f.specular_factor, i) >= static_cast<double>(1e-3f));
   };
 
@@ -693,7 +694,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // Pass 5 (taa_alpha or taa_static_alpha > 0): previous final output at
   // p + mv (bilinear over the taps inside the image, renormalized, at least
   // 1e-3 of weight) for a foreground pixel without reset, clamped per channel
-  // to the 3x3 min/max of the current colour, out = mix(clamped, current, a):
+  // to the min/max of the current colour over the 3x3 foreground neighbours
+  // within 10 depth gradients of p (and not kept), out = mix(clamped, current, a):
   // a = taa_alpha (1 when 0) where |mv| >= 0.05 px, falling linearly to
   // taa_static_alpha at |mv| = 0 when that is smaller; no blend when a = 1.
   // display_lag: a state s per pixel, -1 while chain 0's length is below
@@ -745,6 +747,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
               const int qx = x + dx, qy = y + dy;
               if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
               if ((dx != 0 || dy != 0) && kept[qy * w + qx]) continue;  // what it shows is not the surface's
+              const int q = qy * w + qx;
+              if (!fg[q] || std::fabs(z[i] - z[q]) / (dz[i] + 0.01) > 10.0) continue;  // another surface
               lo = std::min(lo, cur_c[3 * (qy * w + qx) + c]);
               hi = std::max(hi, cur_c[3 * (qy * w + qx) + c]);
             }
