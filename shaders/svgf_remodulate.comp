@@ -27,13 +27,39 @@
 // so that v is the pixel's own (younger pixels' is a spatial estimate, and a
 // lone bright sample may be a firefly); pixels without data keep f.
 const float DN_GUARD_MIN_LENGTH = 4.0;
-vec3 dn_harm_guard(vec3 f, vec4 m, float len) {
-  float g = DN_PARAM_VALUE(svgf, harm_guard);
-  if (!HARM_GUARD || g <= 0.0 || !(m.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
-  vec3 d = f - m.rgb;
+// converge_still k: where a pixel is still and its running mean of its own
+// samples holds DN_STILL_MIN_SAMPLES or more, that mean is the target
+// instead, with a = k standard deviations of it (a sample's variance, the
+// temporal mean's v times the samples it averages, over its samples), and
+// beyond a the deviation shrinks as (a / Y(f - m))^3, not ^1: that mean's
+// noise is not filtered, so a is wide (held to 2, 5 % of the pixels of a
+// flat noisy scene were pulled off their filtered value), and a bias well
+// beyond it (a blurred edge) is taken out nearly whole. The mean tends to
+// the reference, and the output with it.
+const float DN_STILL_MIN_SAMPLES = 16.0;
+// The guard's target of signal s (1: the specular chain, its alpha floor):
+// vec4(rgb, a^2; negative: none); still: the running mean's.
+vec4 dn_guard_target(vec4 m, float len, int s, uint p, out bool still) {
+  float g = DN_PARAM_VALUE(svgf, harm_guard), k = DN_PARAM_VALUE(svgf, converge_still);
+  vec4 mean = CONVERGE_STILL ? (s == 0 ? still_mean.data[p] : still_mean2.data[p]) : vec4(0.0);
+  still = CONVERGE_STILL && k > 0.0 && m.w >= 0.0 && mean.a >= DN_STILL_MIN_SAMPLES;
+  if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
+  if (!still) return vec4(m.rgb, g * g * m.w);
+  return vec4(mean.rgb, k * k * m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA) / mean.a);
+}
+vec4 dn_guard_target(vec4 m, float len, int s, uint p) {
+  bool still;
+  return dn_guard_target(m, len, s, p, still);
+}
+// f guarded toward signal s's target (own: its temporal mean and variance).
+vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
+  bool still;
+  vec4 t = dn_guard_target(own, len, s, p, still);
+  if (!HARM_GUARD || DN_PARAM_VALUE(svgf, harm_guard) <= 0.0 || !(t.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
+  vec3 d = f - t.rgb;
   float dl = dn_luminance(d);
-  float allowed = g * g * m.w;
-  return dl * dl > allowed ? m.rgb + d * (allowed / (dl * dl)) : f;
+  float r = t.w / (dl * dl);
+  return dl * dl > t.w ? t.rgb + d * (still ? r * sqrt(r) : r) : f;
 }
 
 // A pixel whose (diffuse) albedo is not a reflectance, below DN_ALBEDO_MIN
@@ -68,8 +94,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = own.data[p];
-    vec4 m2 = HAS_SPECULAR ? own2.data[p] : vec4(0.0);
+    vec4 m = dn_guard_target(own.data[p], colour_history.data[p].a, 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_target(own2.data[p], colour_history2.data[p].a, 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }
@@ -87,13 +113,16 @@ vec3 remodulate(uint p, out bool kept) {
   if (kept) {
     c = kept_radiance(p, ga);
   } else {
-    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
-                      HARM_GUARD ? colour_history.data[p].a : 0.0) * ga;
+    float len = HARM_GUARD ? colour_history.data[p].a : 0.0;
+    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0), len, 0, p) * ga;
     if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
       c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
     else if (HAS_SPECULAR)
-      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
-                         HARM_GUARD ? colour_history2.data[p].a : 0.0) * specular_modulator(p);
+    {
+      float len2 = HARM_GUARD ? colour_history2.data[p].a : 0.0;
+      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0), len2, 1, p) *
+           specular_modulator(p);
+    }
   }
   if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;

@@ -149,6 +149,20 @@ void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout 
   sw += w;
 }
 
+// CONVERGE_STILL: p's running mean of its own samples d goes on where the
+// history is valid and p is still (continues), else it restarts from d; a
+// pixel without a sample this frame keeps it while it continues, else has none.
+void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
+  if (!CONVERGE_STILL) return;
+  vec4 prev = still_mean.data[p];
+  if (!has_sample) {
+    if (!continues) still_mean.data[p] = vec4(0.0);
+    return;
+  }
+  float n = continues && prev.a > 0.0 ? min(prev.a + 1.0, DN_STILL_MAX_SAMPLES) : 1.0;
+  still_mean.data[p] = vec4(n == 1.0 ? d : mix(prev.rgb, d, 1.0 / n), n);
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -171,6 +185,7 @@ void main() {
     illum.data[p] = vec4(d, 0.0);
     if (WRITE_GUIDE) guide.data[p] = uvec4(0u);
     temporal.data[p] = vec4(m, 0.0, l);
+    update_still_mean(p, d, false, false);
     return;
   }
   vec3 n = dn_svgf_normal(p);
@@ -265,11 +280,15 @@ void main() {
                           floatBitsToUint(grad.x), REFLECTION ? uint(reflection_at(p).z) : 0u);
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
+  bool continues = valid && dn_is_still(mv);
   if (MASKED && !sampled(p)) {
     illum.data[p] = vec4(prev, 0.0);
     temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));
+    update_still_mean(p, d, false, continues);
     return;
   }
+  // A sample the sanitizer changed is none for the still mean: it would stay in it.
+  update_still_mean(p, d, dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p)), continues);
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
   float alpha = valid ? max(1.0 / len, DN_SVGF_ALPHA_COLOUR) : 1.0;
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;

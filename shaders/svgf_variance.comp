@@ -46,15 +46,8 @@
 #include "passes/svgf_variance.pass"
 #include "svgf_joint.glsl"
 
-// The samples the temporal colour averages (variance_of_mean): its first
-// 1/alpha frames are a true mean of `len` samples, after that an exponential
-// average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
-// Signal s's alpha: reflect's alpha_specular for the last with SPECULAR_ALPHA.
-float samples_averaged(float len, int s) {
-  if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
-  float a = DN_SVGF_ALPHA_OF(SPECULAR_ALPHA && dn_last_signal(s));
-  return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
-}
+// Signal s's samples averaged (dn_svgf_samples_averaged): reflect's alpha_specular for the last with SPECULAR_ALPHA.
+float samples_averaged(float len, int s) { return dn_svgf_samples_averaged(len, SPECULAR_ALPHA && dn_last_signal(s)); }
 
 vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.data[i].rgb; }
 

@@ -19,6 +19,9 @@ using protocol::ChannelId;
 // octahedral snorm16x2 normal).
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
+// converge_still: a still pixel's running mean of its own samples,
+// vec4(demodulated rgb, samples) fp32, read and rewritten at p by svgf_reproject.
+constexpr uint64_t kStillMeanBytes = 16;
 // TAA: the previous final output and, with SvgfVariant::display_lag, the
 // lag state: vec4(rgb, lag) fp32, one persistent copy (read as texels by
 // svgf_remodulate, rewritten by svgf_taa after it).
@@ -177,6 +180,9 @@ void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const Sign
   if (second.guide != first.guide) pass.bind("guide2", second.guide).set("SECOND_GUIDE", 1u);
 }
 
+// The still pixels' running means are kept where the harm guard reads them.
+bool keeps_still_mean(const SvgfVariant& v) { return v.converge_still && v.harm_guard && v.iterations > 0; }
+
 // Signal `index`'s reprojection (and history clipping): its temporal colour
 // in its illum buffer, its temporal moments and length.
 void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
@@ -215,6 +221,7 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("READ_HISTORY", s.reads_history)
       .set("SPECULAR_ALPHA", s.specular_alpha);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
+  if (keeps_still_mean(v)) reproject.bind("still_mean", s.history + "_still").set("CONVERGE_STILL", 1u);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)
@@ -331,6 +338,7 @@ SvgfVariant svgf_variant_from(const SessionConfig& config, const Parameters& p) 
   v.luminance_ramp = p.svgf_luminance_ramp != 0.0f;
   v.harm_guard = p.svgf_harm_guard > 0.0f;
   v.keep_unexplained = p.svgf_keep_unexplained != 0.0f;
+  v.converge_still = p.svgf_converge_still != 0.0f;
   return v;
 }
 
@@ -382,6 +390,7 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   for (const SvgfSignal& s : v.signals) {
     g.add_persistent(s.history + "_colour", kColourHistoryBytes);
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
+    if (keeps_still_mean(v)) g.add_persistent(s.history + "_still", kStillMeanBytes);
   }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
   if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
@@ -497,6 +506,11 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     remodulate.bind("own", signal_buffers(v, 0).illum).set("HARM_GUARD", 1u);
     if (v.signals.size() > 1)
       remodulate.bind("own2", signal_buffers(v, 1).illum).bind("colour_history2", v.signals[1].history + "_colour");
+    if (keeps_still_mean(v)) {
+      remodulate.bind("still_mean", v.signals[0].history + "_still").set("CONVERGE_STILL", 1u);
+      if (v.signals.size() > 1)
+        remodulate.bind("still_mean2", v.signals[1].history + "_still").set("SPECULAR_ALPHA", v.signals[1].specular_alpha);
+    }
   }
 
   if (v.taa) {

@@ -121,6 +121,10 @@ struct SvgfVariant {
   // (zero under a mirror or metal) show their own current radiance, split:
   // diffuse + specular (svgf_remodulate's KEEP_UNEXPLAINED).
   bool keep_unexplained = false;
+  // converge_still != 0 (with the harm guard): svgf_reproject keeps a still
+  // pixel's running mean of its own samples, and svgf_remodulate's guard
+  // pulls the output to it within harm_guard standard deviations of it.
+  bool converge_still = false;
   // Set: the chain's last pass (svgf_remodulate, or svgf_taa) writes the
   // displayed frame to this scratch buffer (vec4(rgb, 0) fp32, read as texels; add_svgf_buffers adds
   // it) for a pass of the caller's that writes Output (reflect's median; with

@@ -13,6 +13,13 @@ const float DN_MIN_TAP_WEIGHT = 1e-3;
 // output is stabilised by taa_static_alpha (svgf_remodulate).
 const float DN_STATIC_MOTION = 0.05;
 
+// A still pixel (svgf converge_still, motion below a tenth of
+// DN_STATIC_MOTION) keeps the plain running mean of its own unfiltered
+// samples, of up to DN_STILL_MAX_SAMPLES (then an exponential average).
+const float DN_STILL_MOTION = 0.1 * DN_STATIC_MOTION;
+const float DN_STILL_MAX_SAMPLES = 65536.0;
+bool dn_is_still(vec2 mv) { return length(mv) < DN_STILL_MOTION; }
+
 // 1 for a static pixel, falling linearly to 0 at DN_STATIC_MOTION.
 float dn_stillness(vec2 mv) { return clamp(1.0 - length(mv) / DN_STATIC_MOTION, 0.0, 1.0); }
 

@@ -30,6 +30,10 @@ bool dn_is_finite(vec3 v) { return dn_is_finite(v.x) && dn_is_finite(v.y) && dn_
 // Welch statistics) and sums of many of them far from fp32 overflow.
 const float DN_MAX_RADIANCE = 1e12;
 float dn_sanitize_radiance(float x) { return dn_is_finite(x) && x <= DN_MAX_RADIANCE ? max(x, 0.0) : 0.0; }
+// A radiance the sanitizer leaves as it is (finite, 0 to DN_MAX_RADIANCE).
+bool dn_is_valid_radiance(vec3 c) {
+  return dn_is_finite(c) && all(greaterThanEqual(c, vec3(0.0))) && all(lessThanEqual(c, vec3(DN_MAX_RADIANCE)));
+}
 vec3 dn_sanitize_radiance(vec3 c) {
   return vec3(dn_sanitize_radiance(c.x), dn_sanitize_radiance(c.y), dn_sanitize_radiance(c.z));
 }

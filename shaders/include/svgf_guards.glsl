@@ -20,6 +20,15 @@ const float DN_SVGF_NO_DATA = -1.0;
 // specialization constant of svgf_reproject and svgf_variance).
 #define DN_SVGF_ALPHA_OF(specular) ((specular) ? DN_PARAM_VALUE(reflect, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
 #define DN_SVGF_ALPHA_COLOUR DN_SVGF_ALPHA_OF(SPECULAR_ALPHA)
+
+// The samples the temporal colour averages (variance_of_mean): its first
+// 1/alpha frames are a true mean of `len` samples, after that an exponential
+// average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
+float dn_svgf_samples_averaged(float len, bool specular_alpha) {
+  if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
+  float a = DN_SVGF_ALPHA_OF(specular_alpha);
+  return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
+}
 // HDR step rule of the a-trous variance prefilter: a neighbour's variance
 // counts for p only when |l_p - l_q| <= DN_SVGF_STEP_SIGMAS * sqrt(v_q), so a
 // bright pixel's variance does not open a dark neighbour's luminance

@@ -80,6 +80,7 @@ void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& val
     if (q.name == "luminance_ramp") p.luminance_ramp = static_cast<int>(q.value);
     if (q.name == "harm_guard") p.harm_guard = q.value;
     if (q.name == "keep_unexplained") p.keep_unexplained = static_cast<int>(q.value);
+    if (q.name == "converge_still") p.converge_still = q.value;
     if (q.name == "propagate_variance") p.propagate_variance = static_cast<int>(q.value);
     if (q.name == "step_order") p.finest_first = q.value == 0.0;
     if (q.name == "luminance_form") p.luminance_form = static_cast<int>(q.value);
@@ -239,7 +240,47 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   };
   auto clipped_here = [&](int i) { return sanitized_roughness(f.roughness[i]) < p_.clip_roughness; };
 
-  auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod, bool clip) {
+  // The samples a temporal mean of length l averages (variance_of_mean): l
+  // while the blend weight is 1/l, then the exponential average's (2 - alpha) / alpha.
+  auto samples_averaged = [&](double l) {
+    if (!p_.variance_of_mean) return 1.0;
+    const double a = p_.alpha_colour;
+    return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
+  };
+
+  // converge_still (with the guard): a still pixel's running mean of its own
+  // samples goes on where its history is valid and its motion below 0.005 px,
+  // else restarts from the sample; without a sample it is kept while it
+  // would go on, else none; background has none.
+  const bool keeps_still = p_.converge_still > 0.0 && p_.harm_guard > 0.0 && iterations > 0;
+  auto update_still = [&](Chain& ch, int i, const double* sample, bool has_sample, bool continues) {
+    if (!keeps_still) return;
+    if (ch.still_n.empty()) {
+      ch.still_mean.assign(3 * n, 0.0);
+      ch.still_n.assign(n, 0.0);
+    }
+    if (!has_sample) {
+      if (!continues) ch.still_n[i] = 0.0;
+      return;
+    }
+    const double k = continues && ch.still_n[i] > 0.0 ? std::min(ch.still_n[i] + 1.0, 65536.0) : 1.0;
+    for (int c = 0; c < 3; ++c)
+      ch.still_mean[3 * i + c] = k == 1.0 ? sample[c] : ch.still_mean[3 * i + c] + (sample[c] - ch.still_mean[3 * i + c]) / k;
+    ch.still_n[i] = k;
+  };
+
+  // A sample the sanitizer changed (not finite, negative, above 1e12) is none for the still mean.
+  auto valid_samples = [&](const std::vector<double>& plane) {
+    std::vector<bool> ok(n);
+    for (int i = 0; i < n; ++i) {
+      ok[i] = true;
+      for (int k = 0; k < 3; ++k) ok[i] = ok[i] && std::isfinite(plane[3 * i + k]) && plane[3 * i + k] >= 0.0 && plane[3 * i + k] <= 1e12;
+    }
+    return ok;
+  };
+
+  auto filter = [&](Chain& ch, const std::vector<double>& c, const std::vector<double>& demod, bool clip,
+                    const std::vector<bool>& sample_ok) {
   const std::vector<double>& colour_ = ch.colour;
   const std::vector<double>& length_ = ch.length;
   const std::vector<double>& m1_ = ch.m1;
@@ -268,6 +309,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         len[i] = 0.0;
         m1[i] = luminance(bg);
         m2[i] = m1[i] * m1[i];
+        update_still(ch, i, bg, false, false);
         continue;
       }
       const double* nc = &nrm[3 * i];
@@ -388,6 +430,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           pm2 = pm1 * pm1;
         }
       }
+      const bool continues = valid && std::hypot(mvx, mvy) < 0.005;
+      update_still(ch, i, &d[3 * i], (!masked || sampled(f.sample_count[i])) && sample_ok[i], continues);
       // Not sampled this frame: the history as reprojected (no data without one).
       if (masked && !sampled(f.sample_count[i])) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = pc[k];
@@ -412,13 +456,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   }
 
   // Pass 2: variance, of one sample or (variance_of_mean) of the temporal
-  // mean: divided by the samples it averages, len while the blend weight is
-  // 1/len, then the exponential average's (2 - alpha) / alpha.
-  auto samples_averaged = [&](double l) {
-    if (!p_.variance_of_mean) return 1.0;
-    const double a = p_.alpha_colour;
-    return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
-  };
+  // mean: divided by the samples it averages (samples_averaged).
   std::vector<double> var(n, 0.0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -606,31 +644,46 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   std::vector<double> cur, spec, raw;
   if (split) {
     const std::vector<double> one(3 * n, 1.0);
-    cur = filter(chains_[0], sanitize(f.diffuse), f.diffuse_lighting ? one : a, false);
-    spec = filter(chains_[1], sanitize(f.specular), f.specular_lighting ? one : sf, true);
+    cur = filter(chains_[0], sanitize(f.diffuse), f.diffuse_lighting ? one : a, false, valid_samples(f.diffuse));
+    spec = filter(chains_[1], sanitize(f.specular), f.specular_lighting ? one : sf, true, valid_samples(f.specular));
   } else {
     // Radiance includes what the primary hit emits: filter radiance - emission (>= 0).
     std::vector<double> c = sanitize(f.radiance);
     for (int i = 0; i < 3 * n; ++i) c[i] = std::max(c[i] - e[i], 0.0);
-    cur = filter(chains_[0], c, a, true);
+    cur = filter(chains_[0], c, a, true, valid_samples(f.radiance));
     raw = std::move(c);
   }
 
   // Pass 4a (harm_guard g > 0, with a-trous): each chain's filtered value f
-  // moves back toward its temporal mean m of variance v where the luminance
-  // of f - m exceeds g sqrt(v): m + (f - m) g^2 v / Y(f - m)^2; only where
-  // the history length is at least 4 (v from the pixel's own moments).
+  // moves back toward its target t where the luminance of f - t exceeds the
+  // allowed deviation a: t + (f - t) a^2 / Y(f - t)^2; only where the
+  // history length is at least 4 (v from the pixel's own moments). The
+  // target is the temporal mean m of variance v, a = g sqrt(v), or with
+  // converge_still k where the still running mean holds 16 samples or more,
+  // that mean, a = k sqrt(v samples_averaged(length) / its samples), and the
+  // factor (a / Y(f - t))^3. Returns whether pixel i has a target, and it
+  // (rgb), a^2 and whether it is the still mean.
+  auto guard_target = [&](const Chain& ch, int i, double* t, double& allowed, bool* is_still = nullptr) {
+    const double v = ch.variance[i];
+    if (!(v >= 0.0)) return false;
+    const bool still = keeps_still && ch.still_n[i] >= 16.0;
+    if (is_still) *is_still = still;
+    for (int k = 0; k < 3; ++k) t[k] = still ? ch.still_mean[3 * i + k] : ch.temporal[3 * i + k];
+    allowed = still ? p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i]
+                    : p_.harm_guard * p_.harm_guard * v;
+    return true;
+  };
   auto guard = [&](std::vector<double>& filtered, const Chain& ch) {
-    const double g = p_.harm_guard;
-    if (!(g > 0.0) || iterations == 0) return;
+    if (!(p_.harm_guard > 0.0) || iterations == 0) return;
     for (int i = 0; i < n; ++i) {
-      const double v = ch.variance[i];
-      if (!(v >= 0.0) || ch.length[i] < 4.0) continue;  // no data, or a variance not the pixel's own
+      double t[3], allowed;
+      bool still = false;
+      if (!guard_target(ch, i, t, allowed, &still) || ch.length[i] < 4.0) continue;  // no data, or a variance not the pixel's own
       double d[3];
-      for (int k = 0; k < 3; ++k) d[k] = filtered[4 * i + k] - ch.temporal[3 * i + k];
-      const double dl = luminance(d), allowed = g * g * v;
+      for (int k = 0; k < 3; ++k) d[k] = filtered[4 * i + k] - t[k];
+      const double dl = luminance(d), r = allowed / (dl * dl);
       if (dl * dl > allowed)
-        for (int k = 0; k < 3; ++k) filtered[4 * i + k] = ch.temporal[3 * i + k] + d[k] * allowed / (dl * dl);
+        for (int k = 0; k < 3; ++k) filtered[4 * i + k] = t[k] + d[k] * (still ? r * std::sqrt(r) : r);
     }
   };
   guard(cur, chains_[0]);
@@ -652,7 +705,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     dsan = sanitize(f.diffuse);
     ssan = sanitize(f.specular);
   }
-  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the unfiltered temporal mean.
+  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the guard's target (guard_target).
   auto stillness = [&](int i) {
     bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
     if (split) own = own && chains_[1].variance[i] >= 0.0;
@@ -680,10 +733,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         continue;
       }
       const double s = stillness(i);
-      double now, mean = chains_[0].temporal[j] * a[j];
+      double t[3] = {0.0, 0.0, 0.0}, t2[3] = {0.0, 0.0, 0.0}, allowed;
+      guard_target(chains_[0], i, t, allowed);
+      double now, mean = t[k] * a[j];
       if (split) {
         now = dsan[j] * (f.diffuse_lighting ? a[j] : 1.0) + ssan[j] * (f.specular_lighting ? sf[j] : 1.0);
-        mean += chains_[1].temporal[j] * sf[j];
+        guard_target(chains_[1], i, t2, allowed);
+        mean += t2[k] * sf[j];
       } else {
         now = raw[j];
       }

@@ -32,6 +32,7 @@ struct Variant {
   bool emission;
   std::vector<protocol::Parameter> params;
   float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
+  int frames = 7, reset_at = 5;                           // reset_at -1: none
 };
 
 void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
@@ -50,11 +51,11 @@ TEST_P(SvgfReferenceTest, MatchesCpuReferenceOverFrames) {
   test::apply_parameters(params, v.params);
   test::SvgfReference ref(v.w, v.h, params);
   SvgfSceneGen scene(v.w, v.h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
-  const int frames = 7;
+  const int frames = v.frames;
   double worst = 0.0;
   for (int t = 0; t < frames; ++t) {
     SCOPED_TRACE(testing::Message() << "frame " << t);
-    const uint32_t flags = t == 5 ? protocol::kFrameReset : 0u;
+    const uint32_t flags = t == v.reset_at ? protocol::kFrameReset : 0u;
     const test::HostFrame f = host_frame(scene.frame(t), v.w, v.h, v.in, v.conv, flags, v.emission);
     const std::vector<float> got = run(*pipe, f, v.out);
     const std::vector<double> want = ref.step(reference_frame(f, v.w, v.h, v.emission));
@@ -99,6 +100,11 @@ INSTANTIATE_TEST_SUITE_P(
                 0.01f, 0.02f, 0.02f},
         Variant{"nearly_still_taa", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
                 {{"taa_alpha", 0.8}, {"taa_static_alpha", 0.3}}, 0.02f, -0.01f, 0.03f},
+        // Still for 20 frames, no reset: the still running mean past its 16
+        // samples is the guard's target (converge_still; 1: a narrow band,
+        // so that many pixels are pulled).
+        Variant{"still_converging", 64, 48, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
+                {{"converge_still", 1}}, 0.0f, 0.0f, 0.0f, 20, -1},
         // History clipping off (clip_roughness 0) and the per-sample
         // variance (variance_of_mean 0): Falcor's svgf.
         Variant{"no_clip", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
@@ -199,6 +205,48 @@ TEST_F(SvgfTest, StaticNoisySceneErrorFalls) {
   EXPECT_LT(rms[3], rms[0]);
   EXPECT_LT(rms[7], rms[3]);
   EXPECT_LT(rms[23], rms[7]);
+}
+
+// A still camera converges (converge_still): on a still noisy shadow edge
+// (lighting 1 and 0.25 on one flat surface, which the a-trous blurs: the
+// guides cannot tell the two sides apart), the output's RMSE against the
+// truth is at or below the plain running mean of the inputs' at every frame
+// count, and still falls from 16 to 64 frames. Without it the filtered
+// history holds the blur: at 64 frames worse than the running mean.
+TEST_F(SvgfTest, AStillViewConvergesAsTheRunningMeanDoes) {
+  const int w = 48, h = 16, n = w * h, edge = 24;
+  Flat scene(w, h);
+  auto truth = [&](int i) { return 0.5 * (i % w < edge ? 1.0 : 0.25); };  // albedo 0.5 x lighting
+  auto errors = [&](std::vector<protocol::Parameter> params, std::vector<double>* mean_rmse) {
+    auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, params));
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> noise(0.0f, 2.0f);
+    std::vector<float> radiance(3 * n);
+    std::vector<double> sum(3 * n, 0.0), rmse;
+    for (int t = 1; t <= 64; ++t) {
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) radiance[3 * i + k] = static_cast<float>(truth(i)) * noise(rng);
+      const auto out = run(*pipe, scene.frame(radiance));
+      double e = 0.0, em = 0.0;
+      for (int j = 0; j < 3 * n; ++j) {
+        sum[j] += radiance[j];
+        e += (out[j] - truth(j / 3)) * (out[j] - truth(j / 3));
+        em += (sum[j] / t - truth(j / 3)) * (sum[j] / t - truth(j / 3));
+      }
+      rmse.push_back(std::sqrt(e / (3 * n)));
+      if (mean_rmse) mean_rmse->push_back(std::sqrt(em / (3 * n)));
+    }
+    return rmse;
+  };
+  std::vector<double> mean;
+  const std::vector<double> out = errors({}, &mean);
+  const std::vector<double> off = errors({{"converge_still", 0}}, nullptr);
+  std::printf("[ info     ] RMSE after 1, 4, 16, 64 frames: %.4f %.4f %.4f %.4f; running mean %.4f %.4f %.4f %.4f; "
+              "without converge_still at 64 %.4f\n",
+              out[0], out[3], out[15], out[63], mean[0], mean[3], mean[15], mean[63], off[63]);
+  for (int t : {1, 2, 4, 8, 16, 32, 64}) EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
+  EXPECT_LT(out[63], out[15]);
+  EXPECT_GT(off[63], mean[63]) << "the scene does not show what converge_still is for";
 }
 
 // After a reset the output is exactly what a fresh session makes of the frame.
@@ -397,14 +445,18 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the TAA blend's, fp32 vec4(rgb, lag)), scratch 5*16
-  // (3 illumination: the harm guard keeps the first, guide, temporal), output 12 = 188 B/px, + the constants
-  // block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+2+4 + 48 + 80 + 6 = 158 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 158 + pipelines::GraphSpec::kConstantBytes);
-  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 172 B/px; without the harm guard 156.
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the still running mean: converge_still) + 16
+  // (the TAA blend's, fp32 vec4(rgb, lag)), scratch 5*16 (3 illumination: the harm guard keeps the first,
+  // guide, temporal), output 12 = 204 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+2+4 + 64 + 80 + 6 = 174 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes);
+  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 188 B/px; without converge_still 172; without
+  // the harm guard (which alone reads the still mean) 156.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
+            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(
+                svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"converge_still", 0}})),
             64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"harm_guard", 0}})),
@@ -658,13 +710,13 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16) + 16 (TAA), scratch 9*16
-  // (6 illumination: three per signal, the harm guard keeping the first, the shared guide, 2 temporal:
-  // the joint a-trous passes read both signals'), output 12 = 296 B/px, + the constants block.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 296 + pipelines::GraphSpec::kConstantBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 80 + 144 + 6 = 260 B/px.
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16+16: the still mean) + 16 (TAA),
+  // scratch 9*16 (6 illumination: three per signal, the harm guard keeping the first, the shared guide,
+  // 2 temporal: the joint a-trous passes read both signals'), output 12 = 328 B/px, + the constants block.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 328 + pipelines::GraphSpec::kConstantBytes);
+  // fp16 planes: 6+6+6+6+2+4 + 112 + 144 + 6 = 292 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 260 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 292 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -803,11 +855,11 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // 172 B/px without TAA + 16 B/px of TAA history.
+  // 188 B/px without TAA + 16 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 158 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

@@ -52,7 +52,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
                                                   "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha",
                                                   "taa_static_alpha", "clip_roughness", "variance_of_mean", "harm_guard",
-                                                  "keep_unexplained", "luminance_ramp",
+                                                  "keep_unexplained", "converge_still", "luminance_ramp",
                                                   "propagate_variance"}));
   // svgf-fb: split lighting with F0 and roughness (diffuse in either form); svgf's parameters.
   EXPECT_EQ(all[3].name, "svgf-fb");
