@@ -36,7 +36,7 @@ const float DN_GUARD_MIN_LENGTH = 4.0;
 // flat noisy scene were pulled off their filtered value), and a bias well
 // beyond it (a blurred edge) is taken out nearly whole. The mean tends to
 // the reference, and the output with it.
-const float DN_STILL_MIN_SAMPLES = 16.0;
+const float DN_STILL_MIN_SAMPLES = 8.0;
 // The guard's target of signal s (1: the specular chain, its alpha floor):
 // vec4(rgb, a^2; negative: none); still: the running mean's.
 vec4 dn_guard_target(vec4 m, float len, int s, uint p, out bool still) {

@@ -280,7 +280,10 @@ void main() {
                           floatBitsToUint(grad.x), REFLECTION ? uint(reflection_at(p).z) : 0u);
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
-  bool continues = valid && dn_is_still(mv);
+  // The still mean is p's own: it goes on only where p's own previous pixel
+  // is its surface (a valid history may come from Falcor's 3x3 fallback).
+  vec4 own_aux;
+  bool continues = valid && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
   if (MASKED && !sampled(p)) {
     illum.data[p] = vec4(prev, 0.0);
     temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));

@@ -430,7 +430,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           pm2 = pm1 * pm1;
         }
       }
-      const bool continues = valid && std::hypot(mvx, mvy) < 0.005;
+      // The still mean is p's own: it goes on only where p's own previous
+      // pixel passes the consistency test (valid may come from the 3x3 fallback).
+      const bool own_same = valid && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
+                            !(distance3(nc, &n_[3 * i]) / (dn[i] + 0.01) > 16.0);
+      const bool continues = own_same && std::hypot(mvx, mvy) < 0.005;
       update_still(ch, i, &d[3 * i], (!masked || sampled(f.sample_count[i])) && sample_ok[i], continues);
       // Not sampled this frame: the history as reprojected (no data without one).
       if (masked && !sampled(f.sample_count[i])) {
@@ -659,14 +663,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // allowed deviation a: t + (f - t) a^2 / Y(f - t)^2; only where the
   // history length is at least 4 (v from the pixel's own moments). The
   // target is the temporal mean m of variance v, a = g sqrt(v), or with
-  // converge_still k where the still running mean holds 16 samples or more,
+  // converge_still k where the still running mean holds 8 samples or more,
   // that mean, a = k sqrt(v samples_averaged(length) / its samples), and the
   // factor (a / Y(f - t))^3. Returns whether pixel i has a target, and it
   // (rgb), a^2 and whether it is the still mean.
   auto guard_target = [&](const Chain& ch, int i, double* t, double& allowed, bool* is_still = nullptr) {
     const double v = ch.variance[i];
     if (!(v >= 0.0)) return false;
-    const bool still = keeps_still && ch.still_n[i] >= 16.0;
+    const bool still = keeps_still && ch.still_n[i] >= 8.0;
     if (is_still) *is_still = still;
     for (int k = 0; k < 3; ++k) t[k] = still ? ch.still_mean[3 * i + k] : ch.temporal[3 * i + k];
     allowed = still ? p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i]

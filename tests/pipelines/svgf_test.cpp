@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(
                 0.01f, 0.02f, 0.02f},
         Variant{"nearly_still_taa", 96, 64, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, false,
                 {{"taa_alpha", 0.8}, {"taa_static_alpha", 0.3}}, 0.02f, -0.01f, 0.03f},
-        // Still for 20 frames, no reset: the still running mean past its 16
+        // Still for 20 frames, no reset: the still running mean past its 8
         // samples is the guard's target (converge_still; 1: a narrow band,
         // so that many pixels are pulled).
         Variant{"still_converging", 64, 48, Format::F32, Format::F32, MotionConvention::PixelsToPrevious, true,
