@@ -64,6 +64,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . bench/lib/bench_server.sh
+. bench/lib/point_reference.sh
 
 scenes="1 3"
 size=128x72
@@ -127,23 +128,6 @@ t_start=$(date +%s)
 jitter_arg=()
 [ "$jitter" = 0 ] || jitter_arg=(--jitter)
 
-# point_reference SCENE INDEX: the mean of point_frames 1-spp still frames
-# (seed 10 + INDEX, --jitter as the noisy frames), cached; prints its path.
-point_reference() {
-  local s=$1 index=$2
-  local dir="$cache/progressive_point_${s}_${width}x${height}_n$point_frames"
-  [ "$jitter" = 0 ] || dir+="_jitter"  # the held camera's jitter moves sample 0: another image
-  local file="$dir/ref$index.exr"
-  if [ ! -f "$file" ]; then
-    local tmp="$dir/frames$index.$$"
-    "$dnrender" --scene "$s" --frames "$point_frames" --hold-camera 0 --width "$width" --height "$height" \
-      --seed $((10 + index)) ${jitter_arg[@]+"${jitter_arg[@]}"} --out "$tmp" --quiet 2> /dev/null
-    "$metrics" --average "$tmp/frame_%04d.exr" --frames "$point_frames" --write "$file.tmp.exr"
-    mv "$file.tmp.exr" "$file"
-    rm -rf "$tmp"
-  fi
-  echo "$file"
-}
 
 # Rows: "method pipeline spp-per-frame tag".
 rows=("svgf svgf 1 spp1" "progressive progressive 1 spp1" "progressive progressive 0.25 spp1_4"

@@ -18,6 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . bench/lib/bench_server.sh
+. bench/lib/point_reference.sh
 
 scenes="1 2 3 4 5 6"
 frames=64
@@ -57,22 +58,6 @@ metrics=$bin/bench/progressive_metrics
 mkdir -p "$out"
 start_bench_server still "$bin" "$dn" "$out/dnserver.log"
 
-# point_reference SCENE INDEX: the mean of point_frames 1-spp still frames
-# (seed 10 + INDEX), cached under progressive_convergence.sh's name; prints its path.
-point_reference() {
-  local s=$1 index=$2
-  local dir="$cache/progressive_point_${s}_${width}x${height}_n$point_frames"
-  local file="$dir/ref$index.exr"
-  if [ ! -f "$file" ]; then
-    local tmp="$dir/frames$index.$$"
-    "$dnrender" --scene "$s" --frames "$point_frames" --hold-camera 0 --width "$width" --height "$height" \
-      --seed $((10 + index)) --out "$tmp" --quiet 2> /dev/null
-    "$metrics" --average "$tmp/frame_%04d.exr" --frames "$point_frames" --write "$file.tmp.exr"
-    mv "$file.tmp.exr" "$file"
-    rm -rf "$tmp"
-  fi
-  echo "$file"
-}
 
 # Rows: "label pipeline [NAME=VALUE ...]"; the running mean first.
 rows=("mean accumulate alpha_min=0 max_history=1024" "svgf svgf" "svgf-fb svgf-fb" "reflect reflect"
