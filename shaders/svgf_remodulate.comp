@@ -41,7 +41,7 @@ const float DN_STILL_MIN_SAMPLES = 8.0;
 // vec4(rgb, a^2; negative: none); still: the running mean's.
 vec4 dn_guard_target(vec4 m, float len, int s, uint p, out bool still) {
   float g = DN_PARAM_VALUE(svgf, harm_guard), k = DN_PARAM_VALUE(svgf, converge_still);
-  vec4 mean = CONVERGE_STILL ? (s == 0 ? still_mean.data[p] : still_mean2.data[p]) : vec4(0.0);
+  vec4 mean = CONVERGE_STILL && m.w >= 0.0 ? (s == 0 ? still_mean.data[p] : still_mean2.data[p]) : vec4(0.0);
   still = CONVERGE_STILL && k > 0.0 && m.w >= 0.0 && mean.a >= DN_STILL_MIN_SAMPLES;
   if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
   if (!still) return vec4(m.rgb, g * g * m.w);
@@ -113,16 +113,13 @@ vec3 remodulate(uint p, out bool kept) {
   if (kept) {
     c = kept_radiance(p, ga);
   } else {
-    float len = HARM_GUARD ? colour_history.data[p].a : 0.0;
-    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0), len, 0, p) * ga;
+    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
+                      HARM_GUARD ? colour_history.data[p].a : 0.0, 0, p) * ga;
     if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
       c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
     else if (HAS_SPECULAR)
-    {
-      float len2 = HARM_GUARD ? colour_history2.data[p].a : 0.0;
-      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0), len2, 1, p) *
-           specular_modulator(p);
-    }
+      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
+                         HARM_GUARD ? colour_history2.data[p].a : 0.0, 1, p) * specular_modulator(p);
   }
   if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;

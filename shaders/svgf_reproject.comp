@@ -278,12 +278,12 @@ void main() {
   if (WRITE_GUIDE)
     guide.data[p] = uvec4(floatBitsToUint(has_normal ? z : -z), has_normal ? dn_svgf_pack_normal(n) : 0u,
                           floatBitsToUint(grad.x), REFLECTION ? uint(reflection_at(p).z) : 0u);
-  // MASKED and no sample here this frame (a NaN count is none): the history
-  // as reprojected, or no data (length 0) without one.
   // The still mean is p's own: it goes on only where p's own previous pixel
   // is its surface (a valid history may come from Falcor's 3x3 fallback).
   vec4 own_aux;
-  bool continues = valid && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
+  bool continues = CONVERGE_STILL && valid && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
+  // MASKED and no sample here this frame (a NaN count is none): the history
+  // as reprojected, or no data (length 0) without one.
   if (MASKED && !sampled(p)) {
     illum.data[p] = vec4(prev, 0.0);
     temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));
