@@ -41,7 +41,7 @@ const float DN_STILL_MIN_SAMPLES = 8.0;
 // vec4(rgb, a^2; negative: none); still: the running mean's.
 vec4 dn_guard_target(vec4 m, float len, int s, uint p, out bool still) {
   float g = DN_PARAM_VALUE(svgf, harm_guard), k = DN_PARAM_VALUE(svgf, converge_still);
-  vec4 mean = CONVERGE_STILL && m.w >= 0.0 ? (s == 0 ? still_mean.data[p] : still_mean2.data[p]) : vec4(0.0);
+  vec4 mean = CONVERGE_STILL && m.w >= 0.0 ? (s == 0 ? still_mean_at(p) : still_mean2_at(p)) : vec4(0.0);
   still = CONVERGE_STILL && k > 0.0 && m.w >= 0.0 && mean.a >= DN_STILL_MIN_SAMPLES;
   if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
   if (!still) return vec4(m.rgb, g * g * m.w);
@@ -94,8 +94,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = dn_guard_target(own.data[p], colour_history.data[p].a, 0, p);
-    vec4 m2 = HAS_SPECULAR ? dn_guard_target(own2.data[p], colour_history2.data[p].a, 1, p) : vec4(0.0);
+    vec4 m = dn_guard_target(own_at(p), colour_history_at(p).a, 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_target(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }
@@ -113,13 +113,13 @@ vec3 remodulate(uint p, out bool kept) {
   if (kept) {
     c = kept_radiance(p, ga);
   } else {
-    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own.data[p] : vec4(-1.0),
-                      HARM_GUARD ? colour_history.data[p].a : 0.0, 0, p) * ga;
+    c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own_at(p) : vec4(-1.0),
+                      HARM_GUARD ? colour_history_at(p).a : 0.0, 0, p) * ga;
     if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
       c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
     else if (HAS_SPECULAR)
-      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2.data[p] : vec4(-1.0),
-                         HARM_GUARD ? colour_history2.data[p].a : 0.0, 1, p) * specular_modulator(p);
+      c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2_at(p) : vec4(-1.0),
+                         HARM_GUARD ? colour_history2_at(p).a : 0.0, 1, p) * specular_modulator(p);
   }
   if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
   return c;
@@ -151,7 +151,7 @@ float taa_weight(vec2 mv, bool kept) {
 // ghosting); 0 without a usable TAA history. prev_s: the previous state at
 // the reprojection's heaviest tap.
 float display_lag(uint p, bool valid, float weight, vec2 mv, float prev_s) {
-  if (colour_history.data[p].a < DN_PARAM_VALUE(progressive, luminance_min_age)) return -1.0;
+  if (colour_history_at(p).a < DN_PARAM_VALUE(progressive, luminance_min_age)) return -1.0;
   if (!valid) return 0.0;
   return (prev_s < 0.0 ? 1.0 : prev_s * (1.0 - weight)) * dn_stillness(mv);
 }
