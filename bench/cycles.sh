@@ -42,6 +42,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . bench/lib/bench_server.sh
+. bench/lib/blender_render.sh
+bench=cycles
 
 scene=room
 frames=8
@@ -90,34 +92,24 @@ for s in "${spps[@]}"; do case "$s" in "" | *[!0-9]* | 0) echo "cycles: --spp-li
 for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "cycles: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
 [ ${#spps[@]} -gt 0 ] && [ ${#vars[@]} -gt 0 ] || { echo "cycles: empty --variants or --spp-list" >&2; exit 2; }
 
-# Per scene: its script, the scripts its renders depend on, the side-by-side
-# crops (X,Y,W,H fractions) and what they show, the picture's name in docs/images.
+# Per scene (its scripts: bench/lib/blender_render.sh): the side-by-side crops
+# (X,Y,W,H fractions) and what they show, the picture's name in docs/images.
+blender_scene "$scene" || { echo "$bench: unknown scene '$scene' (room, window)" >&2; exit 2; }
 case "$scene" in
   room)
-    script=examples/blender/cycles_room.py
-    depends=("$script")
     crops=(--crop 0.24,0.28,0.3,0.5 --crop 0.5,0.62,0.3,0.38)
     crop_what="mirror sphere, floor"
     picture=cycles.png
     ;;
   window)
-    script=examples/blender/cycles_window.py
-    depends=("$script" examples/blender/cycles_room.py)
     crops=(--crop 0.3,0.35,0.3,0.45 --crop 0.0,0.1,0.35,0.5)
     crop_what="glass and glossy objects, the window wall"
     picture=cycles_window.png
     ;;
-  *) echo "cycles: unknown scene '$scene' (room, window)" >&2; exit 2 ;;
 esac
 out=${out:-out/cycles/$scene}
 
-blender=${BLENDER:-blender}
-if ! command -v "$blender" > /dev/null 2>&1; then
-  echo "cycles: SKIPPED: Blender not found ('$blender' is not on PATH; set BLENDER=/path/to/blender or install" >&2
-  echo "cycles: it, e.g. apt-get install blender). Blender is not a build or CI dependency; nothing was run." >&2
-  exit 77
-fi
-blender_version=$("$blender" --version 2>/dev/null | awk 'NR == 1 { print $2 }')
+find_blender
 
 bin=${DN_BUILD_DIR:-build}
 dn=$bin/client/dn
@@ -132,37 +124,13 @@ last=$((frames - 1))
 lastf=$(printf '%04d' "$last")
 
 # --- render (cached) -------------------------------------------------------
-script_sum=$(cat "${depends[@]}" | sha1sum | cut -c1-12)
 render_times="$out/render_times.tsv"
 printf 'what\tspp\tseed\tpasses\tframes\tseconds\tseconds_per_frame\n' > "$render_times"
-render() {  # name spp seed passes
-  local dir="$out/render/$1"
-  local stamp="$1 $scene ${width}x$height frames=$frames spp=$2 seed=$3 passes=$4 script=$script_sum blender=$blender_version"
-  if [ -f "$dir/stamp" ] && [ "$(head -1 "$dir/stamp")" = "$stamp" ] && [ -f "$dir/frame_$lastf.exr" ]; then
-    echo "cycles: $1: cached ($dir)"
-  else
-    rm -rf "$dir"
-    mkdir -p "$dir"
-    echo "cycles: rendering $1: $scene, $frames frames at ${width}x$height, $2 spp, seed $3, passes $4 (Blender $blender_version)"
-    local t0 t1
-    t0=$(date +%s.%N)
-    "$blender" -b --factory-startup --python "$script" -- --out "$dir" --width "$width" --height "$height" \
-      --frames "$frames" --spp "$2" --seed "$3" --passes "$4" --threads "$threads" > "$dir/blender.log" 2>&1 ||
-      { echo "cycles: Blender failed rendering $1; the end of $dir/blender.log:" >&2; tail -20 "$dir/blender.log" >&2; exit 1; }
-    t1=$(date +%s.%N)
-    [ -f "$dir/frame_$lastf.exr" ] || { echo "cycles: Blender wrote no $dir/frame_$lastf.exr" >&2; exit 1; }
-    printf '%s\n%s\n' "$stamp" "$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }')" > "$dir/stamp"
-  fi
-  local s
-  s=$(sed -n 2p "$dir/stamp")
-  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" "$frames" "$s" \
-    "$(awk -v s="$s" -v n="$frames" 'BEGIN { printf "%.2f", s / n }')" >> "$render_times"
-}
 for v in "${vars[@]}"; do
-  for s in "${spps[@]}"; do render "input-$v-s$s" "$s" 0 "$v"; done
+  for s in "${spps[@]}"; do blender_render "input-$v-s$s" "$frames" "$s" 0 "$v"; done
 done
-render ref "$ref_spp" 1 all
-render ref2 "$ref_spp" 2 all
+blender_render ref "$frames" "$ref_spp" 1 all
+blender_render ref2 "$frames" "$ref_spp" 2 all
 ref="$out/render/ref/frame_%04d.exr"
 ref2="$out/render/ref2/frame_%04d.exr"
 [ "$render_only" = 0 ] || { echo "cycles: renders in $out/render"; exit 0; }

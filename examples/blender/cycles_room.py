@@ -2,7 +2,7 @@
 
     blender -b --factory-startup --python examples/blender/cycles_room.py -- \
         --out DIR [--width 320] [--height 180] [--frames 8] [--spp 1] [--seed 0] [--start 0]
-        [--name frame] [--half] [--threads N] [--passes preset|denoising|all]
+        [--name frame] [--half] [--threads N] [--passes preset|denoising|all] [--still]
 
 Writes DIR/frame_0000.exr, frame_0001.exr, ... (NAME_%04d.exr; frame numbers --start ..
 --start+frames-1): one multilayer OpenEXR per frame (ZIP, full float unless
@@ -20,7 +20,9 @@ Writes DIR/frame_0000.exr, frame_0001.exr, ... (NAME_%04d.exr; frame numbers --s
 The passes change only what is written, not the render: Combined is the
 same for every --passes value, up to Cycles' run-to-run float noise (two
 runs with the same settings differ as much). Read the files with
-`dn denoise --preset cycles --input 'DIR/frame_%04d.exr'`.
+`dn denoise --preset cycles --input 'DIR/frame_%04d.exr'`. --still holds the
+camera at its pose of frame --start: the frames differ only in noise (and the
+Vector pass is 0), what a viewport accumulating samples shows.
 
 The scene: a small room (diffuse walls, floor and ceiling; the wall behind
 the camera is open to a dim grey world), a mirror sphere (metal, roughness 0),
@@ -71,6 +73,8 @@ def parse_args(prog="cycles_room", doc=__doc__):
     p.add_argument("--passes", choices=PASS_SETS, default="all",
                    help="preset: what --preset cycles reads without Denoising Data; denoising: + Denoising Data; "
                         "all: + Denoising Data, Mist and the Roughness / SpecularF0 AOVs")
+    p.add_argument("--still", action="store_true",
+                   help="hold the camera at its pose of frame --start (the frames differ only in noise)")
     a = p.parse_args(argv)
     if a.width < 1 or a.height < 1 or a.frames < 1 or a.spp < 1:
         p.error("--width, --height, --frames and --spp must be >= 1")
@@ -297,17 +301,29 @@ def set_passes(scene, passes):
     scene.world.mist_settings.start, scene.world.mist_settings.depth = 0.5, 8.0
 
 
+def hold_camera(scene, frame):
+    """Fixes the camera at its animated pose of `frame` (its keys removed)."""
+    scene.frame_set(frame)
+    cam = scene.camera
+    pose = cam.matrix_world.copy()
+    cam.animation_data_clear()
+    cam.matrix_world = pose
+
+
 def run(prog, doc, build):
     """A scene script's main: options, build(a) -> scene, render settings and passes, render."""
     a = parse_args(prog, doc)
     os.makedirs(a.out, exist_ok=True)
     scene = build(a)
+    if a.still:
+        hold_camera(scene, a.start)
     configure(scene, a)
     t0 = time.time()
     bpy.ops.render.render(animation=True)
     total = time.time() - t0
-    print(prog + ": %d frames %dx%d at %d spp (seed %d, passes %s) -> %s in %.2f s (%.3f s/frame), Blender %s" %
-          (a.frames, a.width, a.height, a.spp, a.seed, a.passes, a.out, total, total / a.frames,
+    print(prog + ": %d frames %dx%d at %d spp (seed %d, passes %s%s) -> %s in %.2f s (%.3f s/frame), Blender %s" %
+          (a.frames, a.width, a.height, a.spp, a.seed, a.passes, ", still" if a.still else "", a.out, total,
+           total / a.frames,
            bpy.app.version_string))
 
 

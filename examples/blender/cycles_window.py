@@ -2,7 +2,7 @@
 
     blender -b --factory-startup --python examples/blender/cycles_window.py -- \
         --out DIR [--width 320] [--height 180] [--frames 8] [--spp 1] [--seed 0] [--start 0]
-        [--name frame] [--half] [--threads N] [--passes preset|denoising|all]
+        [--name frame] [--half] [--threads N] [--passes preset|denoising|all] [--still]
 
 The options, the render settings, the passes (--passes) and the file layout
 are cycles_room.py's (this script imports it): DIR/NAME_%04d.exr, one
