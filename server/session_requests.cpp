@@ -13,10 +13,12 @@ using protocol::ErrorCode;
 
 namespace {
 
-// Whether this watcher's RESULT copies carry the noisy radiance: the owner
-// shares it and the watcher's protocol knows the second plane (1.7).
-bool gets_input(const Session& s, const net::Connection& watcher) {
-  return s.share_input && watcher.negotiated_minor >= protocol::kShareInputMinor;
+// What this watcher's RESULT copies carry: the noisy radiance where the
+// owner shares it and the watcher's protocol knows the second plane (1.7),
+// the sample counts where it knows them (1.9).
+ResultForm watcher_form(const Session& s, const net::Connection& watcher) {
+  return {s.share_input && watcher.negotiated_minor >= protocol::kShareInputMinor,
+          watcher.negotiated_minor >= protocol::kSamplesMinor};
 }
 
 }  // namespace
@@ -164,13 +166,9 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
   FrameJob job;
   job.request_id = h.request_id;
   job.owner_wants_output = (h.flags & protocol::kFlagNoOutput) == 0;
+  job.owner_gets_samples = c.negotiated_minor >= protocol::kSamplesMinor;
   for (uint64_t w : s->watchers)
-    if (const net::Connection* wc = find_connection(w)) {
-      if (gets_input(*s, *wc))
-        job.watchers_want_input = true;
-      else
-        job.watchers_want_output = true;
-    }
+    if (const net::Connection* wc = find_connection(w)) job.watcher_forms[watcher_form(*s, *wc).index()] = true;
   job.frame = std::move(m);
   job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
   scheduler_->submit(s, std::move(job));
@@ -262,7 +260,7 @@ void Server::on_frame_done(FrameDone&& done) {
     net::Connection* wc = find_connection(w);
     if (!wc) continue;
     // A watcher that attached after the frame was submitted has no copy encoded for it: it gets the next frame.
-    const auto& message = gets_input(*s, *wc) ? done.watcher_input_message : done.watcher_message;
+    const auto& message = done.watcher_messages[watcher_form(*s, *wc).index()];
     if (!message) continue;
     wc->queue(message, s->id());
     if (!wc->flush()) wc->close_after_flush = true;

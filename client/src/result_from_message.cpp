@@ -13,6 +13,7 @@ Result result_from_message(Incoming&& in, const protocol::Session& info, const s
   out.height = info.height;
   out.format = info.output_format;
   out.timings = std::move(r.timings);
+  if (r.samples && r.samples->counted) out.samples = r.samples;
   for (size_t i = 0; i < r.planes.size(); ++i) {
     const auto& p = r.planes[i];
     // Output, and the noisy radiance on a watcher's copy when the owner shares it (1.7).

@@ -426,7 +426,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     char head[96];
     std::snprintf(head, sizeof head, "frame %04lld  e2e %.1f ms  server %.1f ms", number, r.latency.count(),
                   r.total_timing_ms());
-    std::string line = head;
+    std::string line = head + samples_status(r.samples);
     if (!r.timings.empty()) {
       line += " [";
       for (size_t i = 0; i < r.timings.size(); ++i)

@@ -57,4 +57,9 @@ void Progress::finish() {
   }
 }
 
+std::string samples_status(const std::optional<protocol::SampleCounts>& samples) {
+  if (!samples) return {};
+  return "  samples min " + std::to_string(samples->min) + " median " + std::to_string(samples->median);
+}
+
 }  // namespace dn::cli

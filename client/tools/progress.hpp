@@ -4,7 +4,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
+
+#include "dn/protocol/messages.hpp"
 
 namespace dn::cli {
 
@@ -32,5 +35,9 @@ class Progress {
   std::chrono::steady_clock::time_point start_;
   std::string last_status_;
 };
+
+// A RESULT's sample counts for a per-frame line: "  samples min 3 median 8"
+// (input frames the output rests on, protocol 1.9), or "" without them.
+std::string samples_status(const std::optional<protocol::SampleCounts>& samples);
 
 }  // namespace dn::cli

@@ -104,7 +104,7 @@ int run_watch(const std::vector<std::string>& argv) {
     char line[512];
     std::snprintf(line, sizeof line, "frame %04llu -> %s (skipped %llu so far)", (unsigned long long)r.frame_index,
                   where.c_str(), (unsigned long long)watcher.dropped());
-    progress.frame_done(line, "frame " + std::to_string(r.frame_index));
+    progress.frame_done(line + samples_status(r.samples), "frame " + std::to_string(r.frame_index) + samples_status(r.samples));
   }
   progress.finish();
   if (!quiet)

@@ -336,12 +336,30 @@ bool decode(Ctx& c, Frame& m) {
   return read_planes(r, m.planes, c.type, "planes");
 }
 
+// RESULT.samples (1.9): counted 0 or 1; min <= median, both 0 when not counted.
+bool read_samples(Ctx& c, std::optional<SampleCounts>& out) {
+  out.reset();
+  if (!c.has(kSamplesMinor)) return true;
+  SampleCounts n;
+  const Field min = c.f("samples.min");
+  if (!read_bool(c.r, n.counted, c.f("samples.counted")) || !c.r.u32(n.min, min) ||
+      !c.r.u32(n.median, c.f("samples.median")))
+    return false;
+  if (!n.counted && (n.min != 0 || n.median != 0))
+    return c.r.fail(ErrorCode::Malformed, min, min.str() + " and .median must be 0 when samples.counted is 0");
+  if (n.min > n.median)
+    return c.r.fail(ErrorCode::Malformed, min,
+                    min.str() + " " + std::to_string(n.min) + " is above the median " + std::to_string(n.median));
+  out = n;
+  return true;
+}
+
 bool decode(Ctx& c, Result& m) {
   Reader& r = c.r;
   return r.u64(m.session_id, c.f("session_id")) && r.u64(m.frame_index, c.f("frame_index")) &&
          read_named_values(r, m.timings, c.type, "timings", wire::kMaxTimings, &PassTiming::milliseconds,
                            ".milliseconds", false) &&
-         read_planes(r, m.planes, c.type, "planes");
+         read_planes(r, m.planes, c.type, "planes") && read_samples(c, m.samples);
 }
 
 bool decode(Ctx& c, Attach& m) {

@@ -204,6 +204,11 @@ struct Put {
       s.f64(t.milliseconds);
     }
     put_planes(s, m.planes);
+    if (m.samples) {  // 1.9, for a peer that knows it
+      s.u8(m.samples->counted ? 1 : 0);
+      s.u32(m.samples->min);
+      s.u32(m.samples->median);
+    }
   }
   void operator()(const Attach& m) {
     s.u64(m.session_id);
@@ -230,12 +235,13 @@ struct Put {
 // kVersionMinor (the sender's own), but a WELCOME for a 1.0 client stops
 // after the 1.0 fields (docs/protocol.md §10), so it is checked as 1.0; a
 // SESSION or ATTACH without its watch key is a 1.5 payload, a SESSION
-// without its watch URL a 1.7 one.
+// without its watch URL a 1.7 one, a RESULT without sample counts a 1.8 one.
 uint8_t payload_minor(const Message& message) {
   if (const auto* w = std::get_if<Welcome>(&message); w && !w->has_parameters) return 0;
   if (const auto* s = std::get_if<Session>(&message); s && !s->watch_key) return kWatchKeyMinor - 1;
   if (const auto* s = std::get_if<Session>(&message); s && !s->watch_url) return kWatchUrlMinor - 1;
   if (const auto* a = std::get_if<Attach>(&message); a && !a->watch_key) return kWatchKeyMinor - 1;
+  if (const auto* r = std::get_if<Result>(&message); r && !r->samples) return kSamplesMinor - 1;
   return kVersionMinor;
 }
 

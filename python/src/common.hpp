@@ -93,6 +93,7 @@ struct PyResult {
   py::object image;  // (H, W, 3) float32, or None for a no_output frame
   py::object input;  // a watcher's copy when the owner shares its input: the noisy radiance, else None
   py::dict timings;  // name -> ms
+  py::object samples;  // (min, median) input frames the output rests on (protocol 1.9), or None
   double latency_ms = 0.0, total_timing_ms = 0.0;
 };
 PyResult to_python(const client::Result& r);

@@ -251,6 +251,7 @@ PyResult to_python(const client::Result& r) {
     out.input = py::none();
   }
   for (const auto& t : r.timings) out.timings[py::str(t.name)] = t.milliseconds;
+  out.samples = r.samples ? py::object(py::make_tuple(r.samples->min, r.samples->median)) : py::none();
   out.latency_ms = r.latency.count();
   out.total_timing_ms = r.total_timing_ms();
   return out;
@@ -271,6 +272,9 @@ void bind_frames(py::module_& m) {
                     "a watcher's copy from a session opened with share_input: the noisy radiance the owner sent, "
                     "(height, width, 3) float32; else None")
       .def_readonly("timings", &PyResult::timings)
+      .def_readonly("samples", &PyResult::samples,
+                    "(min, median) over the frame of the input frames each pixel's output rests on (its history "
+                    "length, or a still pixel's running-mean count); None from a pipeline without a count")
       .def_readonly("latency_ms", &PyResult::latency_ms)
       .def_readonly("total_timing_ms", &PyResult::total_timing_ms)
       .def("__repr__", [](const PyResult& r) {

@@ -1,6 +1,7 @@
 // accumulate: temporal accumulation with bilinear reprojection and
 // depth/normal rejection (shaders/accumulate.comp, docs/pipelines.md).
 #include "pipelines/definitions.hpp"
+#include "pipelines/sample_summary.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -36,6 +37,7 @@ GraphSpec build(const SessionConfig& config) {
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("OUTPUT_HALF", is_half(config.output_format));
+  add_sample_summary(g, "history_colour");
   return g;
 }
 

@@ -1,4 +1,5 @@
 #include "pipelines/graph.hpp"
+#include "pipelines/sample_summary.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -153,6 +154,8 @@ void GraphSpec::add_constant(std::string name, std::vector<uint8_t> data) {
   buffers.push_back(std::move(b));
 }
 
+void GraphSpec::add_readback(std::string name, uint64_t bytes) { add_sized(std::move(name), BufferRole::Readback, bytes); }
+
 PassSpec& GraphSpec::add_pass(std::string name, std::string_view shader) {
   return passes.emplace_back(std::move(name), shader);
 }
@@ -289,7 +292,7 @@ GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
       }
       gpu::BufferKind kind = gpu::BufferKind::Storage;
       if (b.role == BufferRole::Input || b.role == BufferRole::Constant) kind = gpu::BufferKind::StorageUpload;
-      if (b.role == BufferRole::Output) kind = gpu::BufferKind::StorageDownload;
+      if (b.role == BufferRole::Output || b.role == BufferRole::Readback) kind = gpu::BufferKind::StorageDownload;
       n.copies[0] = gpu::Buffer(context, b.bytes, kind, b.name);
       device_bytes_ += b.bytes;
       if (b.role == BufferRole::History) {
@@ -466,13 +469,19 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
                       VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
                           VK_ACCESS_TRANSFER_WRITE_BIT);
   timestamps_->write(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0);
-  if (any_staged_input || constants_staged_) {
+  bool any_readback = false;
+  for (auto& n : nodes_)
+    if (n.spec->role == BufferRole::Readback) {
+      vkCmdFillBuffer(cmd, n.copies[0].handle(), 0, VK_WHOLE_SIZE, 0);
+      any_readback = true;
+    }
+  if (any_staged_input || constants_staged_ || any_readback) {
     for (auto& n : nodes_) {
       if (n.spec->role == BufferRole::Input) n.copies[0].record_upload(cmd, n.spec->plane_bytes);
       if (n.spec->role == BufferRole::Constant && constants_staged_) n.copies[0].record_upload(cmd, n.spec->bytes);
     }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   }
   timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 1);
 
@@ -499,6 +508,9 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     out_node->copies[0].record_readback(cmd, out_bytes, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                                         VK_ACCESS_SHADER_WRITE_BIT);
   }
+  for (auto& n : nodes_)
+    if (n.spec->role == BufferRole::Readback)
+      n.copies[0].record_readback(cmd, n.spec->bytes, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT);
   timestamps_->write(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, mark++);
 
   commands_->submit_and_wait(first_use_ ? gpu::CommandStream::kFirstUseTimeoutNs
@@ -516,6 +528,12 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     download_ms += ms_since(t0);
   }
 
+  for (auto& n : nodes_)
+    if (n.spec->role == BufferRole::Readback) {
+      n.read.resize(n.spec->bytes);
+      n.copies[0].read(n.read);
+    }
+
   timings.push_back({"upload", upload_host_ms + intervals[0]});
   for (size_t i = 0; i < passes_.size(); ++i) timings.push_back({passes_[i].spec->name(), intervals[i + 1]});
   timings.push_back({"download", download_ms});
@@ -523,6 +541,13 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   ++frames_;
   history_valid_ = true;
   constants_staged_ = false;  // the device copy is made
+}
+
+std::optional<protocol::SampleCounts> GraphPipeline::samples() const {
+  for (const auto& n : nodes_)
+    if (n.spec->role == BufferRole::Readback && n.spec->name == kSampleSummary && !n.read.empty())
+      return decode_sample_summary(n.read);
+  return std::nullopt;
 }
 
 }  // namespace dn::pipelines

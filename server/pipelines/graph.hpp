@@ -19,6 +19,9 @@
 //  - Constant: per-session read-only data the definition computes on the
 //             host from the session's parameters (a table), uploaded once
 //             before the first frame
+//  - Readback: a small per-session buffer the host reads after every frame
+//             (a pass's summary of the frame, e.g. sample_summary.hpp's),
+//             zeroed before the frame's first pass
 // Every binding of a pass is a storage buffer, bound by the name its shader
 // declares (pass.hpp); binding 0 is the FrameConstants buffer.
 #pragma once
@@ -45,7 +48,7 @@ namespace dn::pipelines {
 
 // Shared: a read-only device buffer the context holds for every session
 // (BufferSpec::shared gives it); bound, never allocated or counted per session.
-enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared, Constant };
+enum class BufferRole { Input, Output, History, Scratch, Persistent, Shared, Constant, Readback };
 
 // A context-wide resource: made on first use, then the same buffer for every
 // session of that context (e.g. fb_lut_buffer, the F_beta table).
@@ -97,6 +100,7 @@ struct GraphSpec {
   gpu::Extent level(uint32_t factor, uint32_t level) const;
   void add_shared(std::string name, SharedResource resource);
   void add_constant(std::string name, std::vector<uint8_t> data);
+  void add_readback(std::string name, uint64_t bytes);
 
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).
@@ -135,6 +139,7 @@ class GraphPipeline final : public Pipeline {
   uint64_t transient_bytes() const override { return transient_bytes_; }
   void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
                std::vector<protocol::PassTiming>& timings) override;
+  std::optional<protocol::SampleCounts> samples() const override;
 
   const GraphSpec& spec() const { return *spec_; }
 
@@ -153,6 +158,7 @@ class GraphPipeline final : public Pipeline {
     gpu::Buffer copies[2];               // History: [parity]; otherwise copies[0] only
     const gpu::Buffer* shared = nullptr;  // Shared: the context's buffer
     int transient = -1;                   // Scratch: its index in the frame's lease
+    std::vector<uint8_t> read;            // Readback: its bytes after the last frame
   };
   struct Capture {
     std::string buffer;

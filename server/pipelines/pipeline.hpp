@@ -96,6 +96,10 @@ class Pipeline {
   // device pass plus the host stages "upload" and "download".
   virtual void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
                        std::vector<protocol::PassTiming>& timings) = 0;
+  // After process(): how many input frames the last frame's output rests on
+  // per pixel, over the frame (RESULT.samples); nullopt for a pipeline that
+  // keeps no count.
+  virtual std::optional<protocol::SampleCounts> samples() const { return std::nullopt; }
 };
 
 // Every pipeline this build offers, in a stable order.

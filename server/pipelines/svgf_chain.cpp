@@ -6,6 +6,7 @@
 #include <string>
 
 #include "pipelines/definitions.hpp"
+#include "pipelines/sample_summary.hpp"
 #include "pipelines/supersample.hpp"
 
 namespace dn::pipelines {
@@ -522,6 +523,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     if (v.display_lag) taa.set("DISPLAY_LAG", 1u);
   }
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
+  // RESULT.samples: the first chain's history length, or its still mean's count.
+  add_sample_summary(g, v.signals[0].history + "_colour", keeps_still_mean(v) ? v.signals[0].history + "_still" : "");
 }
 
 GraphSpec svgf_graph(const SessionConfig& config, SvgfVariant (*variant)(const SessionConfig&, const Parameters&)) {

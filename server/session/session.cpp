@@ -1,5 +1,6 @@
 #include "server/session/session.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "dn/protocol/codec.hpp"
@@ -89,9 +90,9 @@ FrameDone Session::run(FrameJob& job) {
   done.request_id = job.request_id;
   done.frame_index = job.frame.info.frame_index;
   std::vector<uint8_t> output;
+  const bool any_watcher = std::find(job.watcher_forms.begin(), job.watcher_forms.end(), true) != job.watcher_forms.end();
   try {
-    const bool download = job.owner_wants_output || job.watchers_want_output || job.watchers_want_input;
-    pipeline_->process(job.frame, download, output, done.timings);
+    pipeline_->process(job.frame, job.owner_wants_output || any_watcher, output, done.timings);
   } catch (const std::exception& e) {
     done.failed = true;
     done.owner_message = encode_shared(
@@ -100,34 +101,30 @@ FrameDone Session::run(FrameJob& job) {
     return done;
   }
 
-  protocol::Result result;
-  result.session_id = id_;
-  result.frame_index = job.frame.info.frame_index;
-  result.timings = done.timings;
-  protocol::PlaneView plane{protocol::ChannelId::Output, config_.output_format,
-                            std::span<const uint8_t>(output.data(), output.size())};
-  if (job.watchers_want_input) {
-    // The radiance plane as the owner sent it: a view into the FRAME's payload, alive until this returns.
-    result.planes = {plane};
-    for (const protocol::PlaneView& p : job.frame.planes)
-      if (p.id == protocol::ChannelId::Radiance) result.planes.push_back(p);
-    done.watcher_input_message = encode_shared(result, job.request_id);
-  }
-  if (job.watchers_want_output) {
-    result.planes = {plane};
-    done.watcher_message = encode_shared(result, job.request_id);
-  }
-  if (job.owner_wants_output) {
-    if (done.watcher_message) {
-      done.owner_message = done.watcher_message;  // identical bytes: share them
-    } else {
-      result.planes = {plane};
-      done.owner_message = encode_shared(result, job.request_id);
-    }
-  } else {
-    result.planes.clear();
-    done.owner_message = encode_shared(result, job.request_id);
-  }
+  const std::optional<protocol::SampleCounts> samples = pipeline_->samples();
+  const protocol::PlaneView plane{protocol::ChannelId::Output, config_.output_format,
+                                  std::span<const uint8_t>(output.data(), output.size())};
+  // One RESULT of the given form; the radiance plane is a view into the
+  // FRAME's payload, alive until this returns.
+  auto encode_form = [&](ResultForm form, bool with_output) {
+    protocol::Result result;
+    result.session_id = id_;
+    result.frame_index = job.frame.info.frame_index;
+    result.timings = done.timings;
+    if (with_output) result.planes = {plane};
+    if (form.input)
+      for (const protocol::PlaneView& p : job.frame.planes)
+        if (p.id == protocol::ChannelId::Radiance) result.planes.push_back(p);
+    if (form.samples) result.samples = samples ? *samples : protocol::SampleCounts{};  // counted false: no count
+    return encode_shared(result, job.request_id);
+  };
+  for (size_t i = 0; i < job.watcher_forms.size(); ++i)
+    if (job.watcher_forms[i]) done.watcher_messages[i] = encode_form(ResultForm{i >= 2, (i & 1) != 0}, true);
+  const ResultForm owner{false, job.owner_gets_samples};
+  if (job.owner_wants_output && done.watcher_messages[owner.index()])
+    done.owner_message = done.watcher_messages[owner.index()];  // identical bytes: share them
+  else
+    done.owner_message = encode_form(owner, job.owner_wants_output);
   return done;
 }
 

@@ -2,6 +2,7 @@
 // the device history), and the queue of frames waiting for the device.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <deque>
@@ -17,11 +18,20 @@
 namespace dn::server {
 
 // A validated frame on its way to the device; `frame` views into `payload`.
+// What one recipient's RESULT holds besides the output: the noisy radiance
+// (a watcher of a SHARE_INPUT session, 1.7) and the sample counts (1.9),
+// as far as its protocol knows them. index() numbers the four forms.
+struct ResultForm {
+  bool input = false;
+  bool samples = false;
+  size_t index() const { return (input ? 2 : 0) + (samples ? 1 : 0); }
+};
+
 struct FrameJob {
   uint64_t request_id = 0;
   bool owner_wants_output = true;
-  bool watchers_want_output = false;  // watchers that get the output plane alone
-  bool watchers_want_input = false;   // watchers that also get the noisy radiance (SHARE_INPUT, 1.7)
+  bool owner_gets_samples = false;          // the owner's protocol is >= 1.9
+  std::array<bool, 4> watcher_forms = {};   // by ResultForm::index(): some watcher wants that form
   protocol::Frame frame;
   std::vector<uint8_t> payload;
 };
@@ -31,9 +41,9 @@ struct FrameDone {
   uint64_t session_id = 0;
   uint64_t request_id = 0;
   uint64_t frame_index = 0;
-  std::shared_ptr<const std::vector<uint8_t>> owner_message;    // encoded RESULT or ERROR
-  std::shared_ptr<const std::vector<uint8_t>> watcher_message;        // encoded RESULT with the output, if wanted
-  std::shared_ptr<const std::vector<uint8_t>> watcher_input_message;  // ... and the noisy radiance, if wanted
+  std::shared_ptr<const std::vector<uint8_t>> owner_message;  // encoded RESULT or ERROR
+  // Encoded RESULTs with the output, by ResultForm::index(), where wanted.
+  std::array<std::shared_ptr<const std::vector<uint8_t>>, 4> watcher_messages;
   std::vector<protocol::PassTiming> timings;
   bool failed = false;
 };

@@ -99,7 +99,16 @@ void Peer::send_raw(const std::vector<uint8_t>& bytes) {
   }
 }
 
-void Peer::send(const Message& m, uint64_t request_id, uint32_t flags) { send_raw(encode(m, request_id, flags)); }
+void Peer::send(const Message& m, uint64_t request_id, uint32_t flags) {
+  // Under this version's header a RESULT carries RESULT.samples (the client
+  // reads appended fields by the header's minor): not counted unless set.
+  if (const auto* r = std::get_if<Result>(&m); r && !r->samples) {
+    Result with = *r;
+    with.samples = protocol::SampleCounts{};
+    return send_raw(encode(with, request_id, flags));
+  }
+  send_raw(encode(m, request_id, flags));
+}
 
 bool Peer::read_raw(size_t n, int timeout_ms) {
   std::vector<uint8_t> buf(n);

@@ -589,6 +589,7 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
       r.session_id = a->session_id;
       r.frame_index = frame;
       r.planes.push_back({ChannelId::Output, Format::F32, bytes});
+      r.samples = protocol::SampleCounts{true, 1, uint32_t(frame)};  // a 1.9 server's RESULT ends with the counts
       // The stream may carry the ATTACH request id or 0: both reach the watcher.
       encode(r, frame == 6 ? 0 : m->header.request_id, 0, burst);
     }
@@ -617,9 +618,13 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
   EXPECT_EQ(r.frame_index, 7u);
   EXPECT_EQ(w.dropped(), 2u);
   EXPECT_FLOAT_EQ(r.rgb()[0], 7.0f);
+  ASSERT_TRUE(r.samples);
+  EXPECT_EQ(r.samples->min, 1u);
+  EXPECT_EQ(r.samples->median, 7u);
   conn.ping();
   client::Result r8 = w.next();
   EXPECT_EQ(r8.frame_index, 8u);
+  EXPECT_FALSE(r8.samples) << "a RESULT whose pipeline counts nothing has no samples";
   try {
     w.next();
     FAIL() << "the session ended";

@@ -130,7 +130,7 @@ TEST(ClientParameters, OneOneServerTablesReachTheClientAndHelloSaysOneTwo) {
   EXPECT_EQ(svgf->parameters[1].description, "Number of a-trous iterations.");
   conn.close();
   server.join();
-  EXPECT_EQ(hello_minor, 8);  // the client's own version, 1.8
+  EXPECT_EQ(hello_minor, kVersionMinor);  // the client's own version
 }
 
 TEST(ClientParameters, MisspeltParameterFailsLocallyWithOneOneServer) {

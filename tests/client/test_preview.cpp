@@ -89,7 +89,12 @@ TEST(PreviewFrame, HeaderIsJsonWithEscapedNames) {
   EXPECT_NE(json.find("\"name\":\"quote\\\" and\\u000anewline\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"total_ms\":1.7500"), std::string::npos) << json;
   EXPECT_NE(json.find("\"has_input\":false"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"samples\":null"), std::string::npos) << json;
   EXPECT_EQ(json.find('\n'), std::string::npos) << "a raw control character in the JSON";
+  client::Result counted = two_pixel_result(false);
+  counted.samples = protocol::SampleCounts{true, 3, 17};
+  const std::string with_counts = cli::preview_header_json(counted, ctx);
+  EXPECT_NE(with_counts.find("\"samples\":{\"min\":3,\"median\":17}"), std::string::npos) << with_counts;
 }
 
 TEST(PreviewFrame, MessageIsLengthJsonThenRgba8Planes) {

@@ -206,6 +206,34 @@ TEST_F(AccumulateTest, ResetLeavesNoGhost) {
   for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(out[i], b[i], 1e-6) << i;
 }
 
+// RESULT.samples: every pixel of a still view rests on as many frames as were
+// sent (up to max_history); a reset starts again from one.
+TEST_F(AccumulateTest, SampleCountsAreTheHistoryLength) {
+  const int w = 24, h = 12, n = w * h;
+  auto pipe = pipelines::create(ctx(), test::accumulate_config(w, h, Format::F32, Format::F32, {{"max_history", 6}}));
+  std::vector<float> normal(3 * n), depth(n, 2.0f), motion(2 * n, 0.0f), radiance(3 * n, 1.5f);
+  for (int i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+  auto frame = [&](uint32_t flags) {
+    test::HostFrame f;
+    f.info.flags = flags;
+    f.add(ChannelId::Radiance, Format::F32, radiance);
+    f.add(ChannelId::Normal, Format::F32, normal);
+    f.add(ChannelId::Depth, Format::F32, depth);
+    f.add(ChannelId::Motion, Format::F32, motion);
+    return f;
+  };
+  EXPECT_FALSE(pipe->samples()) << "a count before the first frame";
+  for (uint32_t t = 1; t <= 9; ++t) {
+    run(*pipe, frame(0));
+    const auto s = pipe->samples();
+    ASSERT_TRUE(s) << t;
+    EXPECT_EQ(s->min, std::min(t, 6u)) << t;
+    EXPECT_EQ(s->median, std::min(t, 6u)) << t;
+  }
+  run(*pipe, frame(protocol::kFrameReset));
+  EXPECT_EQ(pipe->samples()->median, 1u);
+}
+
 TEST_F(AccumulateTest, BadValuesNeverReachOutputOrHistoryAndPixelsRecover) {
   const int w = 32, h = 16, n = w * h;
   auto pipe = pipelines::create(ctx(), test::accumulate_config(w, h));
@@ -325,24 +353,25 @@ TEST_F(AccumulateTest, SkippingOutputKeepsHistory) {
     const bool want = t == 4;
     b->process(f.view(), want, out, timings);
     EXPECT_EQ(out.empty(), !want);
-    ASSERT_EQ(timings.size(), 3u);
+    ASSERT_EQ(timings.size(), 4u);  // upload, accumulate, sample_summary, download
     if (!want) {
-      EXPECT_EQ(timings[2].milliseconds, 0.0);
+      EXPECT_EQ(timings[3].milliseconds, 0.0);
     }
     if (want) last_b = test::decode_output(out, Format::F32);
   }
   EXPECT_EQ(last_a, last_b);
 }
 
-TEST_F(AccumulateTest, TimingsNameUploadPassAndDownload) {
+TEST_F(AccumulateTest, TimingsNameUploadPassesAndDownload) {
   auto pipe = pipelines::create(ctx(), test::accumulate_config(32, 32));
   test::PanningScene scene(32, 32, 3, 1, 1, 0, 0.1f);
   std::vector<protocol::PassTiming> timings;
   run(*pipe, host_frame(scene.frame(0), 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, 0), &timings);
-  ASSERT_EQ(timings.size(), 3u);
+  ASSERT_EQ(timings.size(), 4u);
   EXPECT_EQ(timings[0].name, "upload");
   EXPECT_EQ(timings[1].name, "accumulate");
-  EXPECT_EQ(timings[2].name, "download");
+  EXPECT_EQ(timings[2].name, "sample_summary");
+  EXPECT_EQ(timings[3].name, "download");
   for (const auto& t : timings) EXPECT_GE(t.milliseconds, 0.0) << t.name;
 }
 

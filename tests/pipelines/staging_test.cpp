@@ -48,7 +48,9 @@ TEST_F(StagingTest, AccumulateAndPassthroughMatchTheDirectPath) {
       } else {
         EXPECT_TRUE(b.empty());
       }
-      ASSERT_EQ(tb.size(), 3u);
+      ASSERT_EQ(tb.size(), 4u);  // upload, accumulate, sample_summary, download
+      ASSERT_TRUE(staging->samples()) << "frame " << t;
+      EXPECT_EQ(direct->samples(), staging->samples()) << "frame " << t << ": the summary read back through staging";
 
       test::HostFrame p;
       p.add(ChannelId::Radiance, in, s.radiance);

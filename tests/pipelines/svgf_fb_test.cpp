@@ -15,6 +15,7 @@
 #include "gpu_test_env.hpp"
 #include "pipelines/fb_lut.hpp"
 #include "pipelines/graph.hpp"
+#include "pipelines/sample_summary.hpp"
 #include "render.hpp"
 #include "scenes.hpp"
 #include "svgf_inputs.hpp"
@@ -362,7 +363,8 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
 // the table itself is the context's.
 TEST_F(SvgfFbTest, DeviceBytesAreAsDocumented) {
   const auto config = fb_config(64, 48);
-  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 416 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 416 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::create(ctx(), config)->device_bytes(), pipelines::estimate_device_bytes(config));
 }
 

@@ -10,6 +10,7 @@
 #include "gpu_test_env.hpp"
 #include "pipelines/graph.hpp"
 #include "pipelines/pipeline.hpp"
+#include "pipelines/sample_summary.hpp"
 #include "svgf_inputs.hpp"
 #include "svgf_reference.hpp"
 
@@ -249,6 +250,32 @@ TEST_F(SvgfTest, AStillViewConvergesAsTheRunningMeanDoes) {
   EXPECT_GT(off[63], mean[63]) << "the scene does not show what converge_still is for";
 }
 
+// RESULT.samples: a still pixel rests on every frame sent (its running mean
+// goes past the history cap); a reset starts again from one; without
+// converge_still the count is the capped history length.
+TEST_F(SvgfTest, SampleCountsFollowTheStillRunningMean) {
+  const int w = 32, h = 16, n = w * h;
+  Flat scene(w, h);
+  std::vector<float> radiance(3 * n, 0.7f);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  for (uint32_t t = 1; t <= 45; ++t) {
+    run(*pipe, scene.frame(radiance));
+    const auto s = pipe->samples();
+    ASSERT_TRUE(s) << t;
+    EXPECT_EQ(s->min, t) << t;
+    EXPECT_EQ(s->median, t) << t << " (every pixel rests on t frames: its bin's floor would be below the minimum)";
+  }
+  run(*pipe, scene.frame(radiance, protocol::kFrameReset));
+  EXPECT_EQ(pipe->samples()->min, 1u);
+  EXPECT_EQ(pipe->samples()->median, 1u);
+
+  auto capped =
+      pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"converge_still", 0}, {"max_history", 8}}));
+  for (int t = 1; t <= 12; ++t) run(*capped, scene.frame(radiance));
+  EXPECT_EQ(capped->samples()->min, 8u);
+  EXPECT_EQ(capped->samples()->median, 8u);
+}
+
 // After a reset the output is exactly what a fresh session makes of the frame.
 TEST_F(SvgfTest, ResetLeavesNoGhost) {
   const int w = 40, h = 30, n = w * h;
@@ -436,7 +463,7 @@ TEST_F(SvgfTest, TimingsNameEveryPass) {
   for (const auto& t : timings) names.push_back(t.name);
   EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject", "svgf_variance", "svgf_atrous_0",
                                              "svgf_atrous_1", "svgf_atrous_2", "svgf_atrous_3", "svgf_remodulate",
-                                             "svgf_taa", "download"}));
+                                             "svgf_taa", "sample_summary", "download"}));
 }
 
 TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
@@ -448,19 +475,24 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
   // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the still running mean: converge_still) + 16
   // (the TAA blend's, fp32 vec4(rgb, lag)), scratch 5*16 (3 illumination: the harm guard keeps the first,
   // guide, temporal), output 12 = 204 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   // fp16 planes: 6+6+6+2+4 + 64 + 80 + 6 = 174 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   // Without the TAA blend (taa_alpha and taa_static_alpha 0): 188 B/px; without converge_still 172; without
   // the harm guard (which alone reads the still mean) 156.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
-            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"converge_still", 0}})),
-            64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 172 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"harm_guard", 0}})),
-            64u * 48 * 156 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 156 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
 }
 
 TEST(SvgfValidate, ChannelsAndParameters) {
@@ -700,7 +732,7 @@ TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
   // One joint chain: both signals' variance and a-trous iterations are the same passes.
   EXPECT_EQ(names, (std::vector<std::string>{"upload", "svgf_reproject_diffuse", "svgf_reproject_specular",
                                              "svgf_variance", "svgf_atrous_0", "svgf_atrous_1", "svgf_remodulate",
-                                             "svgf_taa", "download"}));
+                                             "svgf_taa", "sample_summary", "download"}));
 }
 
 TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
@@ -713,10 +745,12 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
   // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16+16: the still mean) + 16 (TAA),
   // scratch 9*16 (6 illumination: three per signal, the harm guard keeping the first, the shared guide,
   // 2 temporal: the joint a-trous passes read both signals'), output 12 = 328 B/px, + the constants block.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 328 + pipelines::GraphSpec::kConstantBytes);
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 328 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   // fp16 planes: 6+6+6+6+2+4 + 112 + 144 + 6 = 292 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 292 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 292 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
@@ -837,10 +871,10 @@ TEST_F(SvgfTest, TaaOffIsTheGraphWithoutTaa) {
   auto on = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0.1}}, true));
   const std::vector<std::string> without = {"upload",        "svgf_reproject", "svgf_variance", "svgf_atrous_0",
                                             "svgf_atrous_1", "svgf_atrous_2",  "svgf_atrous_3", "svgf_remodulate",
-                                            "download"};
+                                            "sample_summary", "download"};
   EXPECT_EQ(pass_names(*off, frame(0)), without);
   std::vector<std::string> with = without;
-  with.insert(with.end() - 1, "svgf_taa");
+  with.insert(with.end() - 2, "svgf_taa");
   EXPECT_EQ(pass_names(*on, frame(0)), with);
   EXPECT_EQ(pass_names(*base, frame(0)), with);
   EXPECT_EQ(on->device_bytes(), base->device_bytes());
@@ -857,9 +891,11 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
   }
   // 188 B/px without TAA + 16 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes);
+            64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes +
+            pipelines::kSampleSummaryBytes);
 }
 
 // Static camera, a step edge whose sides swap at frame 4: at every pixel the

@@ -52,7 +52,8 @@ std::vector<Message> seed_messages(const std::vector<uint8_t>& pixels) {
   frame.planes = {{ChannelId::Radiance, Format::F16, px.first(12)},
                   {ChannelId::Depth, Format::F32, px.first(8)},
                   {ChannelId::Motion, Format::F16, px.first(8)}};
-  Result result{1, 17, {{"reproject", 0.125}, {"atrous", 1.5}}, {{ChannelId::Output, Format::F16, px.first(12)}}};
+  Result result{1, 17, {{"reproject", 0.125}, {"atrous", 1.5}}, {{ChannelId::Output, Format::F16, px.first(12)}},
+                SampleCounts{true, 3, 8}};
   return {
       Hello{0, "renderer", "secret-token"},
       welcome,

@@ -11,7 +11,7 @@ namespace {
 std::vector<uint8_t> golden_hello(int minor) {
   return Bytes{}
       .raw({0x44, 0x4E, 0x53, 0x56})  // magic "DNSV"
-      .raw({0x01, minor})             // version 1.0 ... 1.8
+      .raw({0x01, minor})             // version 1.0 ... 1.9
       .raw({0x01, 0x00})              // type 1 = HELLO
       .raw({0x00, 0x00, 0x00, 0x00})  // flags
       .raw({0x0D, 0x00, 0x00, 0x00})  // payload_length 13
@@ -105,7 +105,7 @@ TEST(Golden, HelloDecodes) {
 
 TEST(Golden, HelloEncodes) {
   Hello hello{0, "cli", "tk"};
-  EXPECT_EQ(encode(hello, 7, 0), golden_hello(8));  // the sender's own version: 1.8
+  EXPECT_EQ(encode(hello, 7, 0), golden_hello(kVersionMinor));  // the sender's own version
 }
 
 TEST(Golden, HelloOfEitherMinorDecodesTheSame) {
@@ -173,11 +173,11 @@ TEST(Golden, FrameEncodes) {
   f.info.jitter = {0.25f, -0.5f};
   const uint8_t depth[4] = {0x00, 0x3C, 0x00, 0x40};
   f.planes.push_back({ChannelId::Depth, Format::F16, depth});
-  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(8));
+  EXPECT_EQ(encode(f, 0x1122334455667788u, kFlagNoOutput), golden_frame(kVersionMinor));
 }
 
 TEST(Golden, OpenSessionBothWays) {
-  const auto bytes = golden_open_session(8);
+  const auto bytes = golden_open_session(kVersionMinor);
   OpenSession o;
   o.width = 1920;
   o.height = 1080;
@@ -261,7 +261,7 @@ TEST(Golden, SessionWithTheWatchKeyBothWays) {
 
 TEST(Golden, SessionWithTheWatchUrlBothWays) {
   const Session s = golden_session_message(kKey, kUrl);
-  EXPECT_EQ(encode(s, 3, 0), golden_session(8));
+  EXPECT_EQ(encode(s, 3, 0), golden_session(kVersionMinor));
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_session(8);
@@ -292,7 +292,7 @@ TEST(Golden, SessionFromAnOlderServerHasNoKey) {
     ASSERT_FALSE(err) << minor << ": " << err->field << ": " << err->message;
     EXPECT_EQ(diff(golden_session_message(std::nullopt), d.message), "") << minor;
   }
-  // A 1.8 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
+  // A 1.9 server answering a 1.5 client: its own minor in the header, the 1.5 payload.
   std::vector<uint8_t> expected = golden_session(5);
   expected[5] = kVersionMinor;
   EXPECT_EQ(encode(golden_session_message(std::nullopt), 3, 0), expected);
@@ -300,7 +300,7 @@ TEST(Golden, SessionFromAnOlderServerHasNoKey) {
 
 TEST(Golden, AttachWithTheWatchKeyBothWays) {
   const Attach a{0x0102030405060708u, kKey};
-  EXPECT_EQ(encode(a, 9, 0), golden_attach(8));
+  EXPECT_EQ(encode(a, 9, 0), golden_attach(kVersionMinor));
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_attach(6);
@@ -341,6 +341,89 @@ TEST(Golden, WatchKeyMustBeEmptyOrThirtyTwoLowercaseHexDigits) {
   const auto empty = encode(Attach{1, ""}, 1, 0);
   ASSERT_FALSE(decode_message(empty, kMaxMessage, d, storage));
   EXPECT_EQ(std::get<Attach>(d.message).watch_key, std::optional<std::string>(""));
+}
+
+// RESULT, request_id 4, session 0x0102030405060708, frame 2, no timings, no
+// planes (a NO_OUTPUT frame), and from 1.9 the sample counts: counted, min 3,
+// median 8 (§5.7).
+std::vector<uint8_t> golden_result(int minor) {
+  Bytes b;
+  b.raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
+      .raw({0x07, 0x00})                        // type 7 = RESULT
+      .raw({0x00, 0x00, 0x00, 0x00})            // flags
+      .raw({minor >= 9 ? 0x1D : 0x14, 0x00, 0x00, 0x00})  // payload_length 20, 29 with the counts
+      .raw({0x04, 0, 0, 0, 0, 0, 0, 0})         // request_id 4
+      // payload
+      .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01})  // 0: session_id
+      .raw({0x02, 0, 0, 0, 0, 0, 0, 0})                       // 8: frame_index 2
+      .raw({0x00, 0x00})                                      // 16: no timings
+      .raw({0x00, 0x00});                                     // 18: no planes
+  if (minor >= 9) b.raw({0x01}).raw({0x03, 0x00, 0x00, 0x00}).raw({0x08, 0x00, 0x00, 0x00});  // 1.9: samples
+  return b.v;
+}
+
+Result golden_result_message(std::optional<SampleCounts> samples) {
+  Result r;
+  r.session_id = 0x0102030405060708u;
+  r.frame_index = 2;
+  r.samples = samples;
+  return r;
+}
+
+TEST(Golden, ResultWithTheSampleCountsBothWays) {
+  const Result r = golden_result_message(SampleCounts{true, 3, 8});
+  EXPECT_EQ(encode(r, 4, 0), golden_result(9));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_result(9);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(r, d.message), "");
+}
+
+TEST(Golden, ResultWithoutCountsIsTheOlderPayload) {
+  // To a client before 1.9: the 1.8 payload under this sender's own minor.
+  std::vector<uint8_t> expected = golden_result(8);
+  expected[5] = kVersionMinor;
+  EXPECT_EQ(encode(golden_result_message(std::nullopt), 4, 0), expected);
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_result(8);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(golden_result_message(std::nullopt), d.message), "");
+}
+
+TEST(Golden, ResultFromAPipelineWithoutACount) {
+  // To a 1.9 client the field is there, not counted: 9 bytes, all 0.
+  std::vector<uint8_t> expected = golden_result(9);
+  for (size_t i = expected.size() - 9; i < expected.size(); ++i) expected[i] = 0;
+  EXPECT_EQ(encode(golden_result_message(SampleCounts{}), 4, 0), expected);
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto err = decode_message(expected, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(golden_result_message(SampleCounts{}), d.message), "");
+}
+
+TEST(Golden, ResultSampleCountsThatCannotBeAreMalformed) {
+  struct Case {
+    size_t from_end;  // the byte changed, counted from the end of the message
+    uint8_t value;
+    const char* field;
+  };
+  // counted 2; min 9 above median 8; not counted with a min of 3.
+  for (const Case& c : {Case{9, 0x02, "RESULT.samples.counted"}, Case{8, 0x09, "RESULT.samples.min"},
+                        Case{9, 0x00, "RESULT.samples.min"}}) {
+    auto bytes = golden_result(9);
+    bytes[bytes.size() - c.from_end] = c.value;
+    Decoded d;
+    std::vector<uint8_t> storage;
+    auto err = decode_message(bytes, kMaxMessage, d, storage);
+    ASSERT_TRUE(err) << c.field << " decoded";
+    EXPECT_EQ(err->code, ErrorCode::Malformed);
+    EXPECT_EQ(err->field, c.field);
+  }
 }
 
 }  // namespace

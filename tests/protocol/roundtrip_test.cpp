@@ -25,7 +25,7 @@ TEST_P(RoundTrip, RandomContents) {
     ASSERT_FALSE(err) << "iteration " << it << ": " << err->field << ": " << err->message;
     EXPECT_EQ(d.header.type, type);
     EXPECT_EQ(d.header.version_major, 1);
-    EXPECT_EQ(d.header.version_minor, 8);  // the sender's own minor: 1.8
+    EXPECT_EQ(d.header.version_minor, kVersionMinor);  // the sender's own minor
     EXPECT_EQ(d.header.flags, flags);
     EXPECT_EQ(d.header.request_id, request_id);
     EXPECT_EQ(d.header.payload_length, bytes.size() - kHeaderSize);

@@ -222,6 +222,9 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       size_t n = list_size(64);
       for (size_t i = 0; i < n; ++i) m.timings.push_back({random_string(rng, 64), random_double(rng)});
       m.planes = random_planes(rng, o, max_plane_bytes);
+      // Always on the wire from this version's sender (1.9), as SESSION's watch key and URL.
+      const uint32_t a = random_u32(rng), b = random_u32(rng);
+      m.samples = uniform<int>(rng, 0, 3) ? SampleCounts{true, std::min(a, b), std::max(a, b)} : SampleCounts{};
       o.message = m;
       break;
     }
@@ -372,6 +375,12 @@ struct Differ {
       bits("timings[].milliseconds", a.timings[i].milliseconds, b.timings[i].milliseconds);
     }
     planes(a.planes, b.planes);
+    eq("samples.present", a.samples.has_value(), b.samples.has_value());
+    if (a.samples && b.samples) {
+      eq("samples.counted", a.samples->counted, b.samples->counted);
+      eq("samples.min", a.samples->min, b.samples->min);
+      eq("samples.median", a.samples->median, b.samples->median);
+    }
   }
   void operator()(const Attach& a, const Attach& b) {
     eq("session_id", a.session_id, b.session_id);

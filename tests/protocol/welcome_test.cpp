@@ -94,7 +94,7 @@ DecodeError expect_error(const std::vector<uint8_t>& bytes) {
 TEST(Welcome, GoldenOneOneBothWays) {
   const auto bytes = golden_welcome_1_1();
   ASSERT_EQ(bytes.size(), P + 125);
-  EXPECT_EQ(encode(expected_welcome(true), 5, 0), golden_welcome_1_1(8));  // a 1.8 sender's header
+  EXPECT_EQ(encode(expected_welcome(true), 5, 0), golden_welcome_1_1(kVersionMinor));  // this sender's own header
   Decoded d;
   std::vector<uint8_t> storage;
   auto err = decode_message(bytes, kMaxMessage, d, storage);
@@ -115,8 +115,8 @@ TEST(Welcome, OneZeroServerStillDecodesWithoutParameters) {
 }
 
 TEST(Welcome, OneZeroClientGetsTheOneZeroPayloadUnderANewerHeader) {
-  // A 1.8 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
-  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(8));
+  // A 1.9 server answering a 1.0 HELLO: its own minor in the header, only the 1.0 fields.
+  EXPECT_EQ(encode(expected_welcome(false), 5, 0), golden_welcome_1_0(kVersionMinor));
   // A receiver that sent a HELLO of minor >= 1 requires the tables at minor 1.
   const auto e = expect_error(golden_welcome_1_0(1));
   EXPECT_EQ(e.code, ErrorCode::Malformed);

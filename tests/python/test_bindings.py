@@ -31,7 +31,7 @@ def still_scene(rng, w=W, h=H, dtype=np.float32):
 
 def test_connection_reports_the_servers_welcome(conn, server):
     assert conn.endpoint == server.url
-    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 8)
+    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 9)
     assert conn.is_open
     assert conn.limits["max_width"] >= W and conn.limits["max_frames_in_flight"] >= 1
     names = [p.name for p in conn.pipelines()]
@@ -140,6 +140,10 @@ def test_accumulate_over_still_frames_is_the_mean(conn):
         # A reset drops the history: the output is the frame itself.
         fresh = rng.uniform(0, 4, (H, W, 3)).astype(np.float32)
         assert np.array_equal(s.denoise(dict(still, radiance=fresh), reset=True), fresh)
+        # RESULT.samples (protocol 1.9): every pixel of the still view rests on the frames since the reset.
+        for k in (2, 3):
+            s.submit(dict(still, radiance=fresh))
+            assert s.wait().samples == (k, k)
     # Past max_history the mean becomes an exponential average: out = mix(prev, c, 1 / max_history).
     with conn.open_session(W, H, "accumulate", channels=["radiance", "normal", "depth", "motion"],
                            parameters={"alpha_min": 0.0, "max_history": 3}) as s:
@@ -169,6 +173,7 @@ def test_pipelined_submit_wait_in_order(conn):
         while s.in_flight:
             results.append(s.wait())
         assert indices == list(range(10))
+        assert all(r.samples is None for r in results)  # passthrough keeps no count
         assert [r.frame_index for r in results] == indices
         for r, f in zip(results, frames):
             assert r.session_id == s.id and (r.width, r.height) == (W, H)

@@ -90,6 +90,7 @@ void sync_filter(DNFilterImpl& f, const char* where) {
       continue;
     }
     f.pending.pop_front();
+    f.samples = result->samples;
     try {
       write_output(*result, out);
     } catch (...) {
@@ -111,7 +112,17 @@ DN_API void dnExecuteFilter(DNFilter filter) {
     sync_filter(f, "dnExecuteFilter");
     client::Session& session = committed_session(f);
     submit(f, session);
-    write_output(session.wait(), *f.output);
+    const client::Result result = session.wait();
+    f.samples = result.samples;
+    write_output(result, *f.output);
+  });
+}
+
+DN_API bool dnGetFilterSamples(DNFilter filter, uint32_t* outMin, uint32_t* outMedian) {
+  return guarded_filter(filter, "dnGetFilterSamples", false, [&](DNFilterImpl& f) {
+    if (outMin) *outMin = f.samples ? f.samples->min : 0;
+    if (outMedian) *outMedian = f.samples ? f.samples->median : 0;
+    return f.samples.has_value();
   });
 }
 

@@ -247,6 +247,7 @@ DN_API void dnCommitFilter(DNFilter filter) {
     f.session.reset();  // CLOSE_SESSION, not waited for
     f.watch_key.clear();
     f.watch_command.clear();
+    f.samples.reset();
     f.session = d.connection->open_session(desc);
     f.session_generation = d.generation;
     f.committed = desc;

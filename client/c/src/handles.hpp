@@ -87,6 +87,8 @@ struct DNFilterImpl {
 
   // Output images of the frames sent by dnExecuteFilterAsync, oldest first.
   std::deque<dn::capi::Image> pending;
+  // RESULT.samples of the last output written (dnGetFilterSamples).
+  std::optional<dn::protocol::SampleCounts> samples;
   std::vector<std::vector<uint8_t>> scratch;  // packed copies of strided inputs
 };
 

@@ -60,6 +60,10 @@ std::string preview_header_json(const client::Result& r, const PreviewContext& c
   }
   j += "],\"has_input\":";
   j += r.has_input() ? "true" : "false";
+  // Input frames the output rests on (protocol 1.9); null from an older server or a pipeline without a count.
+  j += ",\"samples\":";
+  j += r.samples ? "{\"min\":" + std::to_string(r.samples->min) + ",\"median\":" + std::to_string(r.samples->median) + "}"
+                 : std::string("null");
   return j + "}";
 }
 

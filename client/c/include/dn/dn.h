@@ -186,6 +186,10 @@ DN_API void dnExecuteFilter(DNFilter filter);
 DN_API void dnExecuteFilterAsync(DNFilter filter);
 /* Waits for every frame in flight and writes their outputs, in order. */
 DN_API void dnSyncFilter(DNFilter filter);
+/* How many input frames the last output written rests on per pixel, over
+ * the frame (protocol 1.9): the fewest and the median. False (both 0) before
+ * an output, from an older server, or from a pipeline that keeps no count. */
+DN_API bool dnGetFilterSamples(DNFilter filter, uint32_t* outMin, uint32_t* outMedian);
 
 /* Temporal inputs (OIDN has none). The camera of the next frames: view and
  * projection column-major 4x4 (GLM's layout), unjittered; jitter in pixels

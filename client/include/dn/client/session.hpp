@@ -78,6 +78,10 @@ struct Result {
   // RGB interleaved, rows top-first, in `input_format`. Empty otherwise.
   protocol::Format input_format = protocol::Format::F32;
   std::span<const uint8_t> input;
+  // How many input frames the output rests on per pixel, over the frame: the
+  // fewest and the median (protocol 1.9, RESULT.samples). Empty from an older
+  // server and from pipelines that keep no history length.
+  std::optional<protocol::SampleCounts> samples;
   bool has_output() const { return !output.empty(); }
   bool has_input() const { return !input.empty(); }
   std::vector<float> input_rgb() const;                       // input as float RGB (converted from fp16)

@@ -19,7 +19,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 8;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag); 1.8: SESSION.watch_url
+inline constexpr uint8_t kVersionMinor = 9;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag); 1.8: SESSION.watch_url; 1.9: RESULT.samples
 inline constexpr size_t kHeaderSize = 24;
 
 // Where dnserver listens when started without --listen, and so where clients
@@ -91,6 +91,7 @@ const char* to_string(MessageType type);
 inline constexpr uint8_t kWatchKeyMinor = 6;
 inline constexpr uint8_t kShareInputMinor = 7;  // the header flag SHARE_INPUT
 inline constexpr uint8_t kWatchUrlMinor = 8;    // SESSION.watch_url
+inline constexpr uint8_t kSamplesMinor = 9;     // RESULT.samples
 inline constexpr size_t kMaxWatchUrlBytes = 256;
 inline constexpr size_t kWatchKeyLength = 32;  // 128 random bits
 // Empty, or exactly kWatchKeyLength characters of 0-9a-f: what the decoder accepts.
@@ -229,11 +230,24 @@ struct PassTiming {
   double milliseconds = 0.0;
 };
 
+// 1.9: how many of the session's input frames the output rests on, per
+// pixel, over the frame (docs/protocol.md §5.7).
+struct SampleCounts {
+  bool counted = false;  // false: the pipeline keeps no count (min and median 0)
+  uint32_t min = 0;
+  uint32_t median = 0;
+  bool operator==(const SampleCounts&) const = default;
+};
+
 struct Result {
   uint64_t session_id = 0;
   uint64_t frame_index = 0;
   std::vector<PassTiming> timings;  // device passes and server stages (upload, download)
   std::vector<PlaneView> planes;
+  // 1.9, appended: on the wire exactly when set (as Session.watch_url): the
+  // server sets it for peers at 1.9 or later, not counted where the
+  // pipeline keeps no count.
+  std::optional<SampleCounts> samples;
 };
 
 struct Attach {
