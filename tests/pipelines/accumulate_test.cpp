@@ -183,26 +183,30 @@ TEST_F(AccumulateTest, StaticNoisySceneConvergesToItsMean) {
   EXPECT_NEAR(rms[79] / plateau, 1.0, 0.1);
 }
 
+// A still camera over a flat surface (normal +z, depth 2, no motion) showing `radiance`.
+test::HostFrame still_frame(const std::vector<float>& radiance, uint32_t flags) {
+  const size_t n = radiance.size() / 3;
+  std::vector<float> normal(3 * n, 0.0f), depth(n, 2.0f), motion(2 * n, 0.0f);
+  for (size_t i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+  test::HostFrame f;
+  f.info.flags = flags;
+  f.add(ChannelId::Radiance, Format::F32, radiance);
+  f.add(ChannelId::Normal, Format::F32, normal);
+  f.add(ChannelId::Depth, Format::F32, depth);
+  f.add(ChannelId::Motion, Format::F32, motion);
+  return f;
+}
+
 TEST_F(AccumulateTest, ResetLeavesNoGhost) {
   const int w = 40, h = 30, n = w * h;
   auto pipe = pipelines::create(ctx(), test::accumulate_config(w, h));
-  std::vector<float> normal(3 * n), depth(n, 2.0f), motion(2 * n, 0.0f), a(3 * n, 5.0f), b(3 * n);
-  for (int i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+  std::vector<float> a(3 * n, 5.0f), b(3 * n);
   for (int i = 0; i < 3 * n; ++i) b[i] = 0.01f * (i % 17);
-  auto frame = [&](const std::vector<float>& radiance, uint32_t flags) {
-    test::HostFrame f;
-    f.info.flags = flags;
-    f.add(ChannelId::Radiance, Format::F32, radiance);
-    f.add(ChannelId::Normal, Format::F32, normal);
-    f.add(ChannelId::Depth, Format::F32, depth);
-    f.add(ChannelId::Motion, Format::F32, motion);
-    return f;
-  };
-  for (int t = 0; t < 10; ++t) run(*pipe, frame(a, 0));
+  for (int t = 0; t < 10; ++t) run(*pipe, still_frame(a, 0));
   // Without reset the old colour would dominate; with it the output is exactly the new frame.
-  auto out = run(*pipe, frame(b, protocol::kFrameReset));
+  auto out = run(*pipe, still_frame(b, protocol::kFrameReset));
   for (int i = 0; i < 3 * n; ++i) ASSERT_EQ(out[i], b[i]) << i;
-  out = run(*pipe, frame(b, 0));
+  out = run(*pipe, still_frame(b, 0));
   for (int i = 0; i < 3 * n; ++i) ASSERT_NEAR(out[i], b[i], 1e-6) << i;
 }
 
@@ -211,17 +215,8 @@ TEST_F(AccumulateTest, ResetLeavesNoGhost) {
 TEST_F(AccumulateTest, SampleCountsAreTheHistoryLength) {
   const int w = 24, h = 12, n = w * h;
   auto pipe = pipelines::create(ctx(), test::accumulate_config(w, h, Format::F32, Format::F32, {{"max_history", 6}}));
-  std::vector<float> normal(3 * n), depth(n, 2.0f), motion(2 * n, 0.0f), radiance(3 * n, 1.5f);
-  for (int i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
-  auto frame = [&](uint32_t flags) {
-    test::HostFrame f;
-    f.info.flags = flags;
-    f.add(ChannelId::Radiance, Format::F32, radiance);
-    f.add(ChannelId::Normal, Format::F32, normal);
-    f.add(ChannelId::Depth, Format::F32, depth);
-    f.add(ChannelId::Motion, Format::F32, motion);
-    return f;
-  };
+  const std::vector<float> radiance(3 * n, 1.5f);
+  auto frame = [&](uint32_t flags) { return still_frame(radiance, flags); };
   EXPECT_FALSE(pipe->samples()) << "a count before the first frame";
   for (uint32_t t = 1; t <= 9; ++t) {
     run(*pipe, frame(0));
