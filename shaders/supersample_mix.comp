@@ -36,7 +36,7 @@ void main() {
       ivec2 q = pos + ivec2(dx, dy);
       if (!dn_inside(q, frame.size.xy)) continue;
       uint qi = uint(q.y) * frame.size.x + uint(q.x);
-      uint word = assignment.data[qi];
+      uint word = assignment_at(qi);
       uint want = dn_sample_code_of(-ivec2(dx, dy));  // q's sample belongs to p
       DN_MIX(1u, signal_1)
       DN_MIX(2u, signal_2)

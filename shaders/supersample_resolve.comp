@@ -17,7 +17,7 @@ vec3 resolved(uint p) {
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 sum = DN_LOAD3(src, false, p);
   float count = 1.0;
-  uint word = assignment.data[p];
+  uint word = assignment_at(p);
   for (uint j = 1u; j <= SAMPLES; ++j) {
     uint code = dn_sample_code(word, j);
     if (code == DN_SAMPLE_UNUSED) continue;

@@ -1,5 +1,7 @@
-// Plane access. A plane is a storage buffer declared as `{ uint data[]; } name`
-// holding the client's bytes verbatim: components interleaved per pixel,
+// Plane access. A plane is a buffer of uint words bound as `read` or `texel`
+// (loads go through name_at, so either works: passes gather planes through
+// r32ui texel views, lavapipe's faster scattered read) holding the client's
+// bytes verbatim: components interleaved per pixel,
 // row-major, each component little-endian fp16 or fp32. Whether a plane is
 // fp16 is a specialization constant of the pass (a bool), so the branch folds
 // away when the pipeline is specialised.
@@ -11,7 +13,7 @@
 
 // fp16 element e lives in the low (even e) or high (odd e) half of word e / 2.
 #define DN_LOAD(buf, is_half, e) \
-  ((is_half) ? unpackHalf2x16(buf.data[(e) >> 1u] >> (((e) & 1u) << 4u)).x : uintBitsToFloat(buf.data[(e)]))
+  ((is_half) ? unpackHalf2x16(buf##_at((e) >> 1u) >> (((e) & 1u) << 4u)).x : uintBitsToFloat(buf##_at((e))))
 
 #define DN_LOAD1(buf, is_half, pixel) DN_LOAD(buf, is_half, (pixel))
 #define DN_LOAD2(buf, is_half, pixel) \
