@@ -92,7 +92,8 @@ pairs = [tuple(map(float, line.split())) for line in sys.stdin if line.strip()]
 base = [b for b, _ in pairs]
 now = [c for _, c in pairs]
 ratios = [c / b for b, c in pairs]
+def ms(x): return f"{x:.0f}" if x >= 100 else f"{x:.3g}"
 per_round = ", ".join(f"{x:.2f}" for x in ratios)
-print(f"| {name} | {statistics.median(base):.3g} | {statistics.median(now):.3g} | {per_round} | "
+print(f"| {name} | {ms(statistics.median(base))} | {ms(statistics.median(now))} | {per_round} | "
       f"{statistics.median(ratios):.2f} |")' "$config"
 done
