@@ -82,14 +82,9 @@ while [ $# -gt 0 ]; do
     *) echo "cycles: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
-width=${size%x*}
-height=${size#*x}
-case "$width$height$frames$ref_spp$threads" in *[!0-9]* | "") echo "cycles: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
-[ "$frames" -ge 2 ] || { echo "cycles: need --frames >= 2" >&2; exit 2; }
+blender_options
 IFS=, read -r -a spps <<< "$spp_list"
-IFS=, read -r -a vars <<< "$variants"
 for s in "${spps[@]}"; do case "$s" in "" | *[!0-9]* | 0) echo "cycles: --spp-list wants positive integers, got '$spp_list'" >&2; exit 2 ;; esac; done
-for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "cycles: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
 [ ${#spps[@]} -gt 0 ] && [ ${#vars[@]} -gt 0 ] || { echo "cycles: empty --variants or --spp-list" >&2; exit 2; }
 
 # Per scene (its scripts: bench/lib/blender_render.sh): the side-by-side crops

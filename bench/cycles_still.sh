@@ -53,12 +53,7 @@ while [ $# -gt 0 ]; do
     *) echo "$bench: unknown option '$1'" >&2; usage >&2; exit 2 ;;
   esac
 done
-width=${size%x*}
-height=${size#*x}
-case "$width$height$frames$ref_spp$threads" in *[!0-9]* | "") echo "$bench: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
-[ "$frames" -ge 2 ] || { echo "$bench: need --frames >= 2" >&2; exit 2; }
-IFS=, read -r -a vars <<< "$variants"
-for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "$bench: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
+blender_options
 blender_scene "$scene" || { echo "$bench: unknown scene '$scene' (room, window)" >&2; exit 2; }
 out=${out:-out/cycles_still/$scene}
 find_blender

@@ -1,6 +1,17 @@
 # Shared by the Blender benchmark scripts (sourced, not run): one cached
 # Cycles render of a project scene script.
 #
+# blender_options: checks the options both scripts take (size, frames,
+# ref_spp, threads, variants) and sets width, height and the array vars.
+blender_options() {
+  width=${size%x*}
+  height=${size#*x}
+  case "$width$height$frames$ref_spp$threads" in *[!0-9]* | "") echo "$bench: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
+  [ "$frames" -ge 2 ] || { echo "$bench: need --frames >= 2" >&2; exit 2; }
+  IFS=, read -r -a vars <<< "$variants"
+  for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "$bench: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
+}
+
 # blender_render NAME FRAMES SPP SEED PASSES [SCRIPT-OPTION ...]: renders
 # FRAMES frames of $script into $out/render/NAME (frame_%04d.exr) unless a
 # render with the same settings, the same scene scripts ($depends) and the
