@@ -6,7 +6,11 @@
 blender_options() {
   width=${size%x*}
   height=${size#*x}
-  case "$width$height$frames$ref_spp$threads" in *[!0-9]* | "") echo "$bench: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
+  case "$size" in [0-9]*x[0-9]*) ;; *) echo "$bench: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
+  local value
+  for value in "$width" "$height" "$frames" "$ref_spp" "$threads"; do
+    case "$value" in *[!0-9]* | "") echo "$bench: --size wants WxH and the counts integers" >&2; exit 2 ;; esac
+  done
   [ "$frames" -ge 2 ] || { echo "$bench: need --frames >= 2" >&2; exit 2; }
   IFS=, read -r -a vars <<< "$variants"
   for v in "${vars[@]}"; do case "$v" in preset | denoising | all) ;; *) echo "$bench: unknown variant '$v' (preset, denoising, all)" >&2; exit 2 ;; esac; done
