@@ -37,29 +37,47 @@ const float DN_GUARD_MIN_LENGTH = 4.0;
 // beyond it (a blurred edge) is taken out nearly whole. The mean tends to
 // the reference, and the output with it.
 const float DN_STILL_MIN_SAMPLES = 8.0;
-// The guard's target of signal s (1: the specular chain, its alpha floor):
-// vec4(rgb, a^2; negative: none); still: the running mean's.
-vec4 dn_guard_target(vec4 m, float len, int s, uint p, out bool still) {
-  float g = DN_PARAM_VALUE(svgf, harm_guard), k = DN_PARAM_VALUE(svgf, converge_still);
-  vec4 mean = CONVERGE_STILL && m.w >= 0.0 ? (s == 0 ? still_mean_at(p) : still_mean2_at(p)) : vec4(0.0);
-  still = CONVERGE_STILL && k > 0.0 && m.w >= 0.0 && mean.a >= DN_STILL_MIN_SAMPLES;
-  if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
-  if (!still) return vec4(m.rgb, g * g * m.w);
+// The still target takes over from the moving one over DN_STILL_RAMP samples
+// (weight 1/8 at DN_STILL_MIN_SAMPLES, 1 from 15 on), so the output does not
+// jump when the mean becomes the target.
+const float DN_STILL_RAMP = 8.0;
+// The guard's moving target of signal s: vec4(m.rgb, a^2; negative: no data).
+vec4 dn_moving_target(vec4 m) {
+  float g = DN_PARAM_VALUE(svgf, harm_guard);
+  return vec4(m.rgb, m.w >= 0.0 ? g * g * m.w : -1.0);
+}
+// Signal s's still target (1: the specular chain, its alpha floor): the
+// running mean and its a^2; w: its weight, 0 where the pixel is not still.
+vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
+  float k = DN_PARAM_VALUE(svgf, converge_still);
+  w = 0.0;
+  if (!CONVERGE_STILL || !(k > 0.0) || !(m.w >= 0.0)) return vec4(0.0);
+  vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
+  if (!(mean.a >= DN_STILL_MIN_SAMPLES)) return vec4(0.0);
+  w = clamp((mean.a - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0);
   return vec4(mean.rgb, k * k * m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA) / mean.a);
 }
-vec4 dn_guard_target(vec4 m, float len, int s, uint p) {
-  bool still;
-  return dn_guard_target(m, len, s, p, still);
+// What a kept pixel blends toward where it is still: the targets' colour by
+// weight; .w negative: no data.
+vec4 dn_guard_mean(vec4 m, float len, int s, uint p) {
+  float w;
+  vec4 still = dn_still_target(m, len, s, p, w);
+  return vec4(mix(m.rgb, still.rgb, w), m.w >= 0.0 ? 1.0 : -1.0);
 }
-// f guarded toward signal s's target (own: its temporal mean and variance).
-vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
-  bool still;
-  vec4 t = dn_guard_target(own, len, s, p, still);
-  if (!HARM_GUARD || DN_PARAM_VALUE(svgf, harm_guard) <= 0.0 || !(t.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
+// f beyond a (t.w = a^2) from t.rgb in luminance: shrunk toward it by (a / Y(f - t))^1, or ^3 (cubic).
+vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
   vec3 d = f - t.rgb;
   float dl = dn_luminance(d);
   float r = t.w / (dl * dl);
-  return dl * dl > t.w ? t.rgb + d * (still ? r * sqrt(r) : r) : f;
+  return dl * dl > t.w ? t.rgb + d * (cubic ? r * sqrt(r) : r) : f;
+}
+// f guarded toward signal s's targets (own: its temporal mean and variance).
+vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
+  if (!HARM_GUARD || DN_PARAM_VALUE(svgf, harm_guard) <= 0.0 || !(own.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
+  float w;
+  vec4 still = dn_still_target(own, len, s, p, w);
+  vec3 moving = dn_guarded(f, dn_moving_target(own), false);
+  return w > 0.0 ? mix(moving, dn_guarded(f, still, true), w) : moving;
 }
 
 // A pixel whose (diffuse) albedo is not a reflectance, below DN_ALBEDO_MIN
@@ -94,8 +112,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = dn_guard_target(own_at(p), colour_history_at(p).a, 0, p);
-    vec4 m2 = HAS_SPECULAR ? dn_guard_target(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
+    vec4 m = dn_guard_mean(own_at(p), colour_history_at(p).a, 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }

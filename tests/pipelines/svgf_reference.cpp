@@ -660,35 +660,54 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
 
   // Pass 4a (harm_guard g > 0, with a-trous): each chain's filtered value f
   // moves back toward its target t where the luminance of f - t exceeds the
-  // allowed deviation a: t + (f - t) a^2 / Y(f - t)^2; only where the
+  // allowed deviation a: t + (f - t) (a / Y(f - t))^2; only where the
   // history length is at least 4 (v from the pixel's own moments). The
-  // target is the temporal mean m of variance v, a = g sqrt(v), or with
-  // converge_still k where the still running mean holds 8 samples or more,
-  // that mean, a = k sqrt(v samples_averaged(length) / its samples), and the
-  // factor (a / Y(f - t))^3. Returns whether pixel i has a target, and it
-  // (rgb), a^2 and whether it is the still mean.
-  auto guard_target = [&](const Chain& ch, int i, double* t, double& allowed, bool* is_still = nullptr) {
+  // moving target is the temporal mean m of variance v, a = g sqrt(v). With
+  // converge_still k, where the still running mean holds n >= 8 samples, the
+  // still target is that mean, a = k sqrt(v samples_averaged(length) / n),
+  // factor (a / Y(f - t))^3, and the result is mix(moving, still, w) with
+  // w = min((n - 7) / 8, 1). guard_target gives the moving target, the still
+  // one and w (0: not still); false where pixel i has no data.
+  struct Target {
+    double rgb[3], allowed;
+  };
+  auto guard_target = [&](const Chain& ch, int i, Target& moving, Target& still, double& w) {
     const double v = ch.variance[i];
+    w = 0.0;
     if (!(v >= 0.0)) return false;
-    const bool still = keeps_still && ch.still_n[i] >= 8.0;
-    if (is_still) *is_still = still;
-    for (int k = 0; k < 3; ++k) t[k] = still ? ch.still_mean[3 * i + k] : ch.temporal[3 * i + k];
-    allowed = still ? p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i]
-                    : p_.harm_guard * p_.harm_guard * v;
+    for (int k = 0; k < 3; ++k) moving.rgb[k] = ch.temporal[3 * i + k];
+    moving.allowed = p_.harm_guard * p_.harm_guard * v;
+    if (keeps_still && ch.still_n[i] >= 8.0) {
+      w = std::min((ch.still_n[i] - 7.0) / 8.0, 1.0);
+      for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
+      still.allowed = p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i];
+    }
     return true;
+  };
+  auto guarded_toward = [](const double* f, const Target& t, bool cubic, double* out) {
+    double d[3];
+    for (int k = 0; k < 3; ++k) d[k] = f[k] - t.rgb[k];
+    const double dl = luminance(d), r = t.allowed / (dl * dl);
+    for (int k = 0; k < 3; ++k) out[k] = dl * dl > t.allowed ? t.rgb[k] + d[k] * (cubic ? r * std::sqrt(r) : r) : f[k];
   };
   auto guard = [&](std::vector<double>& filtered, const Chain& ch) {
     if (!(p_.harm_guard > 0.0) || iterations == 0) return;
     for (int i = 0; i < n; ++i) {
-      double t[3], allowed;
-      bool still = false;
-      if (!guard_target(ch, i, t, allowed, &still) || ch.length[i] < 4.0) continue;  // no data, or a variance not the pixel's own
-      double d[3];
-      for (int k = 0; k < 3; ++k) d[k] = filtered[4 * i + k] - t[k];
-      const double dl = luminance(d), r = allowed / (dl * dl);
-      if (dl * dl > allowed)
-        for (int k = 0; k < 3; ++k) filtered[4 * i + k] = t[k] + d[k] * (still ? r * std::sqrt(r) : r);
+      Target moving, still;
+      double w;
+      if (!guard_target(ch, i, moving, still, w) || ch.length[i] < 4.0) continue;  // no data, or a variance not the pixel's own
+      double m[3], s[3];
+      guarded_toward(&filtered[4 * i], moving, false, m);
+      if (w > 0.0) guarded_toward(&filtered[4 * i], still, true, s);
+      for (int k = 0; k < 3; ++k) filtered[4 * i + k] = w > 0.0 ? m[k] + (s[k] - m[k]) * w : m[k];
     }
+  };
+  // What a kept still pixel blends toward: the targets' colour, mixed by w.
+  auto guard_mean = [&](const Chain& ch, int i, double* t) {
+    Target moving, still;
+    double w;
+    if (!guard_target(ch, i, moving, still, w)) return;
+    for (int k = 0; k < 3; ++k) t[k] = w > 0.0 ? moving.rgb[k] + (still.rgb[k] - moving.rgb[k]) * w : moving.rgb[k];
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
@@ -709,7 +728,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     dsan = sanitize(f.diffuse);
     ssan = sanitize(f.specular);
   }
-  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the guard's target (guard_target).
+  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the guard's targets (guard_mean).
   auto stillness = [&](int i) {
     bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
     if (split) own = own && chains_[1].variance[i] >= 0.0;
@@ -737,12 +756,12 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         continue;
       }
       const double s = stillness(i);
-      double t[3] = {0.0, 0.0, 0.0}, t2[3] = {0.0, 0.0, 0.0}, allowed;
-      guard_target(chains_[0], i, t, allowed);
+      double t[3] = {0.0, 0.0, 0.0}, t2[3] = {0.0, 0.0, 0.0};
+      guard_mean(chains_[0], i, t);
       double now, mean = t[k] * a[j];
       if (split) {
         now = dsan[j] * (f.diffuse_lighting ? a[j] : 1.0) + ssan[j] * (f.specular_lighting ? sf[j] : 1.0);
-        guard_target(chains_[1], i, t2, allowed);
+        guard_mean(chains_[1], i, t2);
         mean += t2[k] * sf[j];
       } else {
         now = raw[j];

@@ -208,6 +208,29 @@ TEST_F(SvgfTest, StaticNoisySceneErrorFalls) {
   EXPECT_LT(rms[23], rms[7]);
 }
 
+// The still running mean takes over the guard's target gradually: on a
+// flat noisy still surface the filtered output is far better than an 8-sample
+// mean, and switching to that mean at once raised the RMSE by half at frame 8.
+TEST_F(SvgfTest, AStillViewDoesNotJumpWhenItsMeanTakesOver) {
+  const int w = 64, h = 48, n = w * h;
+  Flat scene(w, h);
+  auto pipe = pipelines::create(ctx(), svgf_config(w, h));
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<float> noise(0.0f, 2.0f);
+  std::vector<float> radiance(3 * n);
+  std::vector<double> rms;
+  for (int t = 0; t < 12; ++t) {
+    for (auto& r : radiance) r = noise(rng);
+    const auto out = run(*pipe, scene.frame(radiance));
+    double sum = 0;
+    for (float v : out) sum += (v - 1.0) * (v - 1.0);
+    rms.push_back(std::sqrt(sum / out.size()));
+  }
+  std::printf("[ info     ] rms after 7 to 12 frames: %.5f %.5f %.5f %.5f %.5f %.5f\n", rms[6], rms[7], rms[8], rms[9],
+              rms[10], rms[11]);
+  for (int t = 8; t <= 12; ++t) EXPECT_LE(rms[t - 1], 1.1 * rms[6]) << t << " frames";
+}
+
 // A still camera converges (converge_still): on a still noisy shadow edge
 // (lighting 1 and 0.25 on one flat surface, which the a-trous blurs: the
 // guides cannot tell the two sides apart), the output's RMSE against the
