@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A still view converges. For each dnrender scene, a still camera
 # (--hold-camera 0: the frames differ only in noise, seed 3) at 1 spp per
-# frame, denoised through `dn denoise` by every svgf-family pipeline and by
+# frame, denoised through `dn denoise` by every svgf-family pipeline, by
+# stat-temporal from the radiance alone (the frames carry no statistics), and by
 # the plain running mean of the inputs (accumulate with alpha_min 0 and
 # max_history 1024). Each output frame n is measured against two "point"
 # references, each the mean of --point-ref-frames 1-spp still frames (seeds
@@ -61,7 +62,7 @@ start_bench_server still "$bin" "$dn" "$out/dnserver.log"
 
 # Rows: "label pipeline [NAME=VALUE ...]"; the running mean first.
 rows=("mean accumulate alpha_min=0 max_history=1024" "svgf svgf" "svgf-fb svgf-fb" "reflect reflect"
-      "progressive progressive" "svgf-no-converge svgf converge_still=0")
+      "progressive progressive" "stat-temporal stat-temporal" "svgf-no-converge svgf converge_still=0")
 tsv="$out/still.tsv"
 printf 'scene\tmethod\tframes\trmse\tnc_mse\tnc_relmse\n' > "$tsv"
 for s in $scenes; do

@@ -2,7 +2,9 @@
 // stat_temporal: temporal sample statistics for stat-temporal (paper 003 §8's
 // future work; docs/pipelines.md, "stat-temporal"). Per pixel p:
 //   C  = the frame's statistics (count, Box-Cox mean, M2, M3, raw mean =
-//        the sanitized radiance); non-finite statistics or n <= 0: no data
+//        the sanitized radiance); non-finite statistics or n <= 0: no data;
+//        without statistics planes (FROM_RADIANCE) the radiance is one
+//        sample: n = 1, mean y(x), M2 = M3 = 0
 //   H  = the previous accumulators under p's bilinear footprint at
 //        p_prev = p + mv, the taps on the same surface (Falcor's SVGF test),
 //        each weighed by its renormalised bilinear weight and merged
@@ -39,10 +41,12 @@
 
 #define DN_READ3(plane, p) vec3(plane.data[3u * (p)], plane.data[3u * (p) + 1u], plane.data[3u * (p) + 2u])
 
-// The frame's statistics at pixel q (no data: n = 0).
+// The frame's statistics at pixel q (no data: n = 0). FROM_RADIANCE: its
+// sanitized radiance is one sample (demodulated: over q's guarded albedo).
 DnStat current_stat(uint q) {
-  DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q),
-                    dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q)));
+  vec3 x = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q));
+  if (FROM_RADIANCE) return dn_stat_sample(DEMODULATED ? x / dn_guarded_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q)) : x, x);
+  DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q), x);
   return dn_stat_usable(s) ? s : dn_stat_empty();
 }
 

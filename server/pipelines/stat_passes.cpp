@@ -31,18 +31,29 @@ std::vector<uint8_t> t_squared_table(double alpha) {
   return bytes;
 }
 
-uint64_t stat_channels() {
-  uint64_t mask = protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
-                  protocol::channel_bit(ChannelId::Normal);
+uint64_t statistics_channels() {
+  uint64_t mask = 0;
   for (ChannelId id : kStatistics) mask |= protocol::channel_bit(id);
   return mask;
 }
 
-void add_stat_inputs(GraphSpec& g, const SessionConfig& config) {
+uint64_t stat_channels() {
+  return protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
+         protocol::channel_bit(ChannelId::Normal) | statistics_channels();
+}
+
+bool declares_statistics(const SessionConfig& config) {
+  uint64_t declared = 0;
+  for (const protocol::ChannelDecl& c : config.channels) declared |= protocol::channel_bit(c.id);
+  return (declared & statistics_channels()) == statistics_channels();
+}
+
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics) {
   g.add_input(config, ChannelId::Radiance, "radiance");
   g.add_input(config, ChannelId::Albedo, "albedo");
   g.add_input(config, ChannelId::Normal, "normal");
-  for (ChannelId id : kStatistics) g.add_input(config, id, std::string(protocol::find_channel(id)->name));
+  if (with_statistics)
+    for (ChannelId id : kStatistics) g.add_input(config, id, std::string(protocol::find_channel(id)->name));
   g.add_constant("stat_t_squared", t_squared_table(g.parameters.stat_alpha));
 }
 
@@ -105,6 +116,18 @@ std::optional<ConfigError> check_statistics(const SessionConfig& config) {
                          config.pipeline + " takes " + std::string(protocol::find_channel(c.id)->name) +
                              " in fp32 only (the sums of squared and cubed deviations overflow fp16)"};
   }
+  return std::nullopt;
+}
+
+std::optional<ConfigError> check_optional_statistics(const SessionConfig& config) {
+  if (auto err = check_statistics(config)) return err;
+  bool some = false;
+  for (const protocol::ChannelDecl& c : config.channels) some = some || protocol::is_sample_statistic(c.id);
+  if (some && !declares_statistics(config))
+    return ConfigError{protocol::ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                       config.pipeline +
+                           " takes all four of stat_count, stat_mean, stat_m2 and stat_m3 or none of them (without "
+                           "them each frame's radiance is one sample per pixel)"};
   return std::nullopt;
 }
 

@@ -38,8 +38,14 @@ inline constexpr uint64_t kStatRgbBytes = 12;
 // The plane that remodulates stat_filter's result with demodulated statistics.
 inline constexpr const char* kStatModulation = "stat_modulation";
 // Declares the frame's planes of stat_channels(), named by their channels'
-// names (radiance, albedo, normal, stat_count, ...), and the table "stat_t_squared".
-void add_stat_inputs(GraphSpec& g, const SessionConfig& config);
+// names (radiance, albedo, normal, stat_count, ...), and the table
+// "stat_t_squared"; with_statistics false: all but the four statistics.
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics = true);
+// The four statistics channels' mask.
+uint64_t statistics_channels();
+// Whether the session declares all four statistics channels (none: false;
+// some: check_statistics refuses the session where they are optional).
+bool declares_statistics(const SessionConfig& config);
 // t^2 of the two-sided Student-t quantile at significance alpha for nu = 1 ..
 // kStatTableSize (entry k: nu = k + 1), as the fp32 bytes of a Constant buffer.
 std::vector<uint8_t> t_squared_table(double alpha);
@@ -50,5 +56,7 @@ std::vector<uint8_t> t_squared_table(double alpha);
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& sources);
 // The statistics are fp32 only (docs/protocol.md §7.7).
 std::optional<ConfigError> check_statistics(const SessionConfig& config);
+// check_statistics, and all four statistics or none (where they are optional: stat-temporal).
+std::optional<ConfigError> check_optional_statistics(const SessionConfig& config);
 
 }  // namespace dn::pipelines

@@ -18,7 +18,9 @@ constexpr uint64_t kGeometryBytes = 16;
 
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
-  add_stat_inputs(g, config);
+  // Without the renderer's statistics each frame's radiance is one sample.
+  const bool from_radiance = !declares_statistics(config);
+  add_stat_inputs(g, config, !from_radiance);
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   g.add_constant("stat_history_t_squared", t_squared_table(g.parameters.stat_temporal_history_alpha));
@@ -29,10 +31,6 @@ GraphSpec build(const SessionConfig& config) {
   g.add_output(config);
 
   PassSpec& temporal = g.add_pass("stat_temporal", "stat_temporal")
-      .bind("count", "stat_count")
-      .bind("mean", "stat_mean")
-      .bind("m2", "stat_m2")
-      .bind("m3", "stat_m3")
       .bind("radiance", "radiance")
       .bind("depth", "depth")
       .bind("normal", "normal")
@@ -56,6 +54,10 @@ GraphSpec build(const SessionConfig& config) {
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("TABLE_SIZE", kStatTableSize);
   temporal.pixels_per_invocation = 1;
+  if (from_radiance)
+    temporal.set("FROM_RADIANCE", true);
+  else
+    temporal.bind("count", "stat_count").bind("mean", "stat_mean").bind("m2", "stat_m2").bind("m3", "stat_m3");
   if (g.parameters.stat_demodulated != 0.0f) {
     // The frame's own samples give the modulation; the accumulators cannot.
     g.add_scratch(kStatModulation, kStatRgbBytes);
@@ -76,13 +78,15 @@ PipelineDefinition stat_temporal_definition() {
   d.description.name = "stat-temporal";
   d.description.summary =
       "stat over sample statistics accumulated across frames: reprojected, tested against the frame with the same "
-      "Welch test (a statistical disocclusion and ghosting test), merged exactly with a fading memory; works at 1 spp.";
-  d.description.required_channels =
-      stat_channels() | protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+      "Welch test (a statistical disocclusion and ghosting test), merged exactly with a fading memory; works at 1 spp, "
+      "and without the statistics planes from the radiance alone (one sample per pixel and frame).";
+  d.description.required_channels = (stat_channels() & ~statistics_channels()) |
+                                     protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
+  d.description.optional_channels = statistics_channels();
   d.parameter_groups = {"stat", "stat_temporal"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.build = build;
-  d.check_channels = check_statistics;
+  d.check_channels = check_optional_statistics;
   return d;
 }
 

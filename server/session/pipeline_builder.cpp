@@ -211,21 +211,29 @@ uint64_t bits(std::initializer_list<ChannelId> ids) {
 
 // The signal channels of each input form a pipeline accepts: radiance, or the
 // split pair with each signal in radiance or lighting form (specular_lighting
-// comes with specular_albedo); with a sample mask and without, where offered.
+// comes with specular_albedo); with a sample mask and without, and with the
+// sample statistics and without, where they are optional.
 std::vector<uint64_t> input_forms(const pipelines::PipelineDescription& p) {
   const uint64_t accepted = p.required_channels | p.optional_channels;
   const uint64_t radiance = bits({ChannelId::Radiance});
   std::vector<uint64_t> forms;
   if (accepted & radiance) forms.push_back(radiance);
-  if (p.required_channels & radiance) return forms;  // its only form (passthrough passes the rest through)
-  for (uint64_t diffuse : {bits({ChannelId::Diffuse}), bits({ChannelId::DiffuseLighting})})
-    for (uint64_t specular : {bits({ChannelId::Specular}), bits({ChannelId::SpecularLighting, ChannelId::SpecularAlbedo})})
-      if (((diffuse | specular) & ~accepted) == 0) forms.push_back(diffuse | specular);
-  const uint64_t mask = bits({ChannelId::SampleCount});
-  if (accepted & mask) {
-    const size_t n = forms.size();
-    for (size_t i = 0; i < n; ++i) forms.push_back(forms[i] | mask);
+  if (p.required_channels & radiance) {
+    // Its only signal form; passthrough passes every other channel through.
+    if (p.name == "passthrough") return forms;
+  } else {
+    for (uint64_t diffuse : {bits({ChannelId::Diffuse}), bits({ChannelId::DiffuseLighting})})
+      for (uint64_t specular :
+           {bits({ChannelId::Specular}), bits({ChannelId::SpecularLighting, ChannelId::SpecularAlbedo})})
+        if (((diffuse | specular) & ~accepted) == 0) forms.push_back(diffuse | specular);
   }
+  const uint64_t groups[] = {bits({ChannelId::SampleCount}), bits({ChannelId::StatCount, ChannelId::StatMean,
+                                                                   ChannelId::StatM2, ChannelId::StatM3})};
+  for (const uint64_t group : groups)
+    if ((p.optional_channels & group) == group) {
+      const size_t n = forms.size();
+      for (size_t i = 0; i < n; ++i) forms.push_back(forms[i] | group);
+    }
   return forms;
 }
 

@@ -18,6 +18,9 @@ struct DnStat {
 
 DnStat dn_stat_empty() { return DnStat(0.0, vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0)); }
 
+// The accumulator of one sample x (raw: what the raw mean holds for it).
+DnStat dn_stat_sample(vec3 x, vec3 raw) { return DnStat(1.0, 2.0 * sqrt(max(x, 0.0)) - 2.0, vec3(0.0), vec3(0.0), raw); }
+
 // Weighs an accumulator by f (fading, bilinear weights): n, M2 and M3 scale,
 // so the means and the central moments M2 / n, M3 / n are kept.
 DnStat dn_stat_scale(DnStat a, float f) { return DnStat(a.n * f, a.mean, a.m2 * f, a.m3 * f, a.raw); }

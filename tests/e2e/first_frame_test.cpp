@@ -29,7 +29,7 @@ struct Form {
 // Every input form a client can open, written out here rather than taken from
 // the server: radiance or the split pair with each signal in radiance or
 // lighting form, the extras each pipeline requires, progressive with and
-// without its sample mask.
+// without its sample mask, stat-temporal with and without statistics.
 std::vector<Form> input_forms() {
   using C = ChannelId;
   const std::vector<C> gbuffer = {C::Albedo, C::Normal, C::Depth, C::Motion};
@@ -52,7 +52,8 @@ std::vector<Form> input_forms() {
   std::vector<Form> forms = {{"passthrough", {C::Radiance}},
                              {"accumulate", {C::Radiance, C::Normal, C::Depth, C::Motion}},
                              {"stat", statistics},
-                             {"stat-temporal", join({statistics, {C::Depth, C::Motion}})}};
+                             {"stat-temporal", join({statistics, {C::Depth, C::Motion}})},
+                             {"stat-temporal", {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion}}};
   for (const auto& s : svgf_signals) {
     forms.push_back({"svgf", join({s, gbuffer})});
     forms.push_back({"progressive", join({s, gbuffer})});

@@ -63,6 +63,9 @@ inline const std::vector<PipelineKind>& kinds() {
       {"stat_temporal", "stat-temporal",
        {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::StatCount, C::StatMean, C::StatM2, C::StatM3},
        {C::Albedo, C::Normal, C::Depth, C::Motion, C::StatCount, C::StatMean, C::StatM2, C::StatM3}},
+      // Without statistics planes: each frame's radiance is one sample.
+      {"stat_temporal_radiance", "stat-temporal", {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion},
+       {C::Albedo, C::Normal, C::Depth, C::Motion}},
       {"svgf_samples", "svgf",
        {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Sample1Radiance, C::Sample1Normal, C::Sample1Depth,
         C::Sample1Offset},

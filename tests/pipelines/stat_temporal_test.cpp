@@ -3,7 +3,8 @@
 // surface, and the oracles of its statistics: a still camera accumulates
 // every sample exactly (the P0b merge), a changed history is rejected by the
 // Welch test and an unchanged one is kept, scaling the samples keeps every
-// decision, and frames without statistics or with bad ones keep the history.
+// decision, and frames without statistics or with bad ones keep the history;
+// a session without statistics planes takes each frame's radiance as one sample.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -81,13 +82,20 @@ test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
   return f;
 }
 
-std::vector<protocol::ChannelDecl> channels() {
-  return {{ChannelId::Radiance, Format::F32},  {ChannelId::Albedo, Format::F32},   {ChannelId::Normal, Format::F32},
-          {ChannelId::Depth, Format::F32},     {ChannelId::Motion, Format::F32},   {ChannelId::StatCount, Format::F32},
-          {ChannelId::StatMean, Format::F32},  {ChannelId::StatM2, Format::F32},   {ChannelId::StatM3, Format::F32}};
+// with_statistics false: the radiance is each frame's one sample per pixel.
+std::vector<protocol::ChannelDecl> channels(bool with_statistics = true) {
+  std::vector<protocol::ChannelDecl> c = {{ChannelId::Radiance, Format::F32},
+                                          {ChannelId::Albedo, Format::F32},
+                                          {ChannelId::Normal, Format::F32},
+                                          {ChannelId::Depth, Format::F32},
+                                          {ChannelId::Motion, Format::F32}};
+  if (with_statistics)
+    for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3})
+      c.push_back({id, Format::F32});
+  return c;
 }
 
-test::HostFrame host_frame(const test::StatTemporalFrame& f) {
+test::HostFrame host_frame(const test::StatTemporalFrame& f, bool with_statistics = true) {
   test::HostFrame h;
   h.info.flags = f.reset ? protocol::kFrameReset : 0u;
   h.add(ChannelId::Radiance, Format::F32, f.stats.radiance);
@@ -95,6 +103,7 @@ test::HostFrame host_frame(const test::StatTemporalFrame& f) {
   h.add(ChannelId::Normal, Format::F32, f.stats.normal);
   h.add(ChannelId::Depth, Format::F32, f.depth);
   h.add(ChannelId::Motion, Format::F32, f.motion);
+  if (!with_statistics) return h;
   h.add(ChannelId::StatCount, Format::F32, f.stats.count);
   h.add(ChannelId::StatMean, Format::F32, f.stats.mean);
   h.add(ChannelId::StatM2, Format::F32, f.stats.m2);
@@ -113,8 +122,9 @@ struct Session {
   pipelines::GraphPipeline* graph = nullptr;
 };
 
-Session make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params = {{"radius", 4}}) {
-  auto config = test::make_config("stat-temporal", w, h, channels(), Format::F32, std::move(params));
+Session make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params = {{"radius", 4}},
+             bool with_statistics = true) {
+  auto config = test::make_config("stat-temporal", w, h, channels(with_statistics), Format::F32, std::move(params));
   EXPECT_FALSE(pipelines::validate(config).has_value());
   Session s;
   s.pipe = pipelines::create(ctx, config);
@@ -201,10 +211,14 @@ Mismatch compare(const DeviceState& d, const test::StatTemporalState& ref) {
 }
 
 TEST_F(StatTemporalTest, MatchesCpuReference) {
+  // from_radiance: the session declares no statistics planes; at 1 spp the
+  // reference's statistics of the frame's one sample are what the server
+  // must derive from the radiance (n = 1, y(x) or y(x / albedo), M2 = M3 = 0).
   struct Variant {
     const char* name;
     SceneSpec scene;
     double fading;
+    bool from_radiance = false;
   };
   // At 1 spp a 3x3 window holds 9 samples: a dark shadow (2 %) moving fast
   // exercises the rejection.
@@ -220,22 +234,27 @@ TEST_F(StatTemporalTest, MatchesCpuReference) {
   still.pan = 0.0f;
   SceneSpec demodulated = four_spp;
   demodulated.demodulated = true;
+  SceneSpec still_demodulated = still;
+  still_demodulated.demodulated = true;
   const Variant variants[] = {{"pan1_1spp", one_spp, 0.9},
                               {"pan0.6_1spp", fractional, 0.9},
                               {"pan1.3_4spp_fading0.7", four_spp, 0.7},
                               {"still_shadow_moves", still, 0.9},
-                              {"pan1.3_4spp_demodulated", demodulated, 0.9}};
+                              {"pan1.3_4spp_demodulated", demodulated, 0.9},
+                              {"pan1_radiance_only", one_spp, 0.9, true},
+                              {"still_radiance_only_demodulated", still_demodulated, 0.9, true}};
   const auto table = t_squared();
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
     Session s = make(ctx(), v.scene.w, v.scene.h,
-                     {{"radius", 4}, {"fading", v.fading}, {"demodulated", v.scene.demodulated ? 1.0 : 0.0}});
+                     {{"radius", 4}, {"fading", v.fading}, {"demodulated", v.scene.demodulated ? 1.0 : 0.0}},
+                     !v.from_radiance);
     test::StatTemporalState state;
     size_t rejected = 0, merged = 0;
     for (int k = 0; k < 8; ++k) {
       test::StatTemporalFrame f = scene_frame(v.scene, k, 3);
       f.reset = k == 5;  // a reset mid-sequence: every pixel starts afresh
-      svgf_inputs::run(*s.pipe, host_frame(f));
+      svgf_inputs::run(*s.pipe, host_frame(f, !v.from_radiance));
       const test::StatTemporalResult want = test::stat_temporal(f, state, v.fading, table);
       const DeviceState device = device_state(s, v.scene.demodulated);
       const Mismatch m = compare(device, want.state);

@@ -111,11 +111,16 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
   EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
                                                   "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated"}));
-  // stat-temporal: stat's channels plus depth and motion (reprojection); stat's parameters and its own.
+  // stat-temporal: stat's channels plus depth and motion (reprojection), the
+  // four statistics optional (without them the radiance is one sample per
+  // frame); stat's parameters and its own.
   EXPECT_EQ(all[6].name, "stat-temporal");
-  EXPECT_EQ(all[6].required_channels,
-            all[5].required_channels | protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
-  EXPECT_EQ(all[6].optional_channels, 0u);
+  const uint64_t statistics = protocol::channel_bit(ChannelId::StatCount) | protocol::channel_bit(ChannelId::StatMean) |
+                              protocol::channel_bit(ChannelId::StatM2) | protocol::channel_bit(ChannelId::StatM3);
+  EXPECT_EQ(all[6].required_channels, (all[5].required_channels & ~statistics) |
+                                          protocol::channel_bit(ChannelId::Depth) |
+                                          protocol::channel_bit(ChannelId::Motion));
+  EXPECT_EQ(all[6].optional_channels, statistics);
   std::vector<std::string> temporal_names;
   for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
   stat_names.insert(stat_names.end(), {"history_alpha", "fading"});
@@ -188,6 +193,26 @@ TEST(Validate, RejectsMissingRequiredChannel) {
   expect_error(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "normal");
   expect_error(test::make_config("passthrough", 8, 8, {}), ErrorCode::MissingChannel, "OPEN_SESSION.channels",
                "radiance");
+}
+
+// stat-temporal takes the four statistics planes or none: some of them is a
+// renderer that lost a pass, not one without statistics.
+TEST(Validate, StatTemporalTakesAllStatisticsOrNone) {
+  std::vector<protocol::ChannelDecl> base = {{ChannelId::Radiance, Format::F32}, {ChannelId::Albedo, Format::F32},
+                                             {ChannelId::Normal, Format::F32},   {ChannelId::Depth, Format::F32},
+                                             {ChannelId::Motion, Format::F32}};
+  EXPECT_FALSE(pipelines::validate(test::make_config("stat-temporal", 8, 8, base)).has_value());
+  auto all = base;
+  for (ChannelId id : {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3})
+    all.push_back({id, Format::F32});
+  EXPECT_FALSE(pipelines::validate(test::make_config("stat-temporal", 8, 8, all)).has_value());
+  auto some = all;
+  some.pop_back();  // stat_m3
+  expect_error(test::make_config("stat-temporal", 8, 8, some), ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+               "all four of stat_count");
+  // stat needs them: one frame's single sample has no variance to test.
+  expect_error(test::make_config("stat", 8, 8, {base[0], base[1], base[2]}), ErrorCode::MissingChannel,
+               "OPEN_SESSION.channels", "stat_count");
 }
 
 TEST(Validate, RejectsUnusedDuplicateAndMalformedChannels) {
