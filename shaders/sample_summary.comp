@@ -26,7 +26,7 @@ void main() {
   for (uint k = 0u; k < RUN; ++k) {
     const uint p = first + k;
     if (p >= frame.size.z) break;
-    float count = history_at(p).w;
+    float count = COUNTS ? counts.data[p] : history_at(p).w;
     if (STILL) count = max(count, still_at(p).w);
     const uint n = uint(clamp(count, 0.0, 4294967040.0) + 0.5);
     const uint bin = dn_sample_bin(n);

@@ -6,15 +6,29 @@
 
 namespace dn::pipelines {
 
-void add_sample_summary(GraphSpec& g, const std::string& history, const std::string& still) {
+namespace {
+
+PassSpec& add_summary_pass(GraphSpec& g) {
   g.add_readback(kSampleSummary, kSampleSummaryBytes);
   PassSpec& pass = g.add_pass("sample_summary", "sample_summary");
-  pass.bind("history", history).bind("summary", kSampleSummary);
-  if (!still.empty()) pass.bind("still", still).set("STILL", 1u);
+  pass.bind("summary", kSampleSummary);
   // Pixels per invocation: runs of equal bins are added at once.
   constexpr uint32_t kRun = 64;
   pass.set("RUN", kRun);
   pass.pixels_per_invocation = kRun;
+  return pass;
+}
+
+}  // namespace
+
+void add_sample_summary(GraphSpec& g, const std::string& history, const std::string& still) {
+  PassSpec& pass = add_summary_pass(g);
+  pass.bind("history", history);
+  if (!still.empty()) pass.bind("still", still).set("STILL", 1u);
+}
+
+void add_sample_count_summary(GraphSpec& g, const std::string& counts) {
+  add_summary_pass(g).bind("counts", counts).set("COUNTS", 1u);
 }
 
 uint32_t sample_bin(uint32_t count) {

@@ -20,6 +20,8 @@ inline constexpr const char* kSampleSummary = "sample_summary";
 // history) and, when not empty, `still` (a still pixel's vec4(mean, samples)),
 // and the Readback buffer it writes. Call after the passes that write them.
 void add_sample_summary(GraphSpec& g, const std::string& history, const std::string& still = {});
+// The same over a plane of one float count per pixel.
+void add_sample_count_summary(GraphSpec& g, const std::string& counts);
 
 // Histogram bins (shaders/include/sample_bins.glsl): a count's bin, and the
 // smallest count in a bin.

@@ -4,6 +4,7 @@
 // statistics with the Welch test, merges what passes exactly (with a fading
 // memory while the pixel moves) and starts afresh from the frame where it
 // fails; stat_prepare and stat_filter then run on the accumulators.
+#include "pipelines/sample_summary.hpp"
 #include "pipelines/stat_passes.hpp"
 
 namespace dn::pipelines {
@@ -68,6 +69,8 @@ GraphSpec build(const SessionConfig& config) {
   }
   add_stat_filter(g, config,
                   StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
+  // RESULT.samples: from the radiance alone a pixel's accumulated count is its frames (the renderer's counts are samples).
+  if (from_radiance) add_sample_count_summary(g, "stat_acc_count");
   return g;
 }
 

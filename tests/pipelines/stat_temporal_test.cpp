@@ -336,6 +336,36 @@ TEST_F(StatTemporalTest, StillCameraAccumulatesEverySampleExactly) {
   EXPECT_EQ(off, 0u) << "accumulated statistics differ from two-pass ones";
 }
 
+// RESULT.samples from the radiance alone: a still pixel's accumulator holds
+// one sample per frame, so the median pixel rests on every frame sent (a
+// chance rejection may restart a few: the minimum is at least 1); a reset
+// starts again from one. With the renderer's statistics (samples, not
+// frames) nothing is counted.
+TEST_F(StatTemporalTest, SampleCountsFromTheRadianceAreFrames) {
+  SceneSpec spec;
+  spec.pan = 0.0f;
+  spec.box = false;
+  spec.shadow_speed = 0.0f;
+  spec.shadow_u = 1e9f;
+  Session s = make(ctx(), spec.w, spec.h, {{"radius", 4}}, false);
+  for (uint32_t t = 1; t <= 20; ++t) {
+    svgf_inputs::run(*s.pipe, host_frame(scene_frame(spec, static_cast<int>(t), 2), false));
+    const auto counts = s.pipe->samples();
+    ASSERT_TRUE(counts) << t;
+    EXPECT_EQ(counts->median, t) << t;
+    EXPECT_GE(counts->min, 1u) << t;
+  }
+  test::StatTemporalFrame reset = scene_frame(spec, 21, 2);
+  reset.reset = true;
+  svgf_inputs::run(*s.pipe, host_frame(reset, false));
+  EXPECT_EQ(s.pipe->samples()->median, 1u);
+  EXPECT_EQ(s.pipe->samples()->min, 1u);
+
+  Session with_statistics = make(ctx(), spec.w, spec.h);
+  svgf_inputs::run(*with_statistics.pipe, host_frame(scene_frame(spec, 1, 2)));
+  EXPECT_FALSE(with_statistics.pipe->samples());
+}
+
 // A still camera; on frame 12 the light on the left half drops to 5 % (a
 // change no G-buffer shows). The Welch test rejects the stale history there
 // (it fails far beyond the critical t: at once) and keeps it elsewhere; the
