@@ -1,7 +1,7 @@
 #version 450
 // svgf_remodulate: Output = filtered demodulated colour * guarded albedo
 // (+ the filtered specular in split mode, + sanitized emission, never
-// filtered) in the session's output format (docs/pipelines.md, "svgf in
+// filtered: a still pixel's running mean of it) in the session's output format (docs/pipelines.md, "svgf in
 // detail", 4). One invocation per pixel pair.
 // With TAA (taa_alpha or taa_static_alpha > 0, spec constant 6) it writes, instead of Output, the
 // current colour and the bilinearly reprojected previous final output for
@@ -36,11 +36,13 @@ const float DN_GUARD_MIN_LENGTH = 4.0;
 // flat noisy scene were pulled off their filtered value), and a bias well
 // beyond it (a blurred edge) is taken out nearly whole. The mean tends to
 // the reference, and the output with it.
-const float DN_STILL_MIN_SAMPLES = 8.0;
+// From 4 samples (the guard's own minimum): at 8, on dnrender's still scenes
+// the capped filter's error had grown above the plain mean's by then.
+const float DN_STILL_MIN_SAMPLES = 4.0;
 // The still target takes over from the moving one over DN_STILL_RAMP samples
-// (weight 1/8 at DN_STILL_MIN_SAMPLES, 1 from 15 on), so the output does not
+// (weight 1/4 at DN_STILL_MIN_SAMPLES, 1 from 7 on), so the output does not
 // jump when the mean becomes the target.
-const float DN_STILL_RAMP = 8.0;
+const float DN_STILL_RAMP = 4.0;
 // The guard's moving target of signal s: vec4(m.rgb, a^2; negative: no data).
 vec4 dn_moving_target(vec4 m) {
   float g = DN_PARAM_VALUE(svgf, harm_guard);
@@ -120,6 +122,54 @@ vec3 kept_radiance(uint p, vec3 ga) {
   return c;
 }
 
+// EMISSION_STILL: emission is added back unfiltered, so whatever else a
+// renderer puts there (Cycles' transmission and volumes, by --preset cycles
+// in split sessions) keeps its one-sample noise; where the pixel is still
+// (motion below DN_STILL_MOTION, no reset) its running mean of its own
+// emission samples is added instead, so it converges as the plain mean
+// does. A change in place (an animated emitter) restarts it: once the mean
+// holds DN_EMISSION_MIN_SAMPLES (fewer give no usable variance), the sample's
+// luminance beyond DN_EMISSION_T standard deviations of the mean's samples
+// (plus 1e-3 of it, for noise-free lights) in two frames in a row (a
+// one-sample outlier of noisy light fails once: merged into the mean, not
+// into M2, which it would widen past the next test, and marked suspect).
+// A sample the sanitizer changed is not counted. Moving pixels: the sample.
+const float DN_EMISSION_T = 6.0;
+const float DN_EMISSION_MIN_SAMPLES = 8.0;
+vec3 emission_added(uint p) {
+  vec3 raw = DN_LOAD3(emission, EMISSION_HALF, p);
+  vec3 e = dn_sanitize_radiance(raw);
+  if (!EMISSION_STILL) return e;
+  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec4 s = vec4(0.0);
+  vec2 t = vec2(0.0);  // M2 of the samples' luminance, suspect
+  if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) && dn_is_still(mv)) {
+    s = emission_still.data[p];
+    t = vec2(emission_test.data[2u * p], emission_test.data[2u * p + 1u]);
+  }
+  if (dn_is_valid_radiance(raw)) {
+    float l = dn_luminance(e), lm = dn_luminance(s.rgb);
+    bool fail = false;
+    if (s.a >= DN_EMISSION_MIN_SAMPLES) {
+      float d = l - lm, bound = 1e-3 * max(l, lm);
+      fail = d * d > DN_EMISSION_T * DN_EMISSION_T * t.x / (s.a - 1.0) * (1.0 + 1.0 / s.a) + bound * bound;
+    }
+    if (s.a > 0.0 && !(fail && t.y != 0.0)) {
+      float n = min(s.a + 1.0, DN_STILL_MAX_SAMPLES);
+      vec3 mean = mix(s.rgb, e, 1.0 / n);
+      t = vec2(fail ? t.x : t.x + (l - lm) * (l - dn_luminance(mean)), fail ? 1.0 : 0.0);
+      s = vec4(mean, n);
+    } else {
+      s = vec4(e, 1.0);
+      t = vec2(0.0);
+    }
+  }
+  emission_still.data[p] = s;
+  emission_test.data[2u * p] = t.x;
+  emission_test.data[2u * p + 1u] = t.y;
+  return s.a > 0.0 ? s.rgb : e;
+}
+
 vec3 remodulate(uint p, out bool kept) {
   vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
   vec3 ga = dn_guarded_albedo(a);
@@ -139,7 +189,7 @@ vec3 remodulate(uint p, out bool kept) {
       c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2_at(p) : vec4(-1.0),
                          HARM_GUARD ? colour_history2_at(p).a : 0.0, 1, p) * specular_modulator(p);
   }
-  if (HAS_EMISSION) c += dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p));
+  if (HAS_EMISSION) c += emission_added(p);
   return c;
 }
 

@@ -23,6 +23,13 @@ constexpr uint64_t kAuxHistoryBytes = 16;
 // converge_still: a still pixel's running mean of its own samples,
 // vec4(demodulated rgb, samples) fp32, read and rewritten at p by svgf_reproject.
 constexpr uint64_t kStillMeanBytes = 16;
+// With emission: a still pixel's running mean of its emission, vec4(rgb,
+// samples), and its change test's (M2 of the luminance, suspect), fp32, one
+// copy each, read and rewritten at p by svgf_remodulate.
+constexpr const char* kEmissionStill = "emission_still";
+constexpr const char* kEmissionTest = "emission_test";
+constexpr uint64_t kEmissionStillBytes = 16;
+constexpr uint64_t kEmissionTestBytes = 8;
 // TAA: the previous final output and, with SvgfVariant::display_lag, the
 // lag state: vec4(rgb, lag) fp32, one persistent copy (read as texels by
 // svgf_remodulate, rewritten by svgf_taa after it).
@@ -183,6 +190,8 @@ void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const Sign
 
 // The still pixels' running means are kept where the harm guard reads them.
 bool keeps_still_mean(const SvgfVariant& v) { return v.converge_still && v.harm_guard && v.iterations > 0; }
+// And of the emission, which is added back unfiltered.
+bool keeps_still_emission(const SvgfVariant& v) { return v.emission && keeps_still_mean(v); }
 
 // Signal `index`'s reprojection (and history clipping): its temporal colour
 // in its illum buffer, its temporal moments and length.
@@ -393,6 +402,10 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
     if (keeps_still_mean(v)) g.add_persistent(s.history + "_still", kStillMeanBytes);
   }
+  if (keeps_still_emission(v)) {
+    g.add_persistent(kEmissionStill, kEmissionStillBytes);
+    g.add_persistent(kEmissionTest, kEmissionTestBytes);
+  }
   if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
   if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
   if (v.extra_samples) {
@@ -467,6 +480,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   if (!v.taa) bind_result(remodulate);
   if (v.emission)
     remodulate.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+  if (keeps_still_emission(v))
+    remodulate.bind("emission_still", kEmissionStill).bind("emission_test", kEmissionTest).set("EMISSION_STILL", 1u);
   if (v.signals.size() > 1) {
     remodulate.bind("specular", results[1]);
     const Modulator& second = v.signals[1].modulator;
@@ -480,8 +495,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   const bool radiance = v.signals.size() == 1 && v.signals[0].channel == ChannelId::Radiance;
   const bool keep = v.keep_unexplained && (radiance || v.signals.size() == 2) && !v.extra_samples &&
                     first.plane == ChannelId::Albedo;
-  // Motion: the TAA reprojection's, and a still unexplained pixel's history (with the guard's buffer).
-  if (v.taa || keep) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+  // Motion: the TAA reprojection's, a still unexplained pixel's history (with the guard's buffer), still emission.
+  if (v.taa || keep || keeps_still_emission(v)) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (v.taa)
     remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
         .bind("taa_history", kTaaHistory)

@@ -358,12 +358,12 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
 }
 
 // Split mode's 328 B/px (fp32, no emission, with the TAA history and the
-// still means) + emission 12 + F0 12 + roughness 4 + the F_beta factor
-// scratch 12 + history clipping's three scratch buffers 3 x 16 = 416 B/px;
-// the table itself is the context's.
+// still means) + emission 12 and its still mean 16 + 8 + F0 12 + roughness 4
+// + the F_beta factor scratch 12 + history clipping's three scratch buffers
+// 3 x 16 = 440 B/px; the table itself is the context's.
 TEST_F(SvgfFbTest, DeviceBytesAreAsDocumented) {
   const auto config = fb_config(64, 48);
-  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 416 + pipelines::GraphSpec::kConstantBytes +
+  EXPECT_EQ(pipelines::estimate_device_bytes(config), 64u * 48 * 440 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::create(ctx(), config)->device_bytes(), pipelines::estimate_device_bytes(config));
 }

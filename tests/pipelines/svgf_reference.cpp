@@ -663,10 +663,10 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // allowed deviation a: t + (f - t) (a / Y(f - t))^2; only where the
   // history length is at least 4 (v from the pixel's own moments). The
   // moving target is the temporal mean m of variance v, a = g sqrt(v). With
-  // converge_still k, where the still running mean holds n >= 8 samples, the
+  // converge_still k, where the still running mean holds n >= 4 samples, the
   // still target is that mean, a = k sqrt(v samples_averaged(length) / n),
   // factor (a / Y(f - t))^3, and the result is mix(moving, still, w) with
-  // w = min((n - 7) / 8, 1). guard_target gives the moving target, the still
+  // w = min((n - 3) / 4, 1). guard_target gives the moving target, the still
   // one and w (0: not still); false where pixel i has no data.
   struct Target {
     double rgb[3], allowed;
@@ -677,8 +677,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     if (!(v >= 0.0)) return false;
     for (int k = 0; k < 3; ++k) moving.rgb[k] = ch.temporal[3 * i + k];
     moving.allowed = p_.harm_guard * p_.harm_guard * v;
-    if (keeps_still && ch.still_n[i] >= 8.0) {
-      w = std::min((ch.still_n[i] - 7.0) / 8.0, 1.0);
+    if (keeps_still && ch.still_n[i] >= 4.0) {
+      w = std::min((ch.still_n[i] - 3.0) / 4.0, 1.0);
       for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
       still.allowed = p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i];
     }
@@ -744,6 +744,60 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     return !(largest_f32(f.specular_factor, i) >= static_cast<double>(1e-3f));
   };
 
+  // Emission added back (with converge_still): where the pixel is still
+  // (usable motion below 0.005 px, no reset) the running mean of its own
+  // emission samples, restarted when a sample's luminance is beyond 6
+  // standard deviations of the mean's samples (M2 / (n - 1) (1 + 1 / n),
+  // from 8 samples; plus (1e-3 max(Y, Y_mean))^2) two frames in a row (the
+  // first failure merges into the mean, not M2, and marks the pixel
+  // suspect). A sample the
+  // sanitizer changed is not counted. Elsewhere the current emission.
+  std::vector<double> added = e;
+  if (keeps_still && !f.emission.empty()) {
+    if (emission_n_.empty()) {
+      emission_mean_.assign(3 * n, 0.0);
+      emission_n_.assign(n, 0.0);
+      emission_m2_.assign(n, 0.0);
+      emission_suspect_.assign(n, false);
+    }
+    for (int i = 0; i < n; ++i) {
+      const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
+      if (reset || !usable_motion(mx, my) || !(std::hypot(mx, my) < 0.005)) {
+        emission_n_[i] = 0.0;
+        emission_m2_[i] = 0.0;
+        emission_suspect_[i] = false;
+      }
+      bool valid = true;
+      for (int k = 0; k < 3; ++k) {
+        const float x = f.emission[3 * i + k];
+        valid = valid && std::isfinite(x) && x >= 0.0f && x <= 1e12f;
+      }
+      double* mean = &emission_mean_[3 * i];
+      if (valid) {
+        const double l = luminance(&e[3 * i]), lm = luminance(mean), sn = emission_n_[i];
+        bool fail = false;
+        if (sn >= 8.0) {
+          const double d = l - lm, bound = 1e-3 * std::max(l, lm);
+          fail = d * d > 36.0 * emission_m2_[i] / (sn - 1.0) * (1.0 + 1.0 / sn) + bound * bound;
+        }
+        if (sn > 0.0 && !(fail && emission_suspect_[i])) {
+          const double k = std::min(sn + 1.0, 65536.0);
+          for (int c = 0; c < 3; ++c) mean[c] += (e[3 * i + c] - mean[c]) / k;
+          if (!fail) emission_m2_[i] += (l - lm) * (l - luminance(mean));
+          emission_n_[i] = k;
+          emission_suspect_[i] = fail;
+        } else {
+          for (int c = 0; c < 3; ++c) mean[c] = e[3 * i + c];
+          emission_n_[i] = 1.0;
+          emission_m2_[i] = 0.0;
+          emission_suspect_[i] = false;
+        }
+      }
+      if (emission_n_[i] > 0.0)
+        for (int c = 0; c < 3; ++c) added[3 * i + c] = mean[c];
+    }
+  }
+
   // Pass 4: remodulate (+ specular, + emission).
   std::vector<double> out(3 * n);
   for (int i = 0; i < n; ++i)
@@ -752,7 +806,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       if (!kept[i]) {
         double s = 0.0;
         if (split) s = no_lobe(i) ? ssan[j] * (f.specular_lighting ? sf[j] : 1.0) : spec[4 * i + k] * sf[j];
-        out[j] = cur[4 * i + k] * a[j] + s + e[j];
+        out[j] = cur[4 * i + k] * a[j] + s + added[j];
         continue;
       }
       const double s = stillness(i);
@@ -766,7 +820,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       } else {
         now = raw[j];
       }
-      out[j] = now * (1.0 - s) + mean * s + e[j];
+      out[j] = now * (1.0 - s) + mean * s + added[j];
     }
 
   remodulated_ = out;

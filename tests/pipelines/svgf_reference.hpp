@@ -102,6 +102,11 @@ class SvgfReference {
   Chain chains_[2];
   // Geometry history (previous frame): depth (0 = none), normal.
   std::vector<double> z_, n_;
+  // converge_still with emission: a still pixel's running mean of its
+  // emission (3 per pixel), its samples, the M2 of their luminance and
+  // whether its change test failed last frame.
+  std::vector<double> emission_mean_, emission_n_, emission_m2_;
+  std::vector<bool> emission_suspect_;
   // TAA history: the previous final output, 3 per pixel.
   std::vector<double> taa_;
   // display_lag's state per pixel (pass 5).

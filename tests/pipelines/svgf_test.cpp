@@ -209,8 +209,9 @@ TEST_F(SvgfTest, StaticNoisySceneErrorFalls) {
 }
 
 // The still running mean takes over the guard's target gradually: on a
-// flat noisy still surface the filtered output is far better than an 8-sample
-// mean, and switching to that mean at once raised the RMSE by half at frame 8.
+// flat noisy still surface the filtered output is far better than a 4-sample
+// mean, and switching to that mean at once raised the RMSE 2.5-fold at
+// frame 4 (0.0138 -> 0.0339); over 4 samples, by at most 1.46.
 TEST_F(SvgfTest, AStillViewDoesNotJumpWhenItsMeanTakesOver) {
   const int w = 64, h = 48, n = w * h;
   Flat scene(w, h);
@@ -226,9 +227,9 @@ TEST_F(SvgfTest, AStillViewDoesNotJumpWhenItsMeanTakesOver) {
     for (float v : out) sum += (v - 1.0) * (v - 1.0);
     rms.push_back(std::sqrt(sum / out.size()));
   }
-  std::printf("[ info     ] rms after 7 to 12 frames: %.5f %.5f %.5f %.5f %.5f %.5f\n", rms[6], rms[7], rms[8], rms[9],
-              rms[10], rms[11]);
-  for (int t = 8; t <= 12; ++t) EXPECT_LE(rms[t - 1], 1.1 * rms[6]) << t << " frames";
+  std::printf("[ info     ] rms after 3 to 8 frames: %.5f %.5f %.5f %.5f %.5f %.5f\n", rms[2], rms[3], rms[4], rms[5],
+              rms[6], rms[7]);
+  for (int t = 4; t <= 8; ++t) EXPECT_LE(rms[t - 1], 1.6 * rms[2]) << t << " frames";
 }
 
 // A still camera converges (converge_still): on a still noisy shadow edge
@@ -271,6 +272,54 @@ TEST_F(SvgfTest, AStillViewConvergesAsTheRunningMeanDoes) {
   for (int t : {1, 2, 4, 8, 16, 32, 64}) EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
   EXPECT_LT(out[63], out[15]);
   EXPECT_GT(off[63], mean[63]) << "the scene does not show what converge_still is for";
+}
+
+// Emission is added back unfiltered; on a still pixel its running mean is
+// (converge_still). Radiance = emission, so the output is what is added:
+// on the left, noisy light (uniform 0..2 times 0.8), the plain mean of the
+// samples sent; on the right a steady emitter that steps from 3 to 5 at
+// frame 20 (a change in place): the first changed sample is merged (one
+// outlier), the second restarts the mean, so the output shows 5 from then.
+// Moving pixels add the frame's own emission.
+TEST_F(SvgfTest, StillEmissionIsItsRunningMeanAndFollowsAChange) {
+  const int w = 32, h = 16, n = w * h, change = 20;
+  Flat scene(w, h);
+  // Without TAA, which would blend the output over frames.
+  auto pipe = pipelines::create(
+      ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0}, {"taa_static_alpha", 0}}, true));
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> noise(0.0f, 2.0f);
+  std::vector<float> emission(3 * n);
+  std::vector<double> sum(3 * n, 0.0);
+  auto frame_of = [&](const std::vector<float>& e, uint32_t flags) {
+    test::HostFrame f = scene.frame(e, flags);
+    f.add(ChannelId::Emission, Format::F32, e);
+    return f;
+  };
+  for (int t = 1; t <= change + 1; ++t) {
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k)
+        emission[3 * i + k] = i % w < w / 2 ? 0.8f * noise(rng) : (t < change ? 3.0f : 5.0f);
+    const auto out = run(*pipe, frame_of(emission, 0));
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int j = 3 * i + k;
+        sum[j] += emission[j];
+        if (i % w < w / 2) {
+          ASSERT_NEAR(out[j], sum[j] / t, 1e-5 * (1.0 + sum[j] / t)) << "frame " << t << " pixel " << i;
+        } else if (t < change) {
+          ASSERT_FLOAT_EQ(out[j], 3.0f) << "frame " << t;
+        } else if (t == change) {
+          ASSERT_NEAR(out[j], (3.0 * (change - 1) + 5.0) / change, 1e-5) << "the first changed sample is merged";
+        } else {
+          ASSERT_FLOAT_EQ(out[j], 5.0f) << "the second changed sample restarts the mean";
+        }
+      }
+  }
+  for (int i = 0; i < n; ++i) scene.motion[2 * i] = 0.5f;  // moving: the frame's own emission
+  for (int i = 0; i < 3 * n; ++i) emission[i] = 0.8f * noise(rng);
+  const auto out = run(*pipe, frame_of(emission, 0));
+  for (int j = 0; j < 3 * n; ++j) ASSERT_FLOAT_EQ(out[j], emission[j]) << j;
 }
 
 // RESULT.samples: a still pixel rests on every frame sent (its running mean
