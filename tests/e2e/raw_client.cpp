@@ -130,7 +130,8 @@ uint64_t RawClient::open(const protocol::OpenSession& request, uint64_t request_
 
 protocol::Session RawClient::open_session(const protocol::OpenSession& request, uint64_t request_id) {
   send(request, request_id);
-  auto r = receive();
+  // Opening may compile the session's kernels: on a cold Mesa cache and a loaded machine, past 20 s.
+  auto r = receive(90.0);
   if (!r) throw std::runtime_error("no reply to OPEN_SESSION");
   if (auto* s = std::get_if<protocol::Session>(&r->message)) return *s;
   if (auto* e = std::get_if<protocol::Error>(&r->message))

@@ -179,10 +179,12 @@ inline test::HostFrame frame(const PipelineKind& kind, Format planes, bool reset
              : frame(kind, planes, reset);
 }
 
-inline std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind, Format planes, Format output = Format::F32) {
+inline std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind, Format planes, Format output = Format::F32,
+                                                 std::vector<protocol::Parameter> params = {}) {
   std::vector<protocol::ChannelDecl> channels;
   for (ChannelId id : kind.declared) channels.push_back({id, format_of(id, planes)});
-  return pipelines::create(test::context(), test::make_config(kind.pipeline, kW, kH, channels, output));
+  return pipelines::create(test::context(),
+                           test::make_config(kind.pipeline, kW, kH, channels, output, std::move(params)));
 }
 
 }  // namespace dn::hard_cases
