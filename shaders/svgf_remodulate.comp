@@ -1,8 +1,9 @@
 #version 450
 // svgf_remodulate: Output = filtered demodulated colour * guarded albedo
 // (+ the filtered specular in split mode, + sanitized emission, never
-// filtered: a still pixel's running mean of it) in the session's output format (docs/pipelines.md, "svgf in
-// detail", 4). One invocation per pixel pair.
+// filtered: a still pixel's running mean of it) in the session's output
+// format (docs/pipelines.md, "svgf in detail", 4). One invocation per pixel
+// pair.
 // With TAA (taa_alpha or taa_static_alpha > 0, spec constant 6) it writes, instead of Output, the
 // current colour and the bilinearly reprojected previous final output for
 // svgf_taa (docs/pipelines.md, "svgf in detail", 5): the TAA history is read

@@ -760,6 +760,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       emission_m2_.assign(n, 0.0);
       emission_suspect_.assign(n, false);
     }
+    const std::vector<bool> valid = valid_samples(std::vector<double>(f.emission.begin(), f.emission.end()));
     for (int i = 0; i < n; ++i) {
       const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
       if (reset || !usable_motion(mx, my) || !(std::hypot(mx, my) < 0.005)) {
@@ -767,13 +768,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         emission_m2_[i] = 0.0;
         emission_suspect_[i] = false;
       }
-      bool valid = true;
-      for (int k = 0; k < 3; ++k) {
-        const float x = f.emission[3 * i + k];
-        valid = valid && std::isfinite(x) && x >= 0.0f && x <= 1e12f;
-      }
       double* mean = &emission_mean_[3 * i];
-      if (valid) {
+      if (valid[i]) {
         const double l = luminance(&e[3 * i]), lm = luminance(mean), sn = emission_n_[i];
         bool fail = false;
         if (sn >= 8.0) {
