@@ -30,13 +30,11 @@
 const float DN_GUARD_MIN_LENGTH = 4.0;
 // converge_still k: where a pixel is still and its running mean of its own
 // samples holds DN_STILL_MIN_SAMPLES or more, that mean is the target
-// instead, with a = k standard deviations of it (a sample's variance, the
-// temporal mean's v times the samples it averages, over its samples), and
-// beyond a the deviation shrinks as (a / Y(f - m))^3, not ^1: that mean's
-// noise is not filtered, so a is wide (held to 2, 5 % of the pixels of a
-// flat noisy scene were pulled off their filtered value), and a bias well
-// beyond it (a blurred edge) is taken out nearly whole. The mean tends to
-// the reference, and the output with it.
+// instead, with a = k standard deviations of it (a sample's variance over its
+// samples), and beyond a the deviation shrinks as (a / Y(f - m))^3, not ^1:
+// that mean's noise is not filtered, so a value just beyond a moves little,
+// and a bias well beyond it (a blurred edge) is taken out nearly whole. The
+// mean tends to the reference, and the output with it.
 // From 4 samples (the guard's own minimum): at 8, on dnrender's still scenes
 // the capped filter's error had grown above the plain mean's by then.
 const float DN_STILL_MIN_SAMPLES = 4.0;
@@ -49,6 +47,26 @@ vec4 dn_moving_target(vec4 m) {
   float g = DN_PARAM_VALUE(svgf, harm_guard);
   return vec4(m.rgb, m.w >= 0.0 ? g * g * m.w : -1.0);
 }
+// A still sample's variance at p: the larger of the temporal mean's v times
+// the samples it averages and the mean over p's 3x3 still neighbours of their
+// own samples' variance. A few samples of sparse light (a caustic, a small
+// source) are often all 0, or hold one firefly, and the variance of p's own
+// would pull the filtered value onto that mean; the moments' exponential
+// average forgets a firefly that the running mean keeps.
+float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
+  float sum = 0.0, count = 0.0;
+  ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
+  for (int o = 0; o < 9; ++o) {
+    ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
+    if (!dn_inside(q, frame.size.xy)) continue;
+    uint iq = uint(q.y) * frame.size.x + uint(q.x);
+    float n = s == 0 ? still_mean_at(iq).a : still_mean2_at(iq).a;
+    if (!(n >= 2.0)) continue;
+    sum += (s == 0 ? still_m2.data[iq] : still_m2_2.data[iq]) / (n - 1.0);
+    count += 1.0;
+  }
+  return max(m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
+}
 // Signal s's still target (1: the specular chain, its alpha floor): the
 // running mean and its a^2; w: its weight, 0 where the pixel is not still.
 vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
@@ -58,7 +76,7 @@ vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
   vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
   if (!(mean.a >= DN_STILL_MIN_SAMPLES)) return vec4(0.0);
   w = clamp((mean.a - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0);
-  return vec4(mean.rgb, k * k * m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA) / mean.a);
+  return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, s, p) / mean.a);
 }
 // What a kept pixel blends toward where it is still: the targets' colour by
 // weight; .w negative: no data.

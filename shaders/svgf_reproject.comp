@@ -149,18 +149,27 @@ void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout 
   sw += w;
 }
 
-// CONVERGE_STILL: p's running mean of its own samples d goes on where the
-// history is valid and p is still (continues), else it restarts from d; a
-// pixel without a sample this frame keeps it while it continues, else has none.
+// CONVERGE_STILL: p's running mean of its own samples d (and the M2 of their
+// luminance) goes on where the history is valid and p is still (continues),
+// else it restarts from d; a pixel without a sample this frame keeps it while
+// it continues, else has none.
 void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
   if (!CONVERGE_STILL) return;
   vec4 prev = still_mean.data[p];
   if (!has_sample) {
-    if (!continues) still_mean.data[p] = vec4(0.0);
+    if (!continues) {
+      still_mean.data[p] = vec4(0.0);
+      still_m2.data[p] = 0.0;
+    }
     return;
   }
   float n = continues && prev.a > 0.0 ? min(prev.a + 1.0, DN_STILL_MAX_SAMPLES) : 1.0;
-  still_mean.data[p] = vec4(n == 1.0 ? d : mix(prev.rgb, d, 1.0 / n), n);
+  vec3 mean = n == 1.0 ? d : mix(prev.rgb, d, 1.0 / n);
+  float l = dn_luminance(d);
+  // At the cap the mean is an exponential average: M2 decays with it.
+  float m2 = n == prev.a ? still_m2.data[p] * (1.0 - 1.0 / n) : still_m2.data[p];
+  still_m2.data[p] = n == 1.0 ? 0.0 : m2 + (l - dn_luminance(prev.rgb)) * (l - dn_luminance(mean));
+  still_mean.data[p] = vec4(mean, n);
 }
 
 void main() {

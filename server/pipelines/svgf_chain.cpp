@@ -21,8 +21,10 @@ using protocol::ChannelId;
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
 // converge_still: a still pixel's running mean of its own samples,
-// vec4(demodulated rgb, samples) fp32, read and rewritten at p by svgf_reproject.
+// vec4(demodulated rgb, samples), and the M2 of their luminance, fp32, read
+// and rewritten at p by svgf_reproject.
 constexpr uint64_t kStillMeanBytes = 16;
+constexpr uint64_t kStillM2Bytes = 4;
 // With emission: a still pixel's running mean of its emission, vec4(rgb,
 // samples), and its change test's (M2 of the luminance, suspect), fp32, one
 // copy each, read and rewritten at p by svgf_remodulate.
@@ -231,7 +233,8 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("READ_HISTORY", s.reads_history)
       .set("SPECULAR_ALPHA", s.specular_alpha);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
-  if (keeps_still_mean(v)) reproject.bind("still_mean", s.history + "_still").set("CONVERGE_STILL", 1u);
+  if (keeps_still_mean(v))
+    reproject.bind("still_mean", s.history + "_still").bind("still_m2", s.history + "_still_m2").set("CONVERGE_STILL", 1u);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)
@@ -400,7 +403,10 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   for (const SvgfSignal& s : v.signals) {
     g.add_persistent(s.history + "_colour", kColourHistoryBytes);
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
-    if (keeps_still_mean(v)) g.add_persistent(s.history + "_still", kStillMeanBytes);
+    if (keeps_still_mean(v)) {
+      g.add_persistent(s.history + "_still", kStillMeanBytes);
+      g.add_persistent(s.history + "_still_m2", kStillM2Bytes);
+    }
   }
   if (keeps_still_emission(v)) {
     g.add_persistent(kEmissionStill, kEmissionStillBytes);
@@ -523,9 +529,13 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     if (v.signals.size() > 1)
       remodulate.bind("own2", signal_buffers(v, 1).illum).bind("colour_history2", v.signals[1].history + "_colour");
     if (keeps_still_mean(v)) {
-      remodulate.bind("still_mean", v.signals[0].history + "_still").set("CONVERGE_STILL", 1u);
+      remodulate.bind("still_mean", v.signals[0].history + "_still")
+          .bind("still_m2", v.signals[0].history + "_still_m2")
+          .set("CONVERGE_STILL", 1u);
       if (v.signals.size() > 1)
-        remodulate.bind("still_mean2", v.signals[1].history + "_still").set("SPECULAR_ALPHA", v.signals[1].specular_alpha);
+        remodulate.bind("still_mean2", v.signals[1].history + "_still")
+            .bind("still_m2_2", v.signals[1].history + "_still_m2")
+            .set("SPECULAR_ALPHA", v.signals[1].specular_alpha);
     }
   }
 

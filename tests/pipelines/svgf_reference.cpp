@@ -258,14 +258,19 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     if (ch.still_n.empty()) {
       ch.still_mean.assign(3 * n, 0.0);
       ch.still_n.assign(n, 0.0);
+      ch.still_m2.assign(n, 0.0);
     }
     if (!has_sample) {
-      if (!continues) ch.still_n[i] = 0.0;
+      if (!continues) ch.still_n[i] = ch.still_m2[i] = 0.0;
       return;
     }
     const double k = continues && ch.still_n[i] > 0.0 ? std::min(ch.still_n[i] + 1.0, 65536.0) : 1.0;
+    const double before = luminance(&ch.still_mean[3 * i]);
     for (int c = 0; c < 3; ++c)
       ch.still_mean[3 * i + c] = k == 1.0 ? sample[c] : ch.still_mean[3 * i + c] + (sample[c] - ch.still_mean[3 * i + c]) / k;
+    // Welford's M2 of the luminance (at the cap, decaying with the mean).
+    const double l = luminance(sample), m2 = k == ch.still_n[i] ? ch.still_m2[i] * (1.0 - 1.0 / k) : ch.still_m2[i];
+    ch.still_m2[i] = k == 1.0 ? 0.0 : m2 + (l - before) * (l - luminance(&ch.still_mean[3 * i]));
     ch.still_n[i] = k;
   };
 
@@ -664,7 +669,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // history length is at least 4 (v from the pixel's own moments). The
   // moving target is the temporal mean m of variance v, a = g sqrt(v). With
   // converge_still k, where the still running mean holds n >= 4 samples, the
-  // still target is that mean, a = k sqrt(v samples_averaged(length) / n),
+  // still target is that mean, a = k sqrt(s2 / n), s2 the larger of v
+  // samples_averaged(length) and the mean over the 3x3 pixels whose still
+  // mean holds n >= 2 of M2 / (n - 1),
   // factor (a / Y(f - t))^3, and the result is mix(moving, still, w) with
   // w = min((n - 3) / 4, 1). guard_target gives the moving target, the still
   // one and w (0: not still); false where pixel i has no data.
@@ -680,7 +687,16 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     if (keeps_still && ch.still_n[i] >= 4.0) {
       w = std::min((ch.still_n[i] - 3.0) / 4.0, 1.0);
       for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
-      still.allowed = p_.converge_still * p_.converge_still * v * samples_averaged(ch.length[i]) / ch.still_n[i];
+      double sum = 0.0, count = 0.0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int x = i % w_ + dx, y = i / w_ + dy, q = y * w_ + x;
+          if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(ch.still_n[q] >= 2.0)) continue;
+          sum += ch.still_m2[q] / (ch.still_n[q] - 1.0);
+          count += 1.0;
+        }
+      const double s2 = std::max(v * samples_averaged(ch.length[i]), sum / std::max(count, 1.0));
+      still.allowed = p_.converge_still * p_.converge_still * s2 / ch.still_n[i];
     }
     return true;
   };

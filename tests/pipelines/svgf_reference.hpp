@@ -22,7 +22,7 @@ struct SvgfParams {
   double taa_alpha = 0.0;         // > 0: the final TAA blend at moving pixels (pass 5)
   double taa_static_alpha = 0.5;  // > 0: its weight at static pixels (pass 5)
   double harm_guard = 2.0;      // > 0: pull the filtered signals back toward their temporal means (pass 4a)
-  double converge_still = 4.0;  // k > 0: still pixels' guard target is their running mean, k of its sigmas (passes 1, 4a)
+  double converge_still = 3.0;  // k > 0: still pixels' guard target is their running mean, k of its sigmas (passes 1, 4a)
   int keep_unexplained = 1;     // pixels whose albedo is no reflectance keep their current radiance; split: no-lobe specular (pass 4b)
   double clip_roughness = 0.9;  // > 0: history clipping of the radiance / specular chain (pass 1)
   int variance_of_mean = 1;      // 1: the variance steering the a-trous is the temporal mean's (pass 2)
@@ -93,6 +93,7 @@ class SvgfReference {
   struct Chain {
     std::vector<double> colour, length, m1, m2;
     std::vector<double> still_mean, still_n;  // converge_still: a still pixel's running mean of its samples (3 + 1 per pixel)
+    std::vector<double> still_m2;             // and the M2 of their luminance
     std::vector<double> temporal, variance;
     std::vector<std::vector<double>> atrous;
   };

@@ -537,18 +537,18 @@ TEST_F(SvgfTest, DeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16 (the still running mean: converge_still) + 16
+  // fp32: inputs 12+12+12+4+8, history 16+16 (one copy) + 16+4 (the still running mean and its M2: converge_still) + 16
   // (the TAA blend's, fp32 vec4(rgb, lag)), scratch 5*16 (3 illumination: the harm guard keeps the first,
-  // guide, temporal), output 12 = 204 B/px, + the constants block (FrameConstants).
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes +
+  // guide, temporal), output 12 = 208 B/px, + the constants block (FrameConstants).
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48)), 64u * 48 * 208 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
-  // fp16 planes: 6+6+6+2+4 + 64 + 80 + 6 = 174 B/px.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes +
+  // fp16 planes: 6+6+6+2+4 + 68 + 80 + 6 = 178 B/px.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16)), 64u * 48 * 178 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
-  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 188 B/px; without converge_still 172; without
+  // Without the TAA blend (taa_alpha and taa_static_alpha 0): 192 B/px; without converge_still 172; without
   // the harm guard (which alone reads the still mean) 156.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}})),
-            64u * 48 * 188 + pipelines::GraphSpec::kConstantBytes +
+            64u * 48 * 192 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 svgf_config(64, 48, Format::F32, Format::F32, {{"taa_static_alpha", 0}, {"converge_still", 0}})),
@@ -807,14 +807,14 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16+16: the still mean) + 16 (TAA),
+  // fp32: inputs 12+12 (diffuse, specular) +12+12+4+8, history 2 x (16+16+16+4: the still mean, its M2) + 16 (TAA),
   // scratch 9*16 (6 illumination: three per signal, the harm guard keeping the first, the shared guide,
-  // 2 temporal: the joint a-trous passes read both signals'), output 12 = 328 B/px, + the constants block.
-  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 328 + pipelines::GraphSpec::kConstantBytes +
+  // 2 temporal: the joint a-trous passes read both signals'), output 12 = 336 B/px, + the constants block.
+  EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48)), 64u * 48 * 336 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
-  // fp16 planes: 6+6+6+6+2+4 + 112 + 144 + 6 = 292 B/px.
+  // fp16 planes: 6+6+6+6+2+4 + 120 + 144 + 6 = 300 B/px.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_split_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 292 + pipelines::GraphSpec::kConstantBytes +
+            64u * 48 * 300 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
 }
 
@@ -954,12 +954,12 @@ TEST_F(SvgfTest, TaaDeviceBytesAreAsDocumented) {
     auto p = pipelines::create(ctx(), c);
     EXPECT_EQ(p->device_bytes(), pipelines::estimate_device_bytes(c));
   }
-  // 188 B/px without TAA + 16 B/px of TAA history.
+  // 192 B/px without TAA + 16 B/px of TAA history.
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F32, Format::F32, {{"taa_alpha", 0.1}})),
-            64u * 48 * 204 + pipelines::GraphSpec::kConstantBytes +
+            64u * 48 * 208 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(svgf_config(64, 48, Format::F16, Format::F16, {{"taa_alpha", 0.1}})),
-            64u * 48 * 174 + pipelines::GraphSpec::kConstantBytes +
+            64u * 48 * 178 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
 }
 
