@@ -68,7 +68,8 @@ GraphSpec build(const SessionConfig& config) {
         .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   }
   add_stat_filter(g, config,
-                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
+                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false,
+                              g.parameters.stat_temporal_pool_single != 0.0f});
   // RESULT.samples: from the radiance alone a pixel's accumulated count is its frames (the renderer's counts are samples).
   if (from_radiance) add_sample_count_summary(g, "stat_acc_count");
   return g;

@@ -44,6 +44,30 @@ double modulation(double radiance, double demodulated, float albedo) {
   return radiance > 0.0 && demodulated > 0.0 ? radiance / demodulated : guarded_albedo(albedo);
 }
 
+namespace {
+
+// The count, Box-Cox means and M2 of the union of two pixels' samples, as
+// stat.glsl's dn_stat_merge computes them in fp32 (M3 is not needed here).
+struct Pooled {
+  float n = 0.0f, mean[3] = {0, 0, 0}, m2[3] = {0, 0, 0};
+};
+void merge_into(Pooled& a, float n, const float* mean, const float* m2) {
+  if (!(a.n > 0.0f)) {
+    a.n = n;
+    for (int c = 0; c < 3; ++c) a.mean[c] = mean[c], a.m2[c] = m2[c];
+    return;
+  }
+  const float total = a.n + n, fb = n / total;
+  for (int c = 0; c < 3; ++c) {
+    const float d = mean[c] - a.mean[c];
+    a.mean[c] = a.mean[c] + d * fb;
+    a.m2[c] = a.m2[c] + m2[c] + d * d * (a.n * fb);
+  }
+  a.n = total;
+}
+
+}  // namespace
+
 StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
   const int n_px = f.width * f.height;
   StatPrepared r;
@@ -53,6 +77,25 @@ StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
   for (int i = 0; i < n_px; ++i) {
     const float n = f.count[i];
     const bool sampled = statistics_usable(n, &f.mean[3 * i], &f.m2[3 * i], &f.m3[3 * i]);
+    if (sampled && n < 2.0f && p.pool_single) {
+      Pooled window;
+      const int x = i % f.width, y = i / f.width;
+      for (int o = 0; o < 9; ++o) {
+        const int qx = x + o % 3 - 1, qy = y + o / 3 - 1, q = qy * f.width + qx;
+        if (qx < 0 || qy < 0 || qx >= f.width || qy >= f.height) continue;
+        if (statistics_usable(f.count[q], &f.mean[3 * q], &f.m2[3 * q], &f.m3[3 * q]))
+          merge_into(window, f.count[q], &f.mean[3 * q], &f.m2[3 * q]);
+      }
+      if (window.n >= 2.0f) {
+        for (int c = 0; c < 3; ++c) {
+          const float s2 = std::max(window.m2[c], 0.0f) / (window.n - 1.0f);
+          r.variance[3 * i + c] = std::max(s2 / n, static_cast<float>(p.variance_floor));
+          r.theta[4 * i + c] = f.mean[3 * i + c];
+        }
+        r.theta[4 * i + 3] = window.n;
+        continue;
+      }
+    }
     if (!sampled || n < 2.0f) {
       // A sample but no variance: the mean, for the single-sample test.
       if (!sampled) continue;  // n = 0 or out of bounds: no data

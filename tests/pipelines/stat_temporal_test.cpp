@@ -278,6 +278,61 @@ TEST_F(StatTemporalTest, MatchesCpuReference) {
   }
 }
 
+// pool_single: from the radiance alone every pixel of a first frame holds
+// one sample, so none has a variance for the Welch test; stat_prepare tests
+// each as its own sample with the sample variance of its 3x3 window. The
+// device's test inputs and output match the CPU reference over the device's
+// accumulators, and the output is nearer the truth (the mean of 4096
+// samples) than the frame; with pool_single 0 the frame comes back as sent.
+TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
+  SceneSpec still;
+  still.pan = 0.0f;
+  const test::StatTemporalFrame f = scene_frame(still, 0, 5);
+  SceneSpec many = still;
+  many.spp = 4096;
+  const std::vector<float> truth = scene_frame(many, 0, 6).stats.radiance;
+  auto rmse = [&](const std::vector<float>& v) {
+    double e = 0.0;
+    for (size_t k = 0; k < v.size(); ++k) e += (v[k] - truth[k]) * (v[k] - truth[k]);
+    return std::sqrt(e / v.size());
+  };
+
+  Session s = make(ctx(), still.w, still.h, {{"radius", 4}}, false);
+  const auto got = svgf_inputs::run(*s.pipe, host_frame(f, false));
+  const DeviceState d = device_state(s);
+  test::StatFrame acc = f.stats;
+  acc.count = d.count;
+  acc.mean = d.mean;
+  acc.m2 = d.m2;
+  acc.m3 = d.m3;
+  acc.radiance = d.raw;
+  test::StatParams p;
+  p.radius = 4;
+  p.pool_single = true;
+  const test::StatPrepared prep = test::stat_prepare(acc, p);
+  const auto theta = test::decode_output(s.graph->captured("stat_prepare", "stat_theta"), Format::F32);
+  const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
+  size_t off = 0;
+  for (int i = 0; i < still.w * still.h; ++i)
+    for (int c = 0; c < 4; ++c) {
+      if (std::fabs(theta[4 * i + c] - prep.theta[4 * i + c]) > 1e-6f * (1.0f + std::fabs(prep.theta[4 * i + c]))) ++off;
+      if (c < 3 && std::fabs(variance[4 * i + c] - prep.variance[3 * i + c]) > 1e-5f * prep.variance[3 * i + c]) ++off;
+    }
+  EXPECT_EQ(off, 0u) << "stat_prepare values off the reference";
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  long members = 0;
+  for (int m : want.members) members += m;
+  const double rms = test::relative_rms(got, want.output);
+  std::printf("[ info     ] first frame: relative RMS %.3g to the reference, %ld members; RMSE %.4f (frame %.4f)\n", rms,
+              members, rmse(got), rmse(f.stats.radiance));
+  EXPECT_LE(rms, 1e-5);
+  EXPECT_GT(members, 0);
+  EXPECT_LT(rmse(got), 0.8 * rmse(f.stats.radiance));
+
+  Session off_session = make(ctx(), still.w, still.h, {{"radius", 4}, {"pool_single", 0}}, false);
+  EXPECT_EQ(svgf_inputs::run(*off_session.pipe, host_frame(f, false)), f.stats.radiance);
+}
+
 // A still camera over an unchanging scene: still pixels do not fade, so a
 // pixel whose history the test never rejected holds every sample, and its
 // accumulators equal two-pass statistics of them all (the exact merge over
