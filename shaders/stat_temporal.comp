@@ -17,11 +17,14 @@
 //        history_alpha; one sample's test would reject on every firefly, the
 //        window's rejects what changed.
 //   accumulator = C (the history is rejected: a moved shadow or highlight, a
-//        ghost) when the test fails by more than 2t standard errors, or fails
-//        for the second frame in a row (p's previous pixel is marked
-//        suspect): a failure at alpha that chance explains (about 3 alpha of
-//        the frames of a still pixel) costs no history. Else merge(H, C), the
-//        exact parallel merge, marking p suspect when the test failed.
+//        ghost) when the test fails by more than 2t standard errors at a
+//        moving pixel, or fails for the second frame in a row (p's previous
+//        pixel is marked suspect): a failure at alpha that chance explains
+//        (about 3 alpha of the frames of a still pixel) costs no history, and
+//        at a still pixel neither does one firefly in the window (rejected at
+//        once, the pixel kept the firefly as its only sample). Else
+//        merge(H, C), the exact parallel merge, marking p suspect when the
+//        test failed.
 //        Windows with fewer than 2 samples pass.
 // Background pixels, the first frame and a reset keep C alone. With
 // demodulated statistics also p's modulation (store_modulation). One
@@ -175,11 +178,12 @@ void main() {
     if (h.n > 0.0) {
       uint test = history_test(pos, prev, z, n, grad, beta);
       bool was_suspect = dn_inside(prev, size) && prev_geometry.data[uint(prev.y) * size.x + uint(prev.x)].z != 0u;
-      if (test == DN_HISTORY_FAILS_FAR || (test == DN_HISTORY_FAILS && was_suspect)) {
+      bool far = test == DN_HISTORY_FAILS_FAR && !dn_is_still(mv);
+      if (far || (test != DN_HISTORY_PASSES && was_suspect)) {
         acc = c;  // rejected
       } else {
         acc = dn_stat_merge(h, c);
-        suspect = test == DN_HISTORY_FAILS;
+        suspect = test != DN_HISTORY_PASSES;
       }
     }
   }

@@ -178,12 +178,14 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
           else if (d2 > bound) test = std::max(test, 1);
         }
       }
+      // Failing far rejects at once only where p moves (motion of 0.005 px or more).
       const bool was_suspect = inside(cx, cy) && prev.suspect[cy * w + cx] != 0;
-      if (test == 2 || (test == 1 && was_suspect)) {
+      const bool far = test == 2 && !(std::hypot(mvx, mvy) < 0.005);
+      if (far || (test != 0 && was_suspect)) {
         res.rejected[i] = 1;
       } else {
         res.state.acc[i] = stat_merge(history, current);
-        res.state.suspect[i] = test == 1;
+        res.state.suspect[i] = test != 0;
       }
     }
   return res;

@@ -423,8 +423,8 @@ TEST_F(StatTemporalTest, SampleCountsFromTheRadianceAreFrames) {
 
 // A still camera; on frame 12 the light on the left half drops to 5 % (a
 // change no G-buffer shows). The Welch test rejects the stale history there
-// (it fails far beyond the critical t: at once) and keeps it elsewhere; the
-// output follows the new light.
+// (a still pixel on the second frame that fails: one frame may be a
+// firefly) and keeps it elsewhere; the output follows the new light.
 TEST_F(StatTemporalTest, RejectsAChangedHistoryAndKeepsAnUnchangedOne) {
   SceneSpec spec;
   spec.pan = 0.0f;
