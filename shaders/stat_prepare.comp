@@ -7,7 +7,7 @@
 //           (skew correction of the Box-Cox mean, Johnson 1978)
 // A pixel with 0 < n < 2 (one sample has no variance) gets theta = its
 // Box-Cox mean and variance 0 (stat_filter tests it against its neighbours'
-// variances), or with POOL_SINGLE (stat-temporal's pool_single) the sample
+// variances), or with pool_single (stat-temporal's default) the sample
 // variance s2 of the merge of its 3x3 window's usable statistics, its own
 // included, over its own n, and that merge's count in theta.w (as SVGF
 // estimates a young pixel's variance from its neighbourhood): from the
@@ -81,7 +81,7 @@ void main() {
     return;
   }
   if (DEMODULATED) demodulate(p, s);
-  if (POOL_SINGLE && s.n < 2.0) {
+  if (DN_PARAM_VALUE(stat, pool_single) != 0.0 && s.n < 2.0) {
     DnStat w = pooled(p);
     if (w.n >= 2.0) {
       vec3 var = max(dn_stat_sample_variance(w) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));

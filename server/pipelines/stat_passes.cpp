@@ -69,7 +69,6 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
                           .bind("theta", "stat_theta")
                           .bind("variance", "stat_variance");
   prepare.pixels_per_invocation = 1;
-  if (s.pool_single) prepare.set("POOL_SINGLE", true);
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.
     g.add_scratch("stat_value", kStatRgbBytes);

@@ -28,9 +28,6 @@ struct StatSources {
   // the frame's planes (the sources are the frame's: stat), or a pass before
   // it (stat_temporal, which sees the frame; the accumulators do not).
   bool prepare_modulates = true;
-  // A pixel with samples but no variance is tested with the sample variance
-  // of its 3x3 window's merged statistics (stat-temporal's pool_single).
-  bool pool_single = false;
 };
 
 // The channels both take besides their own: radiance, albedo, normal and the

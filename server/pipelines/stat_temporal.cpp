@@ -68,8 +68,7 @@ GraphSpec build(const SessionConfig& config) {
         .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   }
   add_stat_filter(g, config,
-                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false,
-                              g.parameters.stat_temporal_pool_single != 0.0f});
+                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
   // RESULT.samples: from the radiance alone a pixel's accumulated count is its frames (the renderer's counts are samples).
   if (from_radiance) add_sample_count_summary(g, "stat_acc_count");
   return g;
@@ -88,7 +87,9 @@ PipelineDefinition stat_temporal_definition() {
                                      protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion);
   d.description.optional_channels = statistics_channels();
   d.parameter_groups = {"stat", "stat_temporal"};
-  d.description.parameters = parameters_of(d.parameter_groups);
+  // A first frame from the radiance alone has no pixel with 2 samples: test each with its window's variance.
+  d.parameter_defaults = {{"pool_single", 1}};
+  d.description.parameters = parameters_of(d.parameter_groups, d.parameter_defaults);
   d.build = build;
   d.check_channels = check_optional_statistics;
   return d;

@@ -110,7 +110,8 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   std::vector<std::string> stat_names;
   for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
   EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
-                                                  "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated"}));
+                                                  "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated",
+                                                  "pool_single"}));
   // stat-temporal: stat's channels plus depth and motion (reprojection), the
   // four statistics optional (without them the radiance is one sample per
   // frame); stat's parameters and its own.
@@ -123,7 +124,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   EXPECT_EQ(all[6].optional_channels, statistics);
   std::vector<std::string> temporal_names;
   for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
-  stat_names.insert(stat_names.end(), {"history_alpha", "fading", "pool_single"});
+  stat_names.insert(stat_names.end(), {"history_alpha", "fading"});
   EXPECT_EQ(temporal_names, stat_names);
   // progressive: svgf's channels without roughness and extra samples, plus
   // sample_count; svgf's parameters with paper 004's defaults, and its own.
