@@ -25,6 +25,7 @@
 //
 // Resources: passes/stat_prepare.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
@@ -61,7 +62,7 @@ DnStat stat_at(uint p) {
 DnStat pooled(uint p) {
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   DnStat acc = dn_stat_empty();
-  for (int o = 0; o < 9; ++o) {
+  [[dont_unroll]] for (int o = 0; o < 9; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (q.x < 0 || q.y < 0 || q.x >= int(frame.size.x) || q.y >= int(frame.size.y)) continue;
     DnStat t = stat_at(uint(q.y) * frame.size.x + uint(q.x));

@@ -11,6 +11,7 @@
 //
 // Resources: passes/svgf_remodulate.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
@@ -56,7 +57,7 @@ vec4 dn_moving_target(vec4 m) {
 float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
   float sum = 0.0, count = 0.0;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  for (int o = 0; o < 9; ++o) {
+  [[dont_unroll]] for (int o = 0; o < 9; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (!dn_inside(q, frame.size.xy)) continue;
     uint iq = uint(q.y) * frame.size.x + uint(q.x);
