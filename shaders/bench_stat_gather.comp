@@ -11,6 +11,7 @@
 // args.yzw = ks, ka, kn (float bits; -1 / (2 sigma^2)).
 #extension GL_GOOGLE_include_directive : require
 #include "grid2d.glsl"
+#include "inside.glsl"
 #include "pass.glsl"
 #include "passes/bench_stat_gather.pass"
 
@@ -46,7 +47,7 @@ void main() {
     for (int dx = -r; dx <= r; ++dx) {
       int d2xy = dx * dx + dy * dy;
       ivec2 q = ivec2(p) + ivec2(dx, dy);
-      if (d2xy > r * r || d2xy == 0 || q.x < 0 || q.y < 0 || q.x >= int(dn_grid.size.x) || q.y >= int(dn_grid.size.y))
+      if (d2xy > r * r || d2xy == 0 || !dn_inside(q, dn_grid.size))
         continue;
       if (TILED) {
         Tap t = dn_tile_at(ivec2(dx, dy));

@@ -29,6 +29,7 @@
 #include "frame.glsl"
 #include "plane.glsl"
 #include "sanitize.glsl"
+#include "inside.glsl"
 #include "stat.glsl"
 #include "pass.glsl"
 #include "passes/stat_prepare.pass"
@@ -64,7 +65,7 @@ DnStat pooled(uint p) {
   DnStat acc = dn_stat_empty();
   [[dont_unroll]] for (int o = 0; o < 9; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
-    if (q.x < 0 || q.y < 0 || q.x >= int(frame.size.x) || q.y >= int(frame.size.y)) continue;
+    if (!dn_inside(q, frame.size.xy)) continue;
     DnStat t = stat_at(uint(q.y) * frame.size.x + uint(q.x));
     if (dn_stat_usable(t)) acc = dn_stat_merge(acc, t);
   }

@@ -162,7 +162,7 @@ void main() {
           for (int yy = -1; yy <= 1; ++yy) {
             for (int xx = -1; xx <= 1; ++xx) {
               ivec2 q = p + ivec2(xx, yy);
-              if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+              if (!dn_inside(q, uvec2(size))) continue;
               // HDR step rule: a neighbour's variance counts only where its
               // own noise explains the luminance step to p.
               vec4 sq = signal_src(s, uint(q.y) * uint(size.x) + uint(q.x));

@@ -16,6 +16,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "svgf_guards.glsl"
+#include "inside.glsl"
 #include "pass.glsl"
 #include "passes/svgf_clip_prefilter.pass"
 
@@ -36,7 +37,7 @@ void main() {
   vec4 sum = vec4(0.0);
   for (int t = -3; t <= 3; ++t) {
     ivec2 q = vertical ? pos + ivec2(0, t) : pos + ivec2(t, 0);
-    if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+    if (!dn_inside(q, uvec2(size))) continue;
     float w = kBinomial[t + 3];
     vec4 s = src_at(uint(q.y) * frame.size.x + uint(q.x));
     // Horizontal: s is (current, foreground), and a background tap adds

@@ -68,22 +68,28 @@ float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
   }
   return max(m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
-// Signal s's still target (1: the specular chain, its alpha floor): the
-// running mean and its a^2; w: its weight, 0 where the pixel is not still.
-vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
-  float k = DN_PARAM_VALUE(svgf, converge_still);
+// Signal s's still running mean (1: the specular chain); w: its weight as
+// the target, 0 where the pixel is not still.
+vec4 dn_still_mean(vec4 m, int s, uint p, out float w) {
   w = 0.0;
-  if (!CONVERGE_STILL || !(k > 0.0) || !(m.w >= 0.0)) return vec4(0.0);
+  if (!CONVERGE_STILL || !(DN_PARAM_VALUE(svgf, converge_still) > 0.0) || !(m.w >= 0.0)) return vec4(0.0);
   vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
   if (!(mean.a >= DN_STILL_MIN_SAMPLES)) return vec4(0.0);
   w = clamp((mean.a - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0);
+  return mean;
+}
+// Signal s's still target (its alpha floor for s = 1): the running mean and its a^2.
+vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
+  vec4 mean = dn_still_mean(m, s, p, w);
+  if (!(w > 0.0)) return vec4(0.0);
+  float k = DN_PARAM_VALUE(svgf, converge_still);
   return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, s, p) / mean.a);
 }
 // What a kept pixel blends toward where it is still: the targets' colour by
 // weight; .w negative: no data.
-vec4 dn_guard_mean(vec4 m, float len, int s, uint p) {
+vec4 dn_guard_mean(vec4 m, int s, uint p) {
   float w;
-  vec4 still = dn_still_target(m, len, s, p, w);
+  vec4 still = dn_still_mean(m, s, p, w);
   return vec4(mix(m.rgb, still.rgb, w), m.w >= 0.0 ? 1.0 : -1.0);
 }
 // f beyond a (t.w = a^2) from t.rgb in luminance: shrunk toward it by (a / Y(f - t))^1, or ^3 (cubic).
@@ -134,8 +140,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = dn_guard_mean(own_at(p), colour_history_at(p).a, 0, p);
-    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
+    vec4 m = dn_guard_mean(own_at(p), 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }

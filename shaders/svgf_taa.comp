@@ -63,7 +63,7 @@ vec3 blend(uint p) {
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         ivec2 q = pos + ivec2(dx, dy);
-        if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+        if (!dn_inside(q, uvec2(size))) continue;
         float zq = z[(dy + 1) * 3 + dx + 1];
         if (!dn_is_foreground(zq) || !dn_same_depth(z[4], grad, zq)) continue;  // another surface
         vec4 cq = current_at(uint(q.y) * frame.size.x + uint(q.x));

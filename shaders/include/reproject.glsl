@@ -4,6 +4,8 @@
 #ifndef DN_REPROJECT_GLSL
 #define DN_REPROJECT_GLSL
 
+#include "inside.glsl"
+
 // Minimum total weight of the accepted bilinear taps below which the history
 // is treated as lost (a documented constant, not a tunable).
 const float DN_MIN_TAP_WEIGHT = 1e-3;
@@ -54,7 +56,5 @@ bool dn_same_depth(float z, float grad_z, float z_other) { return !(abs(z - z_ot
 bool dn_same_surface(float z, vec3 n, vec2 grad, float z_prev, vec3 n_prev) {
   return dn_same_depth(z, grad.x, z_prev) && !(distance(n, n_prev) / (grad.y + 0.01) > 16.0);
 }
-
-bool dn_inside(ivec2 q, uvec2 size) { return q.x >= 0 && q.y >= 0 && q.x < int(size.x) && q.y < int(size.y); }
 
 #endif

@@ -8,6 +8,7 @@
 #define DN_SVGF_GLSL
 
 #include "svgf_guards.glsl"
+#include "inside.glsl"
 
 float dn_svgf_depth(uint p) { return DN_LOAD1(depth, DEPTH_HALF, p); }
 vec3 dn_svgf_normal(uint p) { return dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p)); }
@@ -24,7 +25,7 @@ vec2 dn_svgf_gradients(ivec2 pos, float z, vec3 n) {
     for (int side = -1; side <= 1; side += 2) {
       ivec2 q = pos;
       q[axis] += side;
-      if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+      if (!dn_inside(q, uvec2(size))) continue;
       uint qi = uint(q.y) * uint(size.x) + uint(q.x);
       float zq = dn_svgf_depth(qi);
       if (!dn_is_foreground(zq)) continue;
