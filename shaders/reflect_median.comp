@@ -12,8 +12,11 @@
 // luminance-ranked vector median: that one jumps to another pixel's colour
 // when two luminances swap order, so fp rounding upstream changed the output
 // by up to 0.6 % (scene 6, scale test), where a scalar median moves only as
-// much as its inputs. It reads the chain's displayed frame and writes only
-// Output: no history is touched.
+// much as its inputs. Neighbours that emit are left out of the window: a
+// light is another surface, and beside it the lit surface (dnrender scene
+// 3's lamp) is no firefly against the light's reflected light, about 0.
+// It reads the chain's displayed frame and writes only Output: no history
+// is touched.
 // A full window (9 pixels, nearly every one) takes the median-of-9 exchange
 // network (Paeth, Graphics Gems; 19 component-wise min/max pairs on all three
 // channels at once), a partial one the rank count / 2 search; both pick the
@@ -59,9 +62,29 @@ vec3 median_of_9(vec3 v[9]) {
   return v[4];
 }
 
+// A still pixel keeps its own value against the median, by its running
+// mean's weight (dn_still_weight), where that mean of n samples is
+// significantly brighter than the median: their relative difference beyond
+// DN_MEDIAN_T standard errors of the mean, relative to it. A bright line one
+// pixel thin beside a light passes once its samples agree; a firefly's mean
+// never does (its standard error is about its own excess over the median).
+const float DN_MEDIAN_T = 3.0;
+vec3 median_filtered(uint p);
 vec3 filtered(uint p) {
   vec3 c = src_at(p).rgb;
   if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
+  vec3 m = median_filtered(p);
+  if (!CONVERGE_STILL || m == c) return m;
+  vec4 mean = still_mean_at(p);
+  float w = dn_still_weight(mean.a);
+  if (!(w > 0.0)) return m;
+  float y = dn_luminance(c - emitted(p)), ym = dn_luminance(mean.rgb);
+  float margin = (y - dn_luminance(m - emitted(p))) / y;  // c is brighter than the median here
+  float se2 = still_m2.data[p] / ((mean.a - 1.0) * mean.a) / (ym * ym);
+  return margin * margin > DN_MEDIAN_T * DN_MEDIAN_T * se2 ? mix(m, c, w) : m;
+}
+vec3 median_filtered(uint p) {
+  vec3 c = src_at(p).rgb;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 colours[9];
   bool taken[9];
@@ -73,8 +96,10 @@ vec3 filtered(uint p) {
     colours[k] = vec3(0.0);
     if (taken[k]) {
       if (features.data[2u * qi].w != DN_REFLECT_NONE) return c;
-      colours[k] = src_at(qi).rgb - emitted(qi);
-      ++count;
+      vec3 e = emitted(qi);
+      taken[k] = k == 4 || !(dn_luminance(e) > 0.0);
+      colours[k] = src_at(qi).rgb - e;
+      count += taken[k] ? 1 : 0;
     }
   }
   vec3 own = c - emitted(p);

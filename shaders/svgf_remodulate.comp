@@ -35,14 +35,8 @@ const float DN_GUARD_MIN_LENGTH = 4.0;
 // samples), and beyond a the deviation shrinks as (a / Y(f - m))^3, not ^1:
 // that mean's noise is not filtered, so a value just beyond a moves little,
 // and a bias well beyond it (a blurred edge) is taken out nearly whole. The
-// mean tends to the reference, and the output with it.
-// From 4 samples (the guard's own minimum): at 8, on dnrender's still scenes
-// the capped filter's error had grown above the plain mean's by then.
-const float DN_STILL_MIN_SAMPLES = 4.0;
-// The still target takes over from the moving one over DN_STILL_RAMP samples
-// (weight 1/4 at DN_STILL_MIN_SAMPLES, 1 from 7 on), so the output does not
-// jump when the mean becomes the target.
-const float DN_STILL_RAMP = 4.0;
+// mean tends to the reference, and the output with it. Its weight:
+// dn_still_weight (reproject.glsl).
 // The guard's moving target of signal s: vec4(m.rgb, a^2; negative: no data).
 vec4 dn_moving_target(vec4 m) {
   float g = DN_PARAM_VALUE(svgf, harm_guard);
@@ -74,9 +68,8 @@ vec4 dn_still_mean(vec4 m, int s, uint p, out float w) {
   w = 0.0;
   if (!CONVERGE_STILL || !(DN_PARAM_VALUE(svgf, converge_still) > 0.0) || !(m.w >= 0.0)) return vec4(0.0);
   vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
-  if (!(mean.a >= DN_STILL_MIN_SAMPLES)) return vec4(0.0);
-  w = clamp((mean.a - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0);
-  return mean;
+  w = dn_still_weight(mean.a);
+  return w > 0.0 ? mean : vec4(0.0);
 }
 // Signal s's still target (its alpha floor for s = 1): the running mean and its a^2.
 vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {

@@ -153,6 +153,8 @@ GraphSpec build(const SessionConfig& config) {
       median.bind("emission", "emission")
           .set("HAS_EMISSION", 1u)
           .set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+    if (const std::string still = still_mean_buffer(v); !still.empty())
+      median.bind("still_mean", still).bind("still_m2", still_m2_buffer(v)).set("CONVERGE_STILL", 1u);
     if (v.extra_samples) add_supersample_resolve(g, config, kSupersampleDisplay);
   }
   return g;

@@ -549,8 +549,13 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   }
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
   // RESULT.samples: the first chain's history length, or its still mean's count.
-  add_sample_summary(g, v.signals[0].history + "_colour", keeps_still_mean(v) ? v.signals[0].history + "_still" : "");
+  add_sample_summary(g, v.signals[0].history + "_colour", still_mean_buffer(v));
 }
+
+std::string still_mean_buffer(const SvgfVariant& v) {
+  return keeps_still_mean(v) ? v.signals[0].history + "_still" : "";
+}
+std::string still_m2_buffer(const SvgfVariant& v) { return keeps_still_mean(v) ? v.signals[0].history + "_still_m2" : ""; }
 
 GraphSpec svgf_graph(const SessionConfig& config, SvgfVariant (*variant)(const SessionConfig&, const Parameters&)) {
   GraphSpec g = begin_graph(config);

@@ -160,6 +160,12 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
 void add_svgf_buffers(GraphSpec& g, const SvgfVariant& variant);
 void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVariant& variant);
 
+// The first signal's running mean of a still pixel's samples (vec4(mean, n),
+// svgf_reproject) and the M2 of their luminance; empty where the variant
+// keeps none.
+std::string still_mean_buffer(const SvgfVariant& variant);
+std::string still_m2_buffer(const SvgfVariant& variant);
+
 // The whole graph of a variant with nothing of the caller's own (svgf,
 // progressive): begin_graph, the variant made from the session's resolved
 // parameters, inputs, buffers, the output plane, passes.

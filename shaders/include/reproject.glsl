@@ -21,6 +21,16 @@ const float DN_STATIC_MOTION = 0.05;
 const float DN_STILL_MOTION = 0.1 * DN_STATIC_MOTION;
 const float DN_STILL_MAX_SAMPLES = 65536.0;
 bool dn_is_still(vec2 mv) { return length(mv) < DN_STILL_MOTION; }
+// The weight of a still pixel's running mean of n samples as its target
+// (svgf_remodulate), and against reflect_median's median: 0 below
+// DN_STILL_MIN_SAMPLES (at 8, on dnrender's still scenes the capped filter's
+// error had grown above the plain mean's by then), 1/4 there, rising over
+// DN_STILL_RAMP samples to 1 from 7 on, so the output does not jump.
+const float DN_STILL_MIN_SAMPLES = 4.0;
+const float DN_STILL_RAMP = 4.0;
+float dn_still_weight(float n) {
+  return n >= DN_STILL_MIN_SAMPLES ? clamp((n - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0) : 0.0;
+}
 
 // 1 for a static pixel, falling linearly to 0 at DN_STATIC_MOTION.
 float dn_stillness(vec2 mv) { return clamp(1.0 - length(mv) / DN_STATIC_MOTION, 0.0, 1.0); }
