@@ -15,7 +15,10 @@
 //        p_prev, merged and faded, against the same-surface current pixels
 //        around p, merged), per channel with the Welch-Satterthwaite nu, at
 //        history_alpha; one sample's test would reject on every firefly, the
-//        window's rejects what changed.
+//        window's rejects what changed. The frame's sample variance is shrunk
+//        toward the history's by DN_PRIOR_DOF pseudo-samples: under the
+//        hypothesis tested they share a distribution, and nine samples of
+//        sparse light are often all 0 (a variance of 0).
 //   accumulator = C (the history is rejected: a moved shadow or highlight, a
 //        ghost) when the test fails by more than 2t standard errors at a
 //        moving pixel, or fails for the second frame in a row (p's previous
@@ -106,6 +109,7 @@ uint welch_nu(float var_a, float na, float var_b, float nb) {
 // the means exceeds t standard errors in some channel) or DN_HISTORY_FAILS_FAR
 // (2t: no chance failure of a test at alpha).
 const uint DN_HISTORY_PASSES = 0u, DN_HISTORY_FAILS = 1u, DN_HISTORY_FAILS_FAR = 2u;
+const float DN_PRIOR_DOF = 2.0;
 uint history_test(ivec2 pos, ivec2 prev, float z, vec3 n, vec2 grad, float beta) {
   DnStat h = dn_stat_empty(), c = dn_stat_empty();
   for (int yy = -1; yy <= 1; ++yy)
@@ -122,7 +126,9 @@ uint history_test(ivec2 pos, ivec2 prev, float z, vec3 n, vec2 grad, float beta)
   h = dn_stat_scale(h, beta);
   if (h.n < 2.0 || c.n < 2.0) return DN_HISTORY_PASSES;
   vec3 d = dn_stat_theta(h) - dn_stat_theta(c);
-  vec3 var_h = dn_stat_sample_variance(h) / h.n, var_c = dn_stat_sample_variance(c) / c.n;
+  vec3 s2h = dn_stat_sample_variance(h);
+  vec3 s2c = ((c.n - 1.0) * dn_stat_sample_variance(c) + DN_PRIOR_DOF * s2h) / (c.n - 1.0 + DN_PRIOR_DOF);
+  vec3 var_h = s2h / h.n, var_c = s2c / c.n;
   vec3 t2 = vec3(t_squared.data[welch_nu(var_h.x, h.n, var_c.x, c.n) - 1u],
                  t_squared.data[welch_nu(var_h.y, h.n, var_c.y, c.n) - 1u],
                  t_squared.data[welch_nu(var_h.z, h.n, var_c.z, c.n) - 1u]);

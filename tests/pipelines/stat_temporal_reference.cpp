@@ -42,6 +42,7 @@ StatAccumulator frame_statistics(const StatFrame& f, int q) {
   return ok ? s : StatAccumulator{};
 }
 
+const double kPriorDof = 2.0;
 void theta_and_variance(const StatAccumulator& s, double theta[3], double var[3]) {
   for (int c = 0; c < 3; ++c) {
     const double s2 = std::max(s.m2[c], 0.0) / (s.n - 1.0);
@@ -168,6 +169,8 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
         double th[3], vh[3], tc[3], vc[3];
         theta_and_variance(hw, th, vh);
         theta_and_variance(cw, tc, vc);
+        for (int c = 0; c < 3; ++c)  // the frame's sample variance shrunk toward the history's
+          vc[c] = ((cw.n - 1.0) * vc[c] * cw.n + kPriorDof * vh[c] * hw.n) / (cw.n - 1.0 + kPriorDof) / cw.n;
         for (int c = 0; c < 3; ++c) {
           // Welch-Satterthwaite degrees of freedom (pooled when both variances are 0).
           const double den = vh[c] * vh[c] / (hw.n - 1.0) + vc[c] * vc[c] / (cw.n - 1.0);

@@ -391,6 +391,34 @@ TEST_F(StatTemporalTest, StillCameraAccumulatesEverySampleExactly) {
   EXPECT_EQ(off, 0u) << "accumulated statistics differ from two-pass ones";
 }
 
+// Sparse light on a still camera, from the radiance alone: each sample is 20
+// with probability 0.05, else 0 (a caustic, a small light's glints), so most
+// frames' 3x3 windows hold nine zeros, a sample variance of 0. Under the
+// history's hypothesis the frame's samples share its distribution: the test
+// shrinks the frame's variance toward the history's, and nearly every pixel
+// keeps all its samples. With the frame's own variance alone the window of
+// zeros failed against the history's mean on most frames, two in a row
+// rejected it, and the restarted pixels showed their zeros.
+TEST_F(StatTemporalTest, SparseLightKeepsItsHistory) {
+  const int w = 40, h = 24, frames = 48;
+  Session s = make(ctx(), w, h, {{"radius", 4}}, false);
+  std::mt19937 rng(23);
+  std::bernoulli_distribution lit(0.05);
+  for (int k = 0; k < frames; ++k) {
+    test::StatTemporalFrame f = scene_frame(SceneSpec{w, h, 0.0f, 0.0f, 0.0f, 1.0f, false, 1}, k, 1);
+    for (int i = 0; i < w * h; ++i) {
+      const float x = lit(rng) ? 20.0f : 0.0f;
+      for (int c = 0; c < 3; ++c) f.stats.radiance[3 * i + c] = x;
+    }
+    svgf_inputs::run(*s.pipe, host_frame(f, false));
+  }
+  const DeviceState d = device_state(s);
+  size_t complete = 0;
+  for (int i = 0; i < w * h; ++i) complete += d.count[i] == static_cast<float>(frames);
+  std::printf("[ info     ] %zu of %d pixels kept all %d samples\n", complete, w * h, frames);
+  EXPECT_GE(complete, static_cast<size_t>(0.98 * w * h)) << "sparse light restarted still histories";
+}
+
 // RESULT.samples from the radiance alone: a still pixel's accumulator holds
 // one sample per frame, so the median pixel rests on every frame sent (a
 // chance rejection may restart a few: the minimum is at least 1); a reset
