@@ -225,48 +225,6 @@ TEST_F(SvgfTest, AStillViewDoesNotJumpWhenItsMeanTakesOver) {
   for (int t = 4; t <= 8; ++t) EXPECT_LE(rms[t - 1], 1.6 * rms[2]) << t << " frames";
 }
 
-// A still camera converges (converge_still): on a still noisy shadow edge
-// (lighting 1 and 0.25 on one flat surface, which the a-trous blurs: the
-// guides cannot tell the two sides apart), the output's RMSE against the
-// truth is at or below the plain running mean of the inputs' at every frame
-// count, and still falls from 16 to 64 frames. Without it the filtered
-// history holds the blur: at 64 frames worse than the running mean.
-TEST_F(SvgfTest, AStillViewConvergesAsTheRunningMeanDoes) {
-  const int w = 48, h = 16, n = w * h, edge = 24;
-  Flat scene(w, h);
-  auto truth = [&](int i) { return 0.5 * (i % w < edge ? 1.0 : 0.25); };  // albedo 0.5 x lighting
-  auto errors = [&](std::vector<protocol::Parameter> params, std::vector<double>* mean_rmse) {
-    auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, params));
-    std::mt19937 rng(17);
-    std::uniform_real_distribution<float> noise(0.0f, 2.0f);
-    std::vector<float> radiance(3 * n);
-    std::vector<double> sum(3 * n, 0.0), rmse;
-    for (int t = 1; t <= 64; ++t) {
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) radiance[3 * i + k] = static_cast<float>(truth(i)) * noise(rng);
-      const auto out = run(*pipe, scene.frame(radiance));
-      double e = 0.0, em = 0.0;
-      for (int j = 0; j < 3 * n; ++j) {
-        sum[j] += radiance[j];
-        e += (out[j] - truth(j / 3)) * (out[j] - truth(j / 3));
-        em += (sum[j] / t - truth(j / 3)) * (sum[j] / t - truth(j / 3));
-      }
-      rmse.push_back(std::sqrt(e / (3 * n)));
-      if (mean_rmse) mean_rmse->push_back(std::sqrt(em / (3 * n)));
-    }
-    return rmse;
-  };
-  std::vector<double> mean;
-  const std::vector<double> out = errors({}, &mean);
-  const std::vector<double> off = errors({{"converge_still", 0}}, nullptr);
-  std::printf("[ info     ] RMSE after 1, 4, 16, 64 frames: %.4f %.4f %.4f %.4f; running mean %.4f %.4f %.4f %.4f; "
-              "without converge_still at 64 %.4f\n",
-              out[0], out[3], out[15], out[63], mean[0], mean[3], mean[15], mean[63], off[63]);
-  for (int t : {1, 2, 4, 8, 16, 32, 64}) EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
-  EXPECT_LT(out[63], out[15]);
-  EXPECT_GT(off[63], mean[63]) << "the scene does not show what converge_still is for";
-}
-
 // Emission is added back unfiltered; on a still pixel its running mean is
 // (converge_still). Radiance = emission, so the output is what is added:
 // on the left, noisy light (uniform 0..2 times 0.8), the plain mean of the

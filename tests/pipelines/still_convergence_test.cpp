@@ -1,0 +1,134 @@
+// A still view converges, for every denoising pipeline that takes a plain
+// G-buffer (docs/pipelines.md, "A still view converges"): a still camera on
+// one flat surface of albedo 0.5 lit 1 on the left and 0.25 on the right (a
+// shadow edge the guides cannot see, so every spatial filter blurs it),
+// each frame one noisy sample per pixel (uniform in [0, 2] times the truth,
+// seed 17). The truth is exact. After 1, 2, 4, 8, 16 and 32 frames the
+// output's RMSE against it is at or below the plain running mean's, and it
+// falls from 8 to 32 frames. svgf-fb streams the same light as its diffuse
+// signal (no specular light, F0 0.04, roughness 1); stat-temporal works from
+// the radiance alone. reflect has its own still-view test on path-traced
+// frames (reflect_test.cpp), as it needs the reflection features. svgf also
+// over 64 frames, with converge_still and without.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "frames.hpp"
+#include "gpu_test_env.hpp"
+#include "pipelines/pipeline.hpp"
+#include "svgf_inputs.hpp"
+
+namespace dn {
+namespace {
+
+using test::ChannelId;
+using test::Format;
+
+class StillConvergenceTest : public test::GpuTest, public testing::WithParamInterface<std::string> {};
+class SvgfStillConvergenceTest : public test::GpuTest {};
+
+constexpr int kWidth = 48, kHeight = 16, kEdge = 24, kFrames = 32;
+
+double truth(int pixel) { return 0.5 * (pixel % kWidth < kEdge ? 1.0 : 0.25); }
+
+// The session's channels: what the pipeline takes, all fp32.
+std::vector<protocol::ChannelDecl> channels_of(const std::string& pipeline) {
+  std::vector<ChannelId> ids = {ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth,
+                                ChannelId::Motion};
+  if (pipeline == "svgf-fb")
+    ids = {ChannelId::Diffuse,   ChannelId::Specular, ChannelId::Albedo, ChannelId::SpecularF0,
+           ChannelId::Roughness, ChannelId::Normal,   ChannelId::Depth,  ChannelId::Motion};
+  std::vector<protocol::ChannelDecl> out;
+  for (ChannelId id : ids) out.push_back({id, Format::F32});
+  return out;
+}
+
+test::HostFrame still_frame(const std::string& pipeline, const std::vector<float>& light) {
+  const int n = kWidth * kHeight;
+  std::vector<float> albedo(3 * n, 0.5f), normal(3 * n, 0.0f), depth(n, 3.0f), motion(2 * n, 0.0f);
+  for (int i = 0; i < n; ++i) normal[3 * i + 2] = 1.0f;
+  test::HostFrame f;
+  if (pipeline == "svgf-fb") {
+    f.add(ChannelId::Diffuse, Format::F32, light);
+    f.add(ChannelId::Specular, Format::F32, std::vector<float>(3 * n, 0.0f));
+    f.add(ChannelId::SpecularF0, Format::F32, std::vector<float>(3 * n, 0.04f));
+    f.add(ChannelId::Roughness, Format::F32, std::vector<float>(n, 1.0f));
+  } else {
+    f.add(ChannelId::Radiance, Format::F32, light);
+  }
+  f.add(ChannelId::Albedo, Format::F32, albedo);
+  f.add(ChannelId::Normal, Format::F32, normal);
+  f.add(ChannelId::Depth, Format::F32, depth);
+  f.add(ChannelId::Motion, Format::F32, motion);
+  return f;
+}
+
+// The output's RMSE against the truth after each of `frames` still frames;
+// mean_rmse: the plain running mean's.
+std::vector<double> still_rmse(gpu::Context& ctx, const std::string& pipeline, std::vector<protocol::Parameter> params,
+                               int frames, std::vector<double>& mean_rmse) {
+  const int n = kWidth * kHeight;
+  auto pipe = pipelines::create(ctx, test::make_config(pipeline, kWidth, kHeight, channels_of(pipeline), Format::F32,
+                                                       std::move(params)));
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> noise(0.0f, 2.0f);
+  std::vector<float> light(3 * n);
+  std::vector<double> sum(3 * n, 0.0), out_rmse;
+  mean_rmse.clear();
+  for (int t = 1; t <= frames; ++t) {
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) light[3 * i + k] = static_cast<float>(truth(i)) * noise(rng);
+    const std::vector<float> out = svgf_inputs::run(*pipe, still_frame(pipeline, light));
+    double e = 0.0, em = 0.0;
+    for (int j = 0; j < 3 * n; ++j) {
+      sum[j] += light[j];
+      e += (out[j] - truth(j / 3)) * (out[j] - truth(j / 3));
+      em += (sum[j] / t - truth(j / 3)) * (sum[j] / t - truth(j / 3));
+    }
+    out_rmse.push_back(std::sqrt(e / (3 * n)));
+    mean_rmse.push_back(std::sqrt(em / (3 * n)));
+  }
+  return out_rmse;
+}
+
+TEST_P(StillConvergenceTest, AtOrBelowTheRunningMeanAndFalling) {
+  const std::string pipeline = GetParam();
+  std::vector<double> mean;
+  const std::vector<double> out = still_rmse(ctx(), pipeline, {}, kFrames, mean);
+  std::printf("[ info     ] %s RMSE after 1, 4, 8, 32 frames: %.4f %.4f %.4f %.4f; running mean %.4f %.4f %.4f %.4f\n",
+              pipeline.c_str(), out[0], out[3], out[7], out[31], mean[0], mean[3], mean[7], mean[31]);
+  for (int t : {1, 2, 4, 8, 16, 32}) EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
+  EXPECT_LT(out[31], out[7]);
+}
+
+// svgf over 64 frames, against itself without converge_still: at or below
+// the running mean at every count and still falling from 16 to 64 frames;
+// without it the filtered history holds the blur, above the mean at 64.
+TEST_F(SvgfStillConvergenceTest, ConvergeStillIsWhatLetsGoOfTheBlur) {
+  std::vector<double> mean, unused;
+  const std::vector<double> out = still_rmse(ctx(), "svgf", {}, 64, mean);
+  const std::vector<double> off = still_rmse(ctx(), "svgf", {{"converge_still", 0}}, 64, unused);
+  std::printf("[ info     ] RMSE after 16, 64 frames: %.4f %.4f; running mean %.4f %.4f; without converge_still %.4f %.4f\n",
+              out[15], out[63], mean[15], mean[63], off[15], off[63]);
+  for (int t : {1, 2, 4, 8, 16, 32, 64}) EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
+  EXPECT_LT(out[63], out[15]);
+  EXPECT_GT(off[63], mean[63]) << "the scene does not show what converge_still is for";
+}
+
+INSTANTIATE_TEST_SUITE_P(Pipelines, StillConvergenceTest,
+                         testing::Values("svgf", "svgf-fb", "progressive", "stat-temporal"),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param;
+                           for (char& c : name)
+                             if (c == '-') c = '_';
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace dn
