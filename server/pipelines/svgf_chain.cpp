@@ -194,6 +194,9 @@ void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const Sign
 bool keeps_still_mean(const SvgfVariant& v) { return v.converge_still && v.harm_guard && v.iterations > 0; }
 // And of the emission, which is added back unfiltered.
 bool keeps_still_emission(const SvgfVariant& v) { return v.emission && keeps_still_mean(v); }
+// A signal's still running mean (vec4(mean, n)) and the M2 of its samples' luminance.
+std::string still_mean_of(const std::string& history) { return history + "_still"; }
+std::string still_m2_of(const std::string& history) { return history + "_still_m2"; }
 
 // Signal `index`'s reprojection (and history clipping): its temporal colour
 // in its illum buffer, its temporal moments and length.
@@ -234,7 +237,7 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("SPECULAR_ALPHA", s.specular_alpha);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (keeps_still_mean(v))
-    reproject.bind("still_mean", s.history + "_still").bind("still_m2", s.history + "_still_m2").set("CONVERGE_STILL", 1u);
+    reproject.bind("still_mean", still_mean_of(s.history)).bind("still_m2", still_m2_of(s.history)).set("CONVERGE_STILL", 1u);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)
@@ -404,8 +407,8 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     g.add_persistent(s.history + "_colour", kColourHistoryBytes);
     g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
     if (keeps_still_mean(v)) {
-      g.add_persistent(s.history + "_still", kStillMeanBytes);
-      g.add_persistent(s.history + "_still_m2", kStillM2Bytes);
+      g.add_persistent(still_mean_of(s.history), kStillMeanBytes);
+      g.add_persistent(still_m2_of(s.history), kStillM2Bytes);
     }
   }
   if (keeps_still_emission(v)) {
@@ -529,12 +532,12 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     if (v.signals.size() > 1)
       remodulate.bind("own2", signal_buffers(v, 1).illum).bind("colour_history2", v.signals[1].history + "_colour");
     if (keeps_still_mean(v)) {
-      remodulate.bind("still_mean", v.signals[0].history + "_still")
-          .bind("still_m2", v.signals[0].history + "_still_m2")
+      remodulate.bind("still_mean", still_mean_of(v.signals[0].history))
+          .bind("still_m2", still_m2_of(v.signals[0].history))
           .set("CONVERGE_STILL", 1u);
       if (v.signals.size() > 1)
-        remodulate.bind("still_mean2", v.signals[1].history + "_still")
-            .bind("still_m2_2", v.signals[1].history + "_still_m2")
+        remodulate.bind("still_mean2", still_mean_of(v.signals[1].history))
+            .bind("still_m2_2", still_m2_of(v.signals[1].history))
             .set("SPECULAR_ALPHA", v.signals[1].specular_alpha);
     }
   }
@@ -552,10 +555,8 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   add_sample_summary(g, v.signals[0].history + "_colour", still_mean_buffer(v));
 }
 
-std::string still_mean_buffer(const SvgfVariant& v) {
-  return keeps_still_mean(v) ? v.signals[0].history + "_still" : "";
-}
-std::string still_m2_buffer(const SvgfVariant& v) { return keeps_still_mean(v) ? v.signals[0].history + "_still_m2" : ""; }
+std::string still_mean_buffer(const SvgfVariant& v) { return keeps_still_mean(v) ? still_mean_of(v.signals[0].history) : ""; }
+std::string still_m2_buffer(const SvgfVariant& v) { return keeps_still_mean(v) ? still_m2_of(v.signals[0].history) : ""; }
 
 GraphSpec svgf_graph(const SessionConfig& config, SvgfVariant (*variant)(const SessionConfig&, const Parameters&)) {
   GraphSpec g = begin_graph(config);
