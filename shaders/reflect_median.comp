@@ -62,54 +62,34 @@ vec3 median_of_9(vec3 v[9]) {
   return v[4];
 }
 
-// A still pixel keeps its own value against the median, by its running
-// mean's weight (dn_still_weight), where that mean of n samples is
-// significantly brighter than the median: their relative difference beyond
-// DN_MEDIAN_T standard errors of the mean, relative to it. A bright line one
-// pixel thin beside a light passes once its samples agree; a firefly's mean
-// never does (its standard error is about its own excess over the median).
-const float DN_MEDIAN_T = 3.0;
-vec3 median_filtered(uint p);
-vec3 filtered(uint p) {
-  vec3 c = src_at(p).rgb;
-  if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
-  vec3 m = median_filtered(p);
-  if (!CONVERGE_STILL || m == c) return m;
-  vec4 mean = still_mean_at(p);
-  float w = dn_still_weight(mean.a);
-  if (!(w > 0.0)) return m;
-  float y = dn_luminance(c - emitted(p)), ym = dn_luminance(mean.rgb);
-  float margin = (y - dn_luminance(m - emitted(p))) / y;  // c is brighter than the median here
-  float se2 = still_m2.data[p] / ((mean.a - 1.0) * mean.a) / (ym * ym);
-  return margin * margin > DN_MEDIAN_T * DN_MEDIAN_T * se2 ? mix(m, c, w) : m;
-}
-vec3 median_filtered(uint p) {
-  vec3 c = src_at(p).rgb;
+// The per-channel median of the light (colour minus emission) of p's 3x3
+// window, emitting neighbours left out; false where the window is not all of
+// class none (no median applies).
+bool window_median(uint p, out vec3 median) {
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 colours[9];
   bool taken[9];
   int count = 0;
+  median = vec3(0.0);
   [[unroll]] for (int k = 0; k < 9; ++k) {
     ivec2 q = pos + ivec2(k % 3 - 1, k / 3 - 1);
     uint qi = uint(q.y) * frame.size.x + uint(q.x);
     taken[k] = dn_inside(q, frame.size.xy) && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, qi));
     colours[k] = vec3(0.0);
     if (taken[k]) {
-      if (features.data[2u * qi].w != DN_REFLECT_NONE) return c;
+      if (features.data[2u * qi].w != DN_REFLECT_NONE) return false;
       vec3 e = emitted(qi);
       taken[k] = k == 4 || !(dn_luminance(e) > 0.0);
       colours[k] = src_at(qi).rgb - e;
       count += taken[k] ? 1 : 0;
     }
   }
-  vec3 own = c - emitted(p);
   if (count == 9) {
-    vec3 m9 = median_of_9(colours);
-    return (dn_luminance(own) > dn_luminance(m9) ? m9 : own) + emitted(p);
+    median = median_of_9(colours);
+    return true;
   }
   // Per channel, the value with as many smaller as larger ones (rank count / 2).
   int want = count / 2;
-  vec3 median = c;
   [[unroll]] for (int i = 0; i < 9; ++i) {
     ivec3 below = ivec3(0);
     [[unroll]] for (int j = 0; j < 9; ++j) {
@@ -119,7 +99,34 @@ vec3 median_filtered(uint p) {
     }
     if (taken[i]) median = mix(median, colours[i], equal(below, ivec3(want)));
   }
-  return (dn_luminance(own) > dn_luminance(median) ? median : own) + emitted(p);
+  return true;
+}
+
+// A still pixel keeps its own value against the median, by its running
+// mean's weight (dn_still_weight), where that mean of n samples is
+// significantly brighter than the median: their relative difference beyond
+// DN_MEDIAN_T standard errors of the mean, relative to it. A bright line one
+// pixel thin beside a light passes once its samples agree; a firefly's mean
+// never does (its standard error is about its own excess over the median).
+const float DN_MEDIAN_T = 3.0;
+vec3 filtered(uint p) {
+  vec3 c = src_at(p).rgb;
+  if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
+  vec3 median;
+  if (!window_median(p, median)) return c;
+  vec3 e = emitted(p);
+  vec3 own = c - e;
+  float y = dn_luminance(own), y_median = dn_luminance(median);
+  if (!(y > y_median)) return own + e;
+  vec3 m = median + e;
+  if (!CONVERGE_STILL) return m;
+  vec4 mean = still_mean_at(p);
+  float w = dn_still_weight(mean.a);
+  if (!(w > 0.0)) return m;
+  float ym = dn_luminance(mean.rgb);
+  float margin = (y - y_median) / y;
+  float se2 = still_m2.data[p] / ((mean.a - 1.0) * mean.a) / (ym * ym);
+  return margin * margin > DN_MEDIAN_T * DN_MEDIAN_T * se2 ? mix(m, c, w) : m;
 }
 
 void main() {
