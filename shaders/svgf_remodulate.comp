@@ -101,18 +101,9 @@ vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
   return w > 0.0 ? mix(moving, dn_guarded(f, still, true), w) : moving;
 }
 
-// A pixel whose (diffuse) albedo is not a reflectance, below DN_ALBEDO_MIN
-// in every component (a mirror or metal when the albedo is a diffuse colour)
-// or above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light
-// seen in a mirror), or not finite: the guides cannot tell what it shows
-// from its neighbours, so it keeps its own current radiance (split: diffuse +
-// specular; less emission, added below), or where it is still its own
-// unfiltered temporal mean: what a mirror shows moves with the camera, not
-// with the mirror's surface, but a still view's history holds the same point.
-const float DN_REFLECTANCE_MAX = 1.5;
-// A modulator below DN_ALBEDO_MIN in every component (or not finite): no lobe of that kind.
-bool dn_no_reflectance(vec3 a) { return !(max(a.r, max(a.g, a.b)) >= DN_ALBEDO_MIN); }
-bool dn_unexplained(vec3 a) { return dn_no_reflectance(a) || !(max(a.r, max(a.g, a.b)) <= DN_REFLECTANCE_MAX); }
+// An unexplained pixel (dn_unexplained) keeps its own current radiance
+// (split: diffuse + specular; less emission, added below), or where it is
+// still its own unfiltered temporal mean.
 
 vec3 specular_modulator(uint p) {
   return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0);

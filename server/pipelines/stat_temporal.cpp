@@ -53,7 +53,9 @@ GraphSpec build(const SessionConfig& config) {
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
-      .set("TABLE_SIZE", kStatTableSize);
+      .set("TABLE_SIZE", kStatTableSize)
+      .bind("albedo", "albedo")
+      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   temporal.pixels_per_invocation = 1;
   if (from_radiance)
     temporal.set("FROM_RADIANCE", true);
@@ -62,10 +64,7 @@ GraphSpec build(const SessionConfig& config) {
   if (g.parameters.stat_demodulated != 0.0f) {
     // The frame's own samples give the modulation; the accumulators cannot.
     g.add_scratch(kStatModulation, kStatRgbBytes);
-    temporal.bind("albedo", "albedo")
-        .bind("modulation", kStatModulation)
-        .set("DEMODULATED", true)
-        .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+    temporal.bind("modulation", kStatModulation).set("DEMODULATED", true);
   }
   add_stat_filter(g, config,
                   StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
@@ -88,7 +87,9 @@ PipelineDefinition stat_temporal_definition() {
   d.description.optional_channels = statistics_channels();
   d.parameter_groups = {"stat", "stat_temporal"};
   // A first frame from the radiance alone has no pixel with 2 samples: test each with its window's variance.
-  d.parameter_defaults = {{"pool_single", 1}};
+  // Asymmetric membership (Eq. 14): a history that held a moving highlight has a
+  // large variance, which the symmetric test accepts beside any precise pixel.
+  d.parameter_defaults = {{"pool_single", 1}, {"asymmetric", 1}};
   d.description.parameters = parameters_of(d.parameter_groups, d.parameter_defaults);
   d.build = build;
   d.check_channels = check_optional_statistics;

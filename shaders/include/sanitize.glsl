@@ -56,6 +56,17 @@ float dn_guarded_albedo(float a) {
 }
 vec3 dn_guarded_albedo(vec3 a) { return vec3(dn_guarded_albedo(a.x), dn_guarded_albedo(a.y), dn_guarded_albedo(a.z)); }
 
+// A modulator below DN_ALBEDO_MIN in every component (or not finite): no lobe of that kind.
+bool dn_no_reflectance(vec3 a) { return !(max(a.r, max(a.g, a.b)) >= DN_ALBEDO_MIN); }
+// A pixel whose (diffuse) albedo is not a reflectance, below DN_ALBEDO_MIN
+// in every component (a mirror or metal when the albedo is a diffuse colour)
+// or above DN_REFLECTANCE_MAX in one (Cycles' Denoising Albedo of a light
+// seen in a mirror), or not finite: the guides cannot tell what it shows from
+// its neighbours, and what it shows moves with the camera, not with its
+// surface, so only a still pixel's history holds the same point.
+const float DN_REFLECTANCE_MAX = 1.5;
+bool dn_unexplained(vec3 a) { return dn_no_reflectance(a) || !(max(a.r, max(a.g, a.b)) <= DN_REFLECTANCE_MAX); }
+
 // Depth bounds of a foreground pixel: the smallest normal float (a denormal
 // depth counts as 0 whether or not the device flushes it) and a distance
 // beyond which depth means "infinitely far" (its square stays finite).

@@ -43,6 +43,13 @@ StatAccumulator frame_statistics(const StatFrame& f, int q) {
 }
 
 const double kPriorDof = 2.0;
+// A pixel whose albedo is no reflectance (every component below 1e-3, one
+// above 1.5, or not finite: a metal's diffuse colour) fades at this instead.
+const double kUnexplainedFading = 0.5;
+bool unexplained(const float* a) {
+  const float m = std::max({a[0], a[1], a[2]});
+  return !(m >= 1e-3f) || !(m <= 1.5f);
+}
 void theta_and_variance(const StatAccumulator& s, double theta[3], double var[3]) {
   for (int c = 0; c < 3; ++c) {
     const double s2 = std::max(s.m2[c], 0.0) / (s.n - 1.0);
@@ -147,7 +154,8 @@ StatTemporalResult stat_temporal(const StatTemporalFrame& f, const StatTemporalS
         if (taken[k])
           history = stat_merge(history, stat_scale(prev.acc[(oy + (k >> 1)) * w + ox + (k & 1)], weights[k] / sum));
       const double stillness = std::clamp(1.0 - std::hypot(mvx, mvy) / 0.05, 0.0, 1.0);
-      const double beta = fading + (1.0 - fading) * stillness;
+      const double pixel_fading = unexplained(&s.albedo[3 * i]) ? kUnexplainedFading : fading;
+      const double beta = pixel_fading + (1.0 - pixel_fading) * stillness;
       history = stat_scale(history, beta);
       if (!(history.n > 0.0)) continue;
       // The Welch test over the 3x3 windows around p_prev and p.

@@ -43,7 +43,10 @@ struct SceneSpec {
   int spp = 1;
   float scale = 1.0f;
   bool demodulated = false;  // statistics over sample / albedo (dnrender --stats-demodulated)
+  bool metal = false;        // every fifth plane block sends albedo 0 (a metal's diffuse colour), lit as the others
 };
+
+bool metal_block(const SceneSpec& s, bool in_box, int block) { return s.metal && !in_box && block % 5 == 0; }
 
 test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
   test::StatTemporalFrame f;
@@ -75,7 +78,7 @@ test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
       const int block = in_box ? 5 : static_cast<int>(std::floor(u / 6.0f));
       for (int c = 0; c < 3; ++c) {
         const float albedo = 0.3f + 0.15f * static_cast<float>((block * 3 + c + 8) % 4);
-        st.albedo[3 * i + c] = albedo;
+        st.albedo[3 * i + c] = metal_block(s, in_box, block) ? 0.0f : albedo;
         test::put_exponential_samples(st, i, c, s.spp, s.scale * light * albedo, s.demodulated ? albedo : 1.0f, rng);
       }
     }
@@ -236,13 +239,16 @@ TEST_F(StatTemporalTest, MatchesCpuReference) {
   demodulated.demodulated = true;
   SceneSpec still_demodulated = still;
   still_demodulated.demodulated = true;
+  SceneSpec metal = one_spp;
+  metal.metal = true;
   const Variant variants[] = {{"pan1_1spp", one_spp, 0.9},
                               {"pan0.6_1spp", fractional, 0.9},
                               {"pan1.3_4spp_fading0.7", four_spp, 0.7},
                               {"still_shadow_moves", still, 0.9},
                               {"pan1.3_4spp_demodulated", demodulated, 0.9},
                               {"pan1_radiance_only", one_spp, 0.9, true},
-                              {"still_radiance_only_demodulated", still_demodulated, 0.9, true}};
+                              {"still_radiance_only_demodulated", still_demodulated, 0.9, true},
+                              {"pan1_metal_radiance_only", metal, 0.9, true}};
   const auto table = t_squared();
   for (const auto& v : variants) {
     SCOPED_TRACE(v.name);
@@ -309,6 +315,7 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
   test::StatParams p;
   p.radius = 4;
   p.pool_single = true;
+  p.asymmetric = true;  // stat-temporal's defaults
   const test::StatPrepared prep = test::stat_prepare(acc, p);
   const auto theta = test::decode_output(s.graph->captured("stat_prepare", "stat_theta"), Format::F32);
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
@@ -389,6 +396,39 @@ TEST_F(StatTemporalTest, StillCameraAccumulatesEverySampleExactly) {
   std::printf("[ info     ] %zu of %d pixels kept all %d samples\n", complete, w * h, frames * spp);
   EXPECT_GE(complete, static_cast<size_t>(0.98 * w * h)) << "still pixels lost samples (rejections or fading)";
   EXPECT_EQ(off, 0u) << "accumulated statistics differ from two-pass ones";
+}
+
+// A moving metal (albedo 0: what it shows moves with the camera, not with its
+// surface) keeps about 1 / (1 - 0.5) = 2 frames of samples, the diffuse plane
+// about 1 / (1 - fading): after 10 frames of a 1 px pan, 1 + 0.5 + ... < 2
+// against 1 + 0.9 + ... + 0.9^9 = 6.5 (less what the test rejects).
+TEST_F(StatTemporalTest, AMovingMetalKeepsAShortHistory) {
+  SceneSpec scene;
+  scene.metal = true;
+  scene.box = false;
+  scene.shadow_light = 1.0f;  // no shadow: nothing for the test to reject
+  Session s = make(ctx(), scene.w, scene.h, {{"radius", 4}}, false);
+  for (int k = 0; k < 10; ++k) svgf_inputs::run(*s.pipe, host_frame(scene_frame(scene, k, 9), false));
+  const DeviceState d = device_state(s);
+  double metal_n = 0.0, diffuse_n = 0.0;
+  int metal = 0, diffuse = 0;
+  for (int y = 0; y < scene.h; ++y)
+    for (int x = 1; x < scene.w - 10; ++x) {  // left of the columns the pan brought in during the last 10 frames
+      const int block = static_cast<int>(std::floor((static_cast<float>(x) + 9.0f) / 6.0f));
+      const float n = d.count[y * scene.w + x];
+      if (metal_block(scene, false, block)) {
+        metal_n += n;
+        ++metal;
+      } else {
+        diffuse_n += n;
+        ++diffuse;
+      }
+    }
+  ASSERT_GT(metal, 0);
+  ASSERT_GT(diffuse, 0);
+  std::printf("[ info     ] mean accumulated samples: metal %.3f, diffuse %.3f\n", metal_n / metal, diffuse_n / diffuse);
+  EXPECT_LT(metal_n / metal, 2.0);
+  EXPECT_GT(diffuse_n / diffuse, 5.0);
 }
 
 // Sparse light on a still camera, from the radiance alone: each sample is 20
