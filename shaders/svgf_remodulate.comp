@@ -78,19 +78,25 @@ vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
   float k = DN_PARAM_VALUE(svgf, converge_still);
   return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, s, p) / mean.a);
 }
-// What a kept pixel blends toward where it is still: the targets' colour by
-// weight; .w negative: no data.
-vec4 dn_guard_mean(vec4 m, int s, uint p) {
-  float w;
-  vec4 still = dn_still_mean(m, s, p, w);
-  return vec4(mix(m.rgb, still.rgb, w), m.w >= 0.0 ? 1.0 : -1.0);
-}
 // f beyond a (t.w = a^2) from t.rgb in luminance: shrunk toward it by (a / Y(f - t))^1, or ^3 (cubic).
 vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
   vec3 d = f - t.rgb;
   float dl = dn_luminance(d);
   float r = t.w / (dl * dl);
   return dl * dl > t.w ? t.rgb + d * (cubic ? r * sqrt(r) : r) : f;
+}
+// What a kept pixel blends toward where it is still, by weight: its
+// temporal mean m (the guard's own) pulled toward its running mean beyond
+// half a standard error of that mean, linearly. As samples accumulate the
+// output goes to the running mean; a few samples holding one firefly (a
+// large variance) leave m nearly as it is. .w negative: no data.
+const float DN_KEPT_STILL_BAND = 0.5;
+vec4 dn_guard_mean(vec4 m, float len, int s, uint p) {
+  float w;
+  vec4 mean = dn_still_mean(m, s, p, w);
+  if (!(w > 0.0)) return vec4(m.rgb, m.w >= 0.0 ? 1.0 : -1.0);
+  float a2 = DN_KEPT_STILL_BAND * DN_KEPT_STILL_BAND * dn_still_sample_variance(m, len, s, p) / mean.a;
+  return vec4(mix(m.rgb, dn_guarded(m.rgb, vec4(mean.rgb, a2), false), w), 1.0);
 }
 // f guarded toward signal s's targets (own: its temporal mean and variance).
 vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
@@ -124,8 +130,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = dn_guard_mean(own_at(p), 0, p);
-    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), 1, p) : vec4(0.0);
+    vec4 m = dn_guard_mean(own_at(p), colour_history_at(p).a, 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }

@@ -718,12 +718,21 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       for (int k = 0; k < 3; ++k) filtered[4 * i + k] = w > 0.0 ? m[k] + (s[k] - m[k]) * w : m[k];
     }
   };
-  // What a kept still pixel blends toward: the targets' colour, mixed by w.
+  // What a kept still pixel blends toward: its temporal mean m, guarded
+  // toward the still mean with a = sqrt(s2 / n) / 2 (the still target's a
+  // over 2k) by a^2 / Y(m - mean)^2 beyond a, mixed by w.
   auto guard_mean = [&](const Chain& ch, int i, double* t) {
     Target moving, still;
     double w;
     if (!guard_target(ch, i, moving, still, w)) return;
-    for (int k = 0; k < 3; ++k) t[k] = w > 0.0 ? moving.rgb[k] + (still.rgb[k] - moving.rgb[k]) * w : moving.rgb[k];
+    if (!(w > 0.0)) {
+      for (int k = 0; k < 3; ++k) t[k] = moving.rgb[k];
+      return;
+    }
+    still.allowed /= 4.0 * p_.converge_still * p_.converge_still;
+    double g[3];
+    guarded_toward(moving.rgb, still, false, g);
+    for (int k = 0; k < 3; ++k) t[k] = moving.rgb[k] + (g[k] - moving.rgb[k]) * w;
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
