@@ -6,7 +6,9 @@
 //       symmetric:  (theta_p - theta_q)^2 <= t^2 (var_p + var_q)
 //       asymmetric: (theta_p - theta_q)^2 <  var_p (1 + 2 t^2) - var_q
 //                   (Eq. 14 by its inequality, never through a NaN; equal
-//                   means with zero variances are members)
+//                   means with zero variances are members), with parameter
+//                   asymmetric or where stat_prepare marked p moving
+//                   (stat-temporal)
 //     t = the two-sided quantile for nu = n_p + n_q - 2 (per pair, so unequal
 //     sample counts are exact), read as t^2 from the host's table
 //   weight(p, q) = exp(-|q - p|^2 / (2 s_s^2) - |a_p - a_q|^2 / (2 s_a^2)
@@ -44,11 +46,13 @@ vec3 filter_pixel(uint p) {
   if (!(theta_p.w > 0.0)) return dn_stat_remodulate(raw_p, p);
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec3 var_p = variance_at(p).rgb;
+  vec4 var_p4 = variance_at(p);
+  vec3 var_p = var_p4.rgb;
   vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
+  k.asymmetric = k.asymmetric || var_p4.w > 0.0;  // stat_prepare marked p moving
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy) {

@@ -43,6 +43,7 @@ vec3 filter_pixel() {
   if (!(c.theta.w > 0.0)) return dn_stat_remodulate(raw_p, dn_grid_index(dn_pixel(), dn_grid.size));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
+  k.asymmetric = k.asymmetric || c.variance.w > 0.0;  // stat_prepare marked p moving
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy)

@@ -15,7 +15,10 @@
 // have a variance to test. Its theta stays its own mean: the window's mean
 // made a light seen in a mirror one with its dark neighbours (dnrender scene
 // 6, first frame: RMSE 0.593 against the frame's 0.517). n = 0 or any
-// non-finite statistic gets n = 0 in theta.w: no data. One invocation per pixel.
+// non-finite statistic gets n = 0 in theta.w: no data. With MOVING_ASYMMETRIC
+// (stat-temporal) variance.w is 1 where the pixel moves (motion not usable
+// or 0.005 px or more): stat_filter tests its neighbours by Eq. 14 there.
+// One invocation per pixel.
 //
 // DEMODULATED (the statistics are over demodulated samples): also the
 // value stat_filter averages, the demodulated mean from the moments
@@ -30,6 +33,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "inside.glsl"
+#include "reproject.glsl"
 #include "stat.glsl"
 #include "pass.glsl"
 #include "passes/stat_prepare.pass"
@@ -72,9 +76,17 @@ DnStat pooled(uint p) {
   return acc;
 }
 
+float moving = 0.0;  // variance.w
+
+bool pixel_moves(uint p) {
+  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  return !dn_motion_usable(mv) || !dn_is_still(mv);
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
+  if (MOVING_ASYMMETRIC && pixel_moves(p)) moving = 1.0;
   DnStat s = stat_at(p);
   if (!dn_stat_usable(s)) {
     theta.data[p] = vec4(0.0);
@@ -88,16 +100,16 @@ void main() {
     if (w.n >= 2.0) {
       vec3 var = max(dn_stat_sample_variance(w) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
       theta.data[p] = vec4(s.mean, w.n);
-      variance.data[p] = vec4(var, 0.0);
+      variance.data[p] = vec4(var, moving);
       return;
     }
   }
   if (s.n < 2.0) {  // samples but no variance: the mean, for the single-sample test
     theta.data[p] = vec4(s.mean, s.n);
-    variance.data[p] = vec4(0.0);
+    variance.data[p] = vec4(vec3(0.0), moving);
     return;
   }
   vec3 var = max(dn_stat_sample_variance(s) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
   theta.data[p] = vec4(dn_stat_theta(s), s.n);
-  variance.data[p] = vec4(var, 0.0);
+  variance.data[p] = vec4(var, moving);
 }

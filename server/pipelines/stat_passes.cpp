@@ -69,6 +69,10 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
                           .bind("theta", "stat_theta")
                           .bind("variance", "stat_variance");
   prepare.pixels_per_invocation = 1;
+  if (s.moving_asymmetric)
+    prepare.bind("motion", "motion")
+        .set("MOVING_ASYMMETRIC", true)
+        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.
     g.add_scratch("stat_value", kStatRgbBytes);

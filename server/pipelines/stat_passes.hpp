@@ -28,6 +28,9 @@ struct StatSources {
   // the frame's planes (the sources are the frame's: stat), or a pass before
   // it (stat_temporal, which sees the frame; the accumulators do not).
   bool prepare_modulates = true;
+  // stat-temporal: the filter tests a moving pixel's neighbours by Eq. 14
+  // (their histories may hold what moved over them); stat_prepare reads "motion".
+  bool moving_asymmetric = false;
 };
 
 // The channels both take besides their own: radiance, albedo, normal and the

@@ -67,7 +67,8 @@ GraphSpec build(const SessionConfig& config) {
     temporal.bind("modulation", kStatModulation).set("DEMODULATED", true);
   }
   add_stat_filter(g, config,
-                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false});
+                  StatSources{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw", false, false,
+                              true});
   // RESULT.samples: from the radiance alone a pixel's accumulated count is its frames (the renderer's counts are samples).
   if (from_radiance) add_sample_count_summary(g, "stat_acc_count");
   return g;
@@ -87,9 +88,7 @@ PipelineDefinition stat_temporal_definition() {
   d.description.optional_channels = statistics_channels();
   d.parameter_groups = {"stat", "stat_temporal"};
   // A first frame from the radiance alone has no pixel with 2 samples: test each with its window's variance.
-  // Asymmetric membership (Eq. 14): a history that held a moving highlight has a
-  // large variance, which the symmetric test accepts beside any precise pixel.
-  d.parameter_defaults = {{"pool_single", 1}, {"asymmetric", 1}};
+  d.parameter_defaults = {{"pool_single", 1}};
   d.description.parameters = parameters_of(d.parameter_groups, d.parameter_defaults);
   d.build = build;
   d.check_channels = check_optional_statistics;

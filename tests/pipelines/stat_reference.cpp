@@ -143,6 +143,7 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       double sum[3] = {0, 0, 0}, weight_sum = 1.0;
       const float n_p = prep.theta[4 * i + 3];
       const bool single = n_p < 2.0f;  // gathers with the single-sample test
+      const bool asymmetric = p.asymmetric || (!prep.moving.empty() && prep.moving[i]);
       if (n_p > 0.0f) {
         for (int dy = -r; dy <= r; ++dy)
           for (int dx = -r; dx <= r; ++dx) {
@@ -159,9 +160,9 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
               // p without variance: its sample's variance is q's sample variance.
               const float var_p = single ? prep.variance[3 * q + c] * (n_q / n_p) : prep.variance[3 * i + c];
               const float var_q = prep.variance[3 * q + c];
-              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, var_p, var_q, p.asymmetric);
+              member = member && stat_member(prep.theta[4 * i + c], prep.theta[4 * q + c], t2, var_p, var_q, asymmetric);
               const float d = prep.theta[4 * i + c] - prep.theta[4 * q + c];
-              const float bound = p.asymmetric ? var_p * (1.0f + 2.0f * t2) - var_q : t2 * (var_p + var_q);
+              const float bound = asymmetric ? var_p * (1.0f + 2.0f * t2) - var_q : t2 * (var_p + var_q);
               if (d * d > 0.0f) share = std::max(share, d * d / bound);
             }
             if (!member && !p.base_only) {

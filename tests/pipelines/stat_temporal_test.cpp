@@ -315,7 +315,6 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
   test::StatParams p;
   p.radius = 4;
   p.pool_single = true;
-  p.asymmetric = true;  // stat-temporal's defaults
   const test::StatPrepared prep = test::stat_prepare(acc, p);
   const auto theta = test::decode_output(s.graph->captured("stat_prepare", "stat_theta"), Format::F32);
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
@@ -338,6 +337,52 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
 
   Session off_session = make(ctx(), still.w, still.h, {{"radius", 4}, {"pool_single", 0}}, false);
   EXPECT_EQ(svgf_inputs::run(*off_session.pipe, host_frame(f, false)), f.stats.radiance);
+}
+
+// A moving pixel's neighbours are tested by Eq. 14, a still one's by the
+// symmetric test: after four frames of the 1 px pan (the plane moves, the
+// box does not) stat_prepare marks exactly the plane's pixels, and the output
+// matches the CPU reference over the device's accumulators with that
+// per-pixel choice, which differs from the symmetric test everywhere.
+TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
+  SceneSpec scene;
+  Session s = make(ctx(), scene.w, scene.h, {{"radius", 4}}, false);
+  test::StatTemporalFrame f;
+  std::vector<float> got;
+  for (int k = 0; k < 4; ++k) {
+    f = scene_frame(scene, k, 11);
+    got = svgf_inputs::run(*s.pipe, host_frame(f, false));
+  }
+  const DeviceState d = device_state(s);
+  test::StatFrame acc = f.stats;
+  acc.count = d.count;
+  acc.mean = d.mean;
+  acc.m2 = d.m2;
+  acc.m3 = d.m3;
+  acc.radiance = d.raw;
+  test::StatParams p;
+  p.radius = 4;
+  p.pool_single = true;
+  test::StatPrepared prep = test::stat_prepare(acc, p);
+  const test::StatResult symmetric = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const int n = scene.w * scene.h;
+  prep.moving.assign(n, 0);
+  for (int i = 0; i < n; ++i) prep.moving[i] = std::hypot(f.motion[2 * i], f.motion[2 * i + 1]) >= 0.005;
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
+  int marked = 0, wrong = 0;
+  for (int i = 0; i < n; ++i) {
+    marked += variance[4 * i + 3] > 0.0f;
+    wrong += (variance[4 * i + 3] > 0.0f) != (prep.moving[i] != 0);
+  }
+  const double rms = test::relative_rms(got, want.output), apart = test::relative_rms(got, symmetric.output);
+  std::printf("[ info     ] %d of %d pixels moving; relative RMS %.3g to the reference, %.3g to the symmetric one\n",
+              marked, n, rms, apart);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(marked, n / 2);
+  EXPECT_LT(marked, n);
+  EXPECT_LE(rms, 1e-5);
+  EXPECT_GT(apart, 1e-3);
 }
 
 // A still camera over an unchanging scene: still pixels do not fade, so a
