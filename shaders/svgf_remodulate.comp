@@ -87,16 +87,22 @@ vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
 }
 // What a kept pixel blends toward where it is still, by weight: its
 // temporal mean m (the guard's own) pulled toward its running mean beyond
-// half a standard error of that mean, linearly. As samples accumulate the
-// output goes to the running mean; a few samples holding one firefly (a
-// large variance) leave m nearly as it is. .w negative: no data.
+// half a standard error of that mean, linearly, and from DN_KEPT_MEAN_FROM
+// samples on handed over to the running mean, wholly at DN_KEPT_MEAN_FULL
+// (m averages about 1 / alpha_colour = 20 frames). A few samples holding one
+// firefly (a large variance) leave m nearly as it is; a highlight the
+// running mean holds well beyond its error is taken nearly whole. .w
+// negative: no data.
 const float DN_KEPT_STILL_BAND = 0.5;
+const float DN_KEPT_MEAN_FROM = 8.0, DN_KEPT_MEAN_FULL = 32.0;
 vec4 dn_guard_mean(vec4 m, float len, int s, uint p) {
   float w;
   vec4 mean = dn_still_mean(m, s, p, w);
   if (!(w > 0.0)) return vec4(m.rgb, m.w >= 0.0 ? 1.0 : -1.0);
   float a2 = DN_KEPT_STILL_BAND * DN_KEPT_STILL_BAND * dn_still_sample_variance(m, len, s, p) / mean.a;
-  return vec4(mix(m.rgb, dn_guarded(m.rgb, vec4(mean.rgb, a2), false), w), 1.0);
+  float handover = clamp((mean.a - DN_KEPT_MEAN_FROM) / (DN_KEPT_MEAN_FULL - DN_KEPT_MEAN_FROM), 0.0, 1.0);
+  vec3 g = mix(dn_guarded(m.rgb, vec4(mean.rgb, a2), false), mean.rgb, handover);
+  return vec4(mix(m.rgb, g, w), 1.0);
 }
 // f guarded toward signal s's targets (own: its temporal mean and variance).
 vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {

@@ -720,7 +720,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   };
   // What a kept still pixel blends toward: its temporal mean m, guarded
   // toward the still mean with a = sqrt(s2 / n) / 2 (the still target's a
-  // over 2k) by a^2 / Y(m - mean)^2 beyond a, mixed by w.
+  // over 2k) by a^2 / Y(m - mean)^2 beyond a, then mixed toward the still
+  // mean by clamp((n - 8) / 24, 0, 1), all mixed by w.
   auto guard_mean = [&](const Chain& ch, int i, double* t) {
     Target moving, still;
     double w;
@@ -732,7 +733,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     still.allowed /= 4.0 * p_.converge_still * p_.converge_still;
     double g[3];
     guarded_toward(moving.rgb, still, false, g);
-    for (int k = 0; k < 3; ++k) t[k] = moving.rgb[k] + (g[k] - moving.rgb[k]) * w;
+    const double handover = std::clamp((ch.still_n[i] - 8.0) / 24.0, 0.0, 1.0);
+    for (int k = 0; k < 3; ++k) {
+      g[k] += (still.rgb[k] - g[k]) * handover;
+      t[k] = moving.rgb[k] + (g[k] - moving.rgb[k]) * w;
+    }
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
