@@ -160,6 +160,26 @@ DeviceState device_state(const Session& s, bool demodulated = false) {
   return d;
 }
 
+// The frame's planes with the device's accumulators as its statistics and
+// raw means: what stat_prepare and stat_filter read.
+test::StatFrame accumulated(const test::StatTemporalFrame& f, const DeviceState& d) {
+  test::StatFrame acc = f.stats;
+  acc.count = d.count;
+  acc.mean = d.mean;
+  acc.m2 = d.m2;
+  acc.m3 = d.m3;
+  acc.radiance = d.raw;
+  return acc;
+}
+
+// The filter parameters of the sessions make() opens from the radiance alone.
+test::StatParams session_filter_params() {
+  test::StatParams p;
+  p.radius = 4;
+  p.pool_single = true;
+  return p;
+}
+
 // Pixels whose demodulated mean or modulation is off the reference's: the
 // mean from the accumulated moments, and radiance over the frame's own
 // demodulated mean (the guarded albedo where the frame brought no data, 1
@@ -306,15 +326,8 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
   Session s = make(ctx(), still.w, still.h, {{"radius", 4}}, false);
   const auto got = svgf_inputs::run(*s.pipe, host_frame(f, false));
   const DeviceState d = device_state(s);
-  test::StatFrame acc = f.stats;
-  acc.count = d.count;
-  acc.mean = d.mean;
-  acc.m2 = d.m2;
-  acc.m3 = d.m3;
-  acc.radiance = d.raw;
-  test::StatParams p;
-  p.radius = 4;
-  p.pool_single = true;
+  const test::StatFrame acc = accumulated(f, d);
+  const test::StatParams p = session_filter_params();
   const test::StatPrepared prep = test::stat_prepare(acc, p);
   const auto theta = test::decode_output(s.graph->captured("stat_prepare", "stat_theta"), Format::F32);
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
@@ -354,15 +367,8 @@ TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
     got = svgf_inputs::run(*s.pipe, host_frame(f, false));
   }
   const DeviceState d = device_state(s);
-  test::StatFrame acc = f.stats;
-  acc.count = d.count;
-  acc.mean = d.mean;
-  acc.m2 = d.m2;
-  acc.m3 = d.m3;
-  acc.radiance = d.raw;
-  test::StatParams p;
-  p.radius = 4;
-  p.pool_single = true;
+  const test::StatFrame acc = accumulated(f, d);
+  const test::StatParams p = session_filter_params();
   test::StatPrepared prep = test::stat_prepare(acc, p);
   const test::StatResult symmetric = test::stat_filter(acc, prep, p, t_squared(p.alpha));
   const int n = scene.w * scene.h;
