@@ -155,13 +155,19 @@ vec3 kept_radiance(uint p, vec3 ga) {
 // (plus 1e-3 of it, for noise-free lights) in two frames in a row (a
 // one-sample outlier of noisy light fails once: merged into the mean, not
 // into M2, which it would widen past the next test, and marked suspect).
-// A sample the sanitizer changed is not counted. Moving pixels: the sample.
+// A sample the sanitizer changed is not counted. Moving pixels: the sample;
+// background ones too, keeping no mean: renderers write no motion there
+// (Cycles: 0), so a pixel turning from a wall to the sky would look still.
 const float DN_EMISSION_T = 6.0;
 const float DN_EMISSION_MIN_SAMPLES = 8.0;
 vec3 emission_added(uint p) {
   vec3 raw = DN_LOAD3(emission, EMISSION_HALF, p);
   vec3 e = dn_sanitize_radiance(raw);
   if (!EMISSION_STILL) return e;
+  if (!dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) {
+    emission_still.data[p] = vec4(0.0);
+    return e;
+  }
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
   vec4 s = vec4(0.0);
   vec2 t = vec2(0.0);  // M2 of the samples' luminance, suspect

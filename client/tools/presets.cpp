@@ -616,7 +616,7 @@ protocol::Format wire_format(ChannelId id, bool fp16) {
 
 void convert_cycles_depth(std::span<float> depth) {
   for (float& d : depth)
-    if (!std::isfinite(d) || d >= 1e9f) d = std::numeric_limits<float>::infinity();
+    if (!(d > 0.0f && d < 1e9f)) d = std::numeric_limits<float>::infinity();
 }
 
 void convert_cycles_vector(std::span<float> xy) {

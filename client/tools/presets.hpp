@@ -210,7 +210,7 @@ std::vector<protocol::ChannelId> parse_channel_list(const std::string& list,
                                                    const ChannelSyntax& syntax = kCliChannelSyntax);
 
 // Cycles conversions, in place on interleaved data.
-// Depth: values >= 1e9 (Cycles writes 1e10 for background), non-finite or <= 0 become +inf.
+// Depth: values >= 1e9 or <= 0 (Cycles' background: Depth 1e10, Denoising Depth 0) and non-finite become +inf.
 void convert_cycles_depth(std::span<float> depth);
 // Vector: xy = (V.x, -V.y), in place on 2-component data.
 void convert_cycles_vector(std::span<float> xy);

@@ -254,7 +254,7 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
 // The variance of every signal in one pass (the joint chain: the guide's
 // loads and the 7x7 estimate's geometric weights shared), which also writes
 // each signal's history for the next frame.
-void add_variance(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
+void add_variance(GraphSpec& g, const SvgfVariant& v) {
   const SignalBuffers first = signal_buffers(v, 0);
   PassSpec& variance = g.add_pass("svgf_variance", "svgf_variance");
   variance.bind("guide", first.guide)
@@ -462,7 +462,7 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
   }
   if (v.sparse_gbuffer) add_gbuffer_fill(g, config, *v.validity_mask);
   for (size_t i = 0; i < v.signals.size(); ++i) add_reprojection(g, config, v, i);
-  add_variance(g, config, v);
+  add_variance(g, v);
   const std::vector<std::string> results = add_atrous(g, config, v);
 
   // With TAA, svgf_remodulate writes the current colour to the temporal
@@ -506,12 +506,11 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
                     first.plane == ChannelId::Albedo;
   // Motion: the TAA reprojection's, a still unexplained pixel's history (with the guard's buffer), still emission.
   if (v.taa || keep || keeps_still_emission(v)) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
-  if (v.taa)
+  // Depth: the TAA's foreground test, still emission's (a background pixel keeps no mean).
+  if (v.taa || keeps_still_emission(v))
     remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
-        .bind("taa_history", kTaaHistory)
-        .bind("taa_current", kTemporal)
-        .bind("taa_previous", kGuide)
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
+  if (v.taa) remodulate.bind("taa_history", kTaaHistory).bind("taa_current", kTemporal).bind("taa_previous", kGuide);
   const bool guard = v.harm_guard && v.iterations > 0;
   // The first chain's history (its length): read by the display lag and the harm guard.
   if (v.display_lag || guard) remodulate.bind("colour_history", v.signals[0].history + "_colour");

@@ -156,6 +156,30 @@ TEST(CyclesFixtures, VirtualDepthIsTheViewDepthWhereCyclesStopsAtThePrimaryHit) 
   EXPECT_GE(worst_unconverted, 0.05) << "the raw path length differs (the test would see a missing conversion)";
 }
 
+// Cycles writes Depth 1e10 and Denoising Depth 0 where a ray leaves the
+// scene; the Roughness AOV is 0 there, so the rough guides take the Denoising
+// Depth. Either way the pixel must reach the server as background (+inf),
+// not as a surface at the clip start, and no foreground pixel may.
+TEST(CyclesFixtures, BackgroundPixelsStayBackgroundWithEveryGuide) {
+  for (const char* name : {"frame_0000.exr", "window_0000.exr"})
+    for (bool rough : {false, true}) {
+      const RadianceFrame r = load_radiance_frame(name, rough);
+      const dn::image::ExrReader exr(fixture(name));
+      const auto z = exr.read_channel("ViewLayer.Depth.Z");
+      const auto& depth = plane(r.frame, ChannelId::Depth);
+      size_t background = 0;
+      for (size_t i = 0; i < z.size(); ++i) {
+        if (z[i] >= 1e9f) {
+          ++background;
+          ASSERT_TRUE(std::isinf(depth[i]) && depth[i] > 0.0f) << name << " rough " << rough << " pixel " << i << ": " << depth[i];
+        } else {
+          ASSERT_TRUE(std::isfinite(depth[i]) && depth[i] > 0.0f) << name << " rough " << rough << " pixel " << i;
+        }
+      }
+      if (std::string(name) == "window_0000.exr") EXPECT_GT(background, 100u) << "the window shows the sky";
+    }
+}
+
 // The passes the guide tests compare against, straight from the file.
 struct GuidePasses {
   std::vector<float> z, rough, diffcol, dalb, dnrm;

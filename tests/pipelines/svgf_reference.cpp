@@ -781,7 +781,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // from 8 samples; plus (1e-3 max(Y, Y_mean))^2) two frames in a row (the
   // first failure merges into the mean, not M2, and marks the pixel
   // suspect). A sample the
-  // sanitizer changed is not counted. Elsewhere the current emission.
+  // sanitizer changed is not counted. Elsewhere (moving or background
+  // pixels, which keep no mean) the current emission.
   std::vector<double> added = e;
   if (keeps_still && !f.emission.empty()) {
     if (emission_n_.empty()) {
@@ -793,11 +794,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     const std::vector<bool> valid = valid_samples(std::vector<double>(f.emission.begin(), f.emission.end()));
     for (int i = 0; i < n; ++i) {
       const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
-      if (reset || !usable_motion(mx, my) || !(std::hypot(mx, my) < 0.005)) {
+      const bool background = !foreground(f.depth[i]);
+      if (background || reset || !usable_motion(mx, my) || !(std::hypot(mx, my) < 0.005)) {
         emission_n_[i] = 0.0;
         emission_m2_[i] = 0.0;
         emission_suspect_[i] = false;
       }
+      if (background) continue;
       double* mean = &emission_mean_[3 * i];
       if (valid[i]) {
         const double l = luminance(&e[3 * i]), lm = luminance(mean), sn = emission_n_[i];

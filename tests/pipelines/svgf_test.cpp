@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include "frames.hpp"
@@ -271,6 +272,30 @@ TEST_F(SvgfTest, StillEmissionIsItsRunningMeanAndFollowsAChange) {
   for (int i = 0; i < 3 * n; ++i) emission[i] = 0.8f * noise(rng);
   const auto out = run(*pipe, frame_of(emission, 0));
   for (int j = 0; j < 3 * n; ++j) ASSERT_FLOAT_EQ(out[j], emission[j]) << j;
+}
+
+// Renderers write no motion on background pixels (Cycles: 0), so a pixel
+// that turns from a surface to the sky under a moving camera looks still.
+// A background pixel keeps no emission mean: it shows its own emission
+// (the sky's), and a surface that appears there again starts a new mean.
+TEST_F(SvgfTest, ABackgroundPixelKeepsNoStillEmissionMean) {
+  const int w = 32, h = 16, n = w * h;
+  Flat scene(w, h);
+  auto pipe = pipelines::create(
+      ctx(), svgf_config(w, h, Format::F32, Format::F32, {{"taa_alpha", 0}, {"taa_static_alpha", 0}}, true));
+  auto frame_of = [&](float e) {
+    const std::vector<float> emission(3 * n, e);
+    test::HostFrame f = scene.frame(emission);
+    f.add(ChannelId::Emission, Format::F32, emission);
+    return f;
+  };
+  for (int t = 0; t < 12; ++t) run(*pipe, frame_of(3.0f));  // a still emitter: its mean holds 12 samples
+  std::fill(scene.depth.begin(), scene.depth.end(), std::numeric_limits<float>::infinity());
+  std::vector<float> out = run(*pipe, frame_of(1.3f));
+  for (int j = 0; j < 3 * n; ++j) ASSERT_FLOAT_EQ(out[j], 1.3f) << "the sky's own emission at " << j;
+  std::fill(scene.depth.begin(), scene.depth.end(), 3.0f);
+  out = run(*pipe, frame_of(0.4f));
+  for (int j = 0; j < 3 * n; ++j) ASSERT_FLOAT_EQ(out[j], 0.4f) << "a new mean, without the sky's sample, at " << j;
 }
 
 // RESULT.samples: a still pixel rests on every frame sent (its running mean
