@@ -7,9 +7,9 @@
 //           (skew correction of the Box-Cox mean, Johnson 1978)
 // A pixel with 0 < n < 2 (one sample has no variance) gets theta = its
 // Box-Cox mean and variance 0 (stat_filter tests it against its neighbours'
-// variances), or with pool_single (stat-temporal's default) the sample
-// variance s2 of the merge of its 3x3 window's usable statistics, its own
-// included, over its own n, and that merge's count in theta.w (as SVGF
+// variances), or with pool_single (stat-temporal's default) a sample
+// variance from its 3x3 window's usable statistics (quadrant_variance) over
+// its own n, and the whole window's merged count in theta.w (as SVGF
 // estimates a young pixel's variance from its neighbourhood): from the
 // radiance alone every pixel of a first frame has one sample, and none would
 // have a variance to test. Its theta stays its own mean: the window's mean
@@ -76,6 +76,36 @@ DnStat pooled(uint p) {
   return acc;
 }
 
+// A one-sample pixel's sample variance: per channel the second smallest of
+// the sample variances of the merges of the four 2x2 quadrants of p's 3x3
+// window that hold p (each merged in row order), of those with 2 or more
+// samples; the smallest where only one has; none (count 0) where none has.
+// The whole window's variance counts a neighbouring highlight, firefly or
+// edge as noise, and p then accepted it in stat_filter; a bright pixel next
+// to p lies in at most two of the quadrants, so the second smallest is clear
+// of it, and of the downward bias of the smallest.
+vec3 quadrant_variance(uint p, out float count) {
+  ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
+  vec3 smallest = vec3(0.0), second = vec3(0.0);
+  count = 0.0;
+  [[dont_unroll]] for (int quadrant = 0; quadrant < 4; ++quadrant) {
+    ivec2 corner = pos - ivec2(1 - quadrant % 2, 1 - quadrant / 2);
+    DnStat acc = dn_stat_empty();
+    for (int k = 0; k < 4; ++k) {
+      ivec2 q = corner + ivec2(k % 2, k / 2);
+      if (!dn_inside(q, frame.size.xy)) continue;
+      DnStat t = stat_at(uint(q.y) * frame.size.x + uint(q.x));
+      if (dn_stat_usable(t)) acc = dn_stat_merge(acc, t);
+    }
+    if (!(acc.n >= 2.0)) continue;
+    vec3 v = dn_stat_sample_variance(acc);
+    second = count == 0.0 ? v : count == 1.0 ? max(smallest, v) : min(second, max(smallest, v));
+    smallest = count == 0.0 ? v : min(smallest, v);
+    count += 1.0;
+  }
+  return count >= 2.0 ? second : smallest;
+}
+
 float moving = 0.0;  // variance.w
 
 bool pixel_moves(uint p) {
@@ -97,8 +127,10 @@ void main() {
   if (DEMODULATED) demodulate(p, s);
   if (DN_PARAM_VALUE(stat, pool_single) != 0.0 && s.n < 2.0) {
     DnStat w = pooled(p);
-    if (w.n >= 2.0) {
-      vec3 var = max(dn_stat_sample_variance(w) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
+    float quadrants;
+    vec3 s2 = quadrant_variance(p, quadrants);
+    if (w.n >= 2.0 && quadrants > 0.0) {
+      vec3 var = max(s2 / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
       theta.data[p] = vec4(s.mean, w.n);
       variance.data[p] = vec4(var, moving);
       return;

@@ -1,6 +1,7 @@
 #include "stat_reference.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -78,17 +79,33 @@ StatPrepared stat_prepare(const StatFrame& f, const StatParams& p) {
     const float n = f.count[i];
     const bool sampled = statistics_usable(n, &f.mean[3 * i], &f.m2[3 * i], &f.m3[3 * i]);
     if (sampled && n < 2.0f && p.pool_single) {
-      Pooled window;
       const int x = i % f.width, y = i / f.width;
-      for (int o = 0; o < 9; ++o) {
-        const int qx = x + o % 3 - 1, qy = y + o / 3 - 1, q = qy * f.width + qx;
-        if (qx < 0 || qy < 0 || qx >= f.width || qy >= f.height) continue;
-        if (statistics_usable(f.count[q], &f.mean[3 * q], &f.m2[3 * q], &f.m3[3 * q]))
-          merge_into(window, f.count[q], &f.mean[3 * q], &f.m2[3 * q]);
+      // The merge of the usable statistics of the w x h block at (x0, y0), in row order.
+      auto merged = [&](int x0, int y0, int bw, int bh) {
+        Pooled m;
+        for (int o = 0; o < bw * bh; ++o) {
+          const int qx = x0 + o % bw, qy = y0 + o / bw, q = qy * f.width + qx;
+          if (qx < 0 || qy < 0 || qx >= f.width || qy >= f.height) continue;
+          if (statistics_usable(f.count[q], &f.mean[3 * q], &f.m2[3 * q], &f.m3[3 * q]))
+            merge_into(m, f.count[q], &f.mean[3 * q], &f.m2[3 * q]);
+        }
+        return m;
+      };
+      // Per channel the second smallest sample variance of the 2x2 quadrants holding the pixel (2+ samples each).
+      std::vector<std::array<float, 3>> quadrant;
+      for (int k = 0; k < 4; ++k) {
+        const Pooled m = merged(x - 1 + k % 2, y - 1 + k / 2, 2, 2);
+        if (m.n >= 2.0f)
+          quadrant.push_back({std::max(m.m2[0], 0.0f) / (m.n - 1.0f), std::max(m.m2[1], 0.0f) / (m.n - 1.0f),
+                              std::max(m.m2[2], 0.0f) / (m.n - 1.0f)});
       }
-      if (window.n >= 2.0f) {
+      const Pooled window = merged(x - 1, y - 1, 3, 3);
+      if (window.n >= 2.0f && !quadrant.empty()) {
         for (int c = 0; c < 3; ++c) {
-          const float s2 = std::max(window.m2[c], 0.0f) / (window.n - 1.0f);
+          std::vector<float> v;
+          for (const auto& q : quadrant) v.push_back(q[c]);
+          std::sort(v.begin(), v.end());
+          const float s2 = v[std::min<size_t>(1, v.size() - 1)];
           r.variance[3 * i + c] = std::max(s2 / n, static_cast<float>(p.variance_floor));
           r.theta[4 * i + c] = f.mean[3 * i + c];
         }

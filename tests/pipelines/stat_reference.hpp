@@ -24,8 +24,9 @@ struct StatParams {
   // means from the moments and multiplies by p's modulation.
   bool demodulated = false;
   // stat-temporal's pool_single: a pixel with samples but fewer than 2 is
-  // tested as its own mean with the sample variance of its 3x3 window's
-  // merged statistics (fp32 merges in the device's row order).
+  // tested as its own mean with, per channel, the second smallest sample
+  // variance of the merged statistics of the 2x2 quadrants of its 3x3 window
+  // that hold it (fp32 merges in the device's row order).
   bool pool_single = false;
 
   // Paper 003's setting: alpha 0.005, all-or-nothing membership.
