@@ -170,14 +170,17 @@ TEST(CyclesPreset, VectorAndDepthConversionOnSyntheticMotion) {
 }
 
 TEST(CyclesPreset, ConversionFunctions) {
-  std::vector<float> d = {1.0f, 1e10f, std::numeric_limits<float>::quiet_NaN(), 0.0f, 3e9f, 123.0f};
+  std::vector<float> d = {1.0f, 1e10f, std::numeric_limits<float>::quiet_NaN(), 0.0f, 3e9f, 123.0f, -2.0f};
   convert_cycles_depth(d);
   EXPECT_EQ(d[0], 1.0f);
   EXPECT_TRUE(std::isinf(d[1]));
   EXPECT_TRUE(std::isinf(d[2]));
-  EXPECT_EQ(d[3], 0.0f);  // 0 is background in the protocol already
+  // Cycles' Denoising Depth is 0 on the sky: +inf, so that the conversion to
+  // view depth (which adds the clip start) keeps it background.
+  EXPECT_TRUE(std::isinf(d[3]) && d[3] > 0.0f);
   EXPECT_TRUE(std::isinf(d[4]));
   EXPECT_EQ(d[5], 123.0f);
+  EXPECT_TRUE(std::isinf(d[6]) && d[6] > 0.0f);
   std::vector<float> v = {1.5f, 2.5f, -3.0f, -4.0f};
   convert_cycles_vector(v);
   EXPECT_EQ(v, (std::vector<float>{1.5f, -2.5f, -3.0f, 4.0f}));
