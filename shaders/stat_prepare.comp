@@ -9,7 +9,7 @@
 // Box-Cox mean and variance 0 (stat_filter tests it against its neighbours'
 // variances), or with pool_single (stat-temporal's default) a sample
 // variance from its 3x3 window's usable statistics (quadrant_variance) over
-// its own n, and the whole window's merged count in theta.w (as SVGF
+// its own n, and the whole window's sample count in theta.w (as SVGF
 // estimates a young pixel's variance from its neighbourhood): from the
 // radiance alone every pixel of a first frame has one sample, and none would
 // have a variance to test. Its theta stays its own mean: the window's mean
@@ -63,17 +63,17 @@ DnStat stat_at(uint p) {
   return s;
 }
 
-// The merge of the usable statistics of p's 3x3 window, in row order (no data: n = 0).
-DnStat pooled(uint p) {
+// The sample count of the usable statistics of p's 3x3 window, summed in row order.
+float window_count(uint p) {
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  DnStat acc = dn_stat_empty();
+  float n = 0.0;
   [[dont_unroll]] for (int o = 0; o < 9; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (!dn_inside(q, frame.size.xy)) continue;
     DnStat t = stat_at(uint(q.y) * frame.size.x + uint(q.x));
-    if (dn_stat_usable(t)) acc = dn_stat_merge(acc, t);
+    if (dn_stat_usable(t)) n += t.n;
   }
-  return acc;
+  return n;
 }
 
 // A one-sample pixel's sample variance: per channel the second smallest of
@@ -126,12 +126,11 @@ void main() {
   }
   if (DEMODULATED) demodulate(p, s);
   if (DN_PARAM_VALUE(stat, pool_single) != 0.0 && s.n < 2.0) {
-    DnStat w = pooled(p);
     float quadrants;
     vec3 s2 = quadrant_variance(p, quadrants);
-    if (w.n >= 2.0 && quadrants > 0.0) {
+    if (quadrants > 0.0) {  // then the window holds 2 or more samples too
       vec3 var = max(s2 / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
-      theta.data[p] = vec4(s.mean, w.n);
+      theta.data[p] = vec4(s.mean, window_count(p));
       variance.data[p] = vec4(var, moving);
       return;
     }
