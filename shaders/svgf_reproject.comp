@@ -172,6 +172,60 @@ void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
   still_mean.data[p] = vec4(mean, n);
 }
 
+// A change in a still view (a shadow falls, a light is switched): b, the
+// luminance of the current samples over p's 3x3 foreground pixels averaged
+// without the largest and the smallest, keeps its own running mean and M2
+// beside p's still mean (binding 19); once that holds DN_CHANGE_MIN_SAMPLES,
+// b beyond DN_CHANGE_T standard deviations of its samples (plus 1e-3 of it)
+// in two frames in a row restarts p's still mean and history. One pixel's
+// 1-spp noise hides the change of its own light for many frames, nine
+// pixels' much less often; one firefly among them, which the trim drops,
+// restarted converged pixels on dnrender's still scenes. The first failure
+// is merged into the mean, not into M2 (it would widen the next test), and
+// marks the state suspect (M2 stored as -1 - M2). Not below one sample per
+// pixel (MASKED): the box's samples change with the mask.
+const float DN_CHANGE_T = 3.0;
+const float DN_CHANGE_MIN_SAMPLES = 8.0;
+float box_luminance(ivec2 pos) {
+  float sum = 0.0, count = 0.0, lo = 1e38, hi = 0.0;
+  [[dont_unroll]] for (int o = 0; o < 9; ++o) {
+    ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
+    if (!dn_inside(q, frame.size.xy)) continue;
+    uint qi = uint(q.y) * frame.size.x + uint(q.x);
+    if (!dn_is_foreground(dn_svgf_depth(qi))) continue;
+    float l = dn_luminance(CLIP ? current_at(qi).rgb : dn_svgf_current(qi));
+    sum += l;
+    count += 1.0;
+    lo = min(lo, l);
+    hi = max(hi, l);
+  }
+  return count > 2.0 ? (sum - lo - hi) / (count - 2.0) : sum / count;
+}
+// Whether p's still mean goes on (it continues and its light has not changed).
+bool still_unchanged(uint p, ivec2 pos, bool continues) {
+  if (!CONVERGE_STILL || MASKED) return continues;
+  float b = box_luminance(pos);
+  vec2 s = still_change.data[p];
+  float n = still_mean.data[p].a;
+  bool suspect = s.y < 0.0;
+  float m2 = suspect ? -1.0 - s.y : s.y;
+  bool fail = false;
+  if (continues && n >= DN_CHANGE_MIN_SAMPLES) {
+    float dev = b - s.x, bound = 1e-3 * max(b, s.x);
+    fail = dev * dev > DN_CHANGE_T * DN_CHANGE_T * m2 / (n - 1.0) * (1.0 + 1.0 / n) + bound * bound;
+  }
+  bool goes_on = continues && n > 0.0 && !(fail && suspect);
+  if (!goes_on) {
+    still_change.data[p] = vec2(b, 0.0);
+    return false;
+  }
+  float k = min(n + 1.0, DN_STILL_MAX_SAMPLES);
+  float mean = mix(s.x, b, 1.0 / k);
+  if (!fail) m2 = (k == n ? m2 * (1.0 - 1.0 / k) : m2) + (b - s.x) * (b - mean);
+  still_change.data[p] = vec2(mean, fail ? -1.0 - m2 : m2);
+  return true;
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -291,6 +345,11 @@ void main() {
   // is its surface (a valid history may come from Falcor's 3x3 fallback).
   vec4 own_aux;
   bool continues = CONVERGE_STILL && valid && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
+  bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
+  if (has_sample && !still_unchanged(p, pos, continues) && continues) {
+    continues = false;
+    valid = false;
+  }
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
   if (MASKED && !sampled(p)) {
@@ -300,7 +359,7 @@ void main() {
     return;
   }
   // A sample the sanitizer changed is none for the still mean: it would stay in it.
-  update_still_mean(p, d, dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p)), continues);
+  update_still_mean(p, d, has_sample, continues);
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
   float alpha = valid ? max(1.0 / len, DN_SVGF_ALPHA_COLOUR) : 1.0;
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;

@@ -21,10 +21,12 @@ using protocol::ChannelId;
 constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
 // converge_still: a still pixel's running mean of its own samples,
-// vec4(demodulated rgb, samples), and the M2 of their luminance, fp32, read
-// and rewritten at p by svgf_reproject.
+// vec4(demodulated rgb, samples), the M2 of their luminance, and its change
+// test's vec2(running mean, M2) of the 3x3 box luminance, fp32, read and
+// rewritten at p by svgf_reproject.
 constexpr uint64_t kStillMeanBytes = 16;
 constexpr uint64_t kStillM2Bytes = 4;
+constexpr uint64_t kStillChangeBytes = 8;
 // With emission: a still pixel's running mean of its emission, vec4(rgb,
 // samples), and its change test's (M2 of the luminance, suspect), fp32, one
 // copy each, read and rewritten at p by svgf_remodulate.
@@ -197,6 +199,7 @@ bool keeps_still_emission(const SvgfVariant& v) { return v.emission && keeps_sti
 // A signal's still running mean (vec4(mean, n)) and the M2 of its samples' luminance.
 std::string still_mean_of(const std::string& history) { return history + "_still"; }
 std::string still_m2_of(const std::string& history) { return history + "_still_m2"; }
+std::string still_change_of(const std::string& history) { return history + "_still_change"; }
 
 // Signal `index`'s reprojection (and history clipping): its temporal colour
 // in its illum buffer, its temporal moments and length.
@@ -237,7 +240,10 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .set("SPECULAR_ALPHA", s.specular_alpha);
   if (demodulate) reproject.bind("modulator", s.modulator.buffer);
   if (keeps_still_mean(v))
-    reproject.bind("still_mean", still_mean_of(s.history)).bind("still_m2", still_m2_of(s.history)).set("CONVERGE_STILL", 1u);
+    reproject.bind("still_mean", still_mean_of(s.history))
+        .bind("still_m2", still_m2_of(s.history))
+        .bind("still_change", still_change_of(s.history))
+        .set("CONVERGE_STILL", 1u);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)
@@ -409,6 +415,7 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     if (keeps_still_mean(v)) {
       g.add_persistent(still_mean_of(s.history), kStillMeanBytes);
       g.add_persistent(still_m2_of(s.history), kStillM2Bytes);
+      g.add_persistent(still_change_of(s.history), kStillChangeBytes);
     }
   }
   if (keeps_still_emission(v)) {

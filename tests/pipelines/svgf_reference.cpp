@@ -274,6 +274,38 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     ch.still_n[i] = k;
   };
 
+  // The still mean's change test: the luminance of the current samples over
+  // the 3x3 foreground pixels, averaged without its largest and smallest,
+  // keeps its own running mean and M2;
+  // from 8 samples on, beyond 3 standard deviations of its samples (plus 1e-3
+  // of it) twice in a row restarts the still mean and the history (the first
+  // failure: merged into the mean, not M2). Decided in single precision, as on the device.
+  auto still_unchanged = [&](Chain& ch, int i, float b, bool continues) {
+    if (ch.change_mean.empty()) {
+      ch.change_mean.assign(n, 0.0f);
+      ch.change_m2.assign(n, 0.0f);
+      ch.change_suspect.assign(n, false);
+    }
+    const float cn = ch.still_n.empty() ? 0.0f : float(ch.still_n[i]), mean = ch.change_mean[i];
+    float m2 = ch.change_m2[i];
+    bool fail = false;
+    if (continues && cn >= 8.0f) {
+      const float dev = b - mean, bound = 1e-3f * std::max(b, mean);
+      fail = dev * dev > 9.0f * m2 / (cn - 1.0f) * (1.0f + 1.0f / cn) + bound * bound;
+    }
+    if (!continues || !(cn > 0.0f) || (fail && ch.change_suspect[i])) {
+      ch.change_mean[i] = b;
+      ch.change_m2[i] = 0.0f;
+      ch.change_suspect[i] = false;
+      return false;
+    }
+    const float k = std::min(cn + 1.0f, 65536.0f), next = mean + (b - mean) / k;
+    if (!fail) ch.change_m2[i] = (k == cn ? m2 * (1.0f - 1.0f / k) : m2) + (b - mean) * (b - next);
+    ch.change_mean[i] = next;
+    ch.change_suspect[i] = fail;
+    return true;
+  };
+
   // A sample the sanitizer changed (not finite, negative, above 1e12) is none for the still mean.
   auto valid_samples = [&](const std::vector<double>& plane) {
     std::vector<bool> ok(n);
@@ -439,7 +471,22 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       // pixel passes the consistency test (valid may come from the 3x3 fallback).
       const bool own_same = valid && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
                             !(distance3(nc, &n_[3 * i]) / (dn[i] + 0.01) > 16.0);
-      const bool continues = own_same && std::hypot(mvx, mvy) < 0.005;
+      bool continues = own_same && std::hypot(mvx, mvy) < 0.005;
+      if (keeps_still && !masked && sample_ok[i]) {
+        float box = 0.0f, count = 0.0f, lo = 1e38f, hi = 0.0f;
+        for (int yy = -1; yy <= 1; ++yy)
+          for (int xx = -1; xx <= 1; ++xx) {
+            const int qx = x + xx, qy = y + yy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx]) continue;
+            const float lq = float(luminance(&d[3 * (qy * w + qx)]));
+            box += lq;
+            count += 1.0f;
+            lo = std::min(lo, lq);
+            hi = std::max(hi, lq);
+          }
+        const float trimmed = count > 2.0f ? (box - lo - hi) / (count - 2.0f) : box / count;
+        if (!still_unchanged(ch, i, trimmed, continues) && continues) continues = valid = false;
+      }
       update_still(ch, i, &d[3 * i], (!masked || sampled(f.sample_count[i])) && sample_ok[i], continues);
       // Not sampled this frame: the history as reprojected (no data without one).
       if (masked && !sampled(f.sample_count[i])) {
