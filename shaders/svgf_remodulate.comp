@@ -85,24 +85,16 @@ vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
   float r = t.w / (dl * dl);
   return dl * dl > t.w ? t.rgb + d * (cubic ? r * sqrt(r) : r) : f;
 }
-// What a kept pixel blends toward where it is still, by weight: its
-// temporal mean m (the guard's own) pulled toward its running mean beyond
-// half a standard error of that mean, linearly, and from DN_KEPT_MEAN_FROM
-// samples on handed over to the running mean, wholly at DN_KEPT_MEAN_FULL
-// (m averages about 1 / alpha_colour = 20 frames). A few samples holding one
-// firefly (a large variance) leave m nearly as it is; a highlight the
-// running mean holds well beyond its error is taken nearly whole. .w
-// negative: no data.
-const float DN_KEPT_STILL_BAND = 0.5;
-const float DN_KEPT_MEAN_FROM = 8.0, DN_KEPT_MEAN_FULL = 32.0;
-vec4 dn_guard_mean(vec4 m, float len, int s, uint p) {
-  float w;
-  vec4 mean = dn_still_mean(m, s, p, w);
-  if (!(w > 0.0)) return vec4(m.rgb, m.w >= 0.0 ? 1.0 : -1.0);
-  float a2 = DN_KEPT_STILL_BAND * DN_KEPT_STILL_BAND * dn_still_sample_variance(m, len, s, p) / mean.a;
-  float handover = clamp((mean.a - DN_KEPT_MEAN_FROM) / (DN_KEPT_MEAN_FULL - DN_KEPT_MEAN_FROM), 0.0, 1.0);
-  vec3 g = mix(dn_guarded(m.rgb, vec4(mean.rgb, a2), false), mean.rgb, handover);
-  return vec4(mix(m.rgb, g, w), 1.0);
+// What a kept pixel blends toward where it is still: its still running
+// mean once that holds a sample (then it shows exactly what the plain mean
+// of its samples shows), else its temporal mean m. .w negative: no data.
+vec4 dn_guard_mean(vec4 m, int s, uint p) {
+  if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
+  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) {
+    vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
+    if (mean.a >= 1.0) return vec4(mean.rgb, 1.0);
+  }
+  return vec4(m.rgb, 1.0);
 }
 // f guarded toward signal s's targets (own: its temporal mean and variance).
 vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
@@ -136,8 +128,8 @@ vec3 kept_radiance(uint p, vec3 ga) {
   }
   if (HARM_GUARD) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-    vec4 m = dn_guard_mean(own_at(p), colour_history_at(p).a, 0, p);
-    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), colour_history2_at(p).a, 1, p) : vec4(0.0);
+    vec4 m = dn_guard_mean(own_at(p), 0, p);
+    vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
       c = mix(c, m.rgb * ga + (HAS_SPECULAR ? m2.rgb * specular_modulator(p) : vec3(0.0)), dn_stillness(mv));
   }
@@ -228,8 +220,10 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // static: nothing moved, so averaging the output over frames only takes out
 // the flicker the a-trous leaves (docs/pipelines.md, "svgf in detail", 5).
 // A pixel kept as rendered blends only where it is still (its motion, that
-// of its surface, is not that of what it shows).
+// of its surface, is not that of what it shows), and not with a still
+// running mean (converge_still), which it then shows as it is.
 float taa_weight(vec2 mv, bool kept) {
+  if (kept && CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) return 1.0;
   float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
   if (still <= 0.0 || still >= moving) return moving;

@@ -150,7 +150,7 @@ void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout 
 }
 
 // CONVERGE_STILL: p's running mean of its own samples d (and the M2 of their
-// luminance) goes on where the history is valid and p is still (continues),
+// luminance) goes on where p's surface keeps its history and p is still (continues),
 // else it restarts from d; a pixel without a sample this frame keeps it while
 // it continues, else has none.
 void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
@@ -174,20 +174,25 @@ void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
 
 // A change in a still view (a shadow falls, a light is switched): b, the
 // luminance of the current samples over p's 3x3 foreground pixels averaged
-// without the largest and the smallest, keeps its own running mean and M2
-// beside p's still mean (binding 19); once that holds DN_CHANGE_MIN_SAMPLES,
-// b beyond DN_CHANGE_T standard deviations of its samples (plus 1e-3 of it)
-// in two frames in a row restarts p's still mean and history. One pixel's
-// 1-spp noise hides the change of its own light for many frames, nine
-// pixels' much less often; one firefly among them, which the trim drops,
-// restarted converged pixels on dnrender's still scenes. The first failure
-// is merged into the mean, not into M2 (it would widen the next test), and
-// marks the state suspect (M2 stored as -1 - M2). Not below one sample per
-// pixel (MASKED): the box's samples change with the mask.
-const float DN_CHANGE_T = 3.0;
+// without the largest and the smallest, keeps beside p's still mean its
+// running mean and M2, its recent mean r (an exponential average of weight
+// DN_CHANGE_ALPHA) and the same average of b's variance as the box's spread
+// shows it (binding 19). From DN_CHANGE_MIN_SAMPLES on, r beyond t standard
+// deviations of itself from the running mean (plus 1e-3 of it) restarts
+// p's still mean and history; the variance is the larger of the M2's (of
+// the samples before b: a changed light's would widen the test that is to
+// catch it) and the spread's (the first bright samples of sparse light,
+// which the M2 has not seen yet). t: 3 darker, 4 brighter (1-spp light is
+// skewed to the bright side). One pixel's 1-spp noise hides the change of
+// its own light for many frames, nine pixels' over a few frames much less
+// often. Not below one sample per pixel (MASKED): the box's samples change
+// with the mask.
+const float DN_CHANGE_T_DARKER = 3.0, DN_CHANGE_T_BRIGHTER = 4.0;
+const float DN_CHANGE_ALPHA = 0.25;
 const float DN_CHANGE_MIN_SAMPLES = 8.0;
-float box_luminance(ivec2 pos) {
-  float sum = 0.0, count = 0.0, lo = 1e38, hi = 0.0;
+// vec2(b, b's variance from the spread of the box's values).
+vec2 box_luminance(ivec2 pos) {
+  float sum = 0.0, sum2 = 0.0, count = 0.0, lo = 1e38, hi = 0.0;
   [[dont_unroll]] for (int o = 0; o < 9; ++o) {
     ivec2 q = pos + ivec2(o % 3 - 1, o / 3 - 1);
     if (!dn_inside(q, frame.size.xy)) continue;
@@ -195,34 +200,40 @@ float box_luminance(ivec2 pos) {
     if (!dn_is_foreground(dn_svgf_depth(qi))) continue;
     float l = dn_luminance(CLIP ? current_at(qi).rgb : dn_svgf_current(qi));
     sum += l;
+    sum2 += l * l;
     count += 1.0;
     lo = min(lo, l);
     hi = max(hi, l);
   }
-  return count > 2.0 ? (sum - lo - hi) / (count - 2.0) : sum / count;
+  if (count < 3.0) return vec2(sum / count, 0.0);
+  float spread = max(sum2 - sum * sum / count, 0.0) / (count - 1.0);
+  return vec2((sum - lo - hi) / (count - 2.0), spread / (count - 2.0));
 }
 // Whether p's still mean goes on (it continues and its light has not changed).
 bool still_unchanged(uint p, ivec2 pos, bool continues) {
   if (!CONVERGE_STILL || MASKED) return continues;
-  float b = box_luminance(pos);
-  vec2 s = still_change.data[p];
+  vec2 box = box_luminance(pos);
+  float b = box.x;
+  vec4 s = still_change.data[p];  // running mean, M2, recent mean, recent spread variance
   float n = still_mean.data[p].a;
-  bool suspect = s.y < 0.0;
-  float m2 = suspect ? -1.0 - s.y : s.y;
-  bool fail = false;
-  if (continues && n >= DN_CHANGE_MIN_SAMPLES) {
-    float dev = b - s.x, bound = 1e-3 * max(b, s.x);
-    fail = dev * dev > DN_CHANGE_T * DN_CHANGE_T * m2 / (n - 1.0) * (1.0 + 1.0 / n) + bound * bound;
-  }
-  bool goes_on = continues && n > 0.0 && !(fail && suspect);
-  if (!goes_on) {
-    still_change.data[p] = vec2(b, 0.0);
+  if (!continues || !(n > 0.0)) {
+    still_change.data[p] = vec4(b, 0.0, b, box.y);
     return false;
   }
   float k = min(n + 1.0, DN_STILL_MAX_SAMPLES);
+  float a = max(1.0 / k, DN_CHANGE_ALPHA);
+  vec2 recent = mix(s.zw, box, a);
+  // The recent mean's variance about the running mean: v (a / (2 - a) + 1 / n).
+  float dev = recent.x - s.x, bound = 1e-3 * max(recent.x, s.x);
+  float t = dev < 0.0 ? DN_CHANGE_T_DARKER : DN_CHANGE_T_BRIGHTER;
+  float v = max(n > 1.0 ? s.y / (n - 1.0) : 0.0, recent.y);
+  if (n >= DN_CHANGE_MIN_SAMPLES && dev * dev > t * t * v * (a / (2.0 - a) + 1.0 / n) + bound * bound) {
+    still_change.data[p] = vec4(b, 0.0, b, box.y);
+    return false;
+  }
   float mean = mix(s.x, b, 1.0 / k);
-  if (!fail) m2 = (k == n ? m2 * (1.0 - 1.0 / k) : m2) + (b - s.x) * (b - mean);
-  still_change.data[p] = vec2(mean, fail ? -1.0 - m2 : m2);
+  float m2 = (k == n ? s.y * (1.0 - 1.0 / k) : s.y) + (b - s.x) * (b - mean);
+  still_change.data[p] = vec4(mean, m2, recent);
   return true;
 }
 
@@ -303,6 +314,10 @@ void main() {
       prev_len = floor(sl / sw + 0.5);  // integral lengths: no fp32 vs exact flips of the len < 4 test
     }
   }
+  // The still mean follows the geometry, not the clip's rejection: a sparse
+  // 1-spp highlight contradicts its history often, and its own change test
+  // (still_unchanged) catches a change of light.
+  bool surface_kept = valid;
   // Clipped signals (highlights and reflections): reject a history the
   // current frame contradicts, else clip it to the current neighbourhood.
   if (CLIP) {
@@ -344,7 +359,7 @@ void main() {
   // The still mean is p's own: it goes on only where p's own previous pixel
   // is its surface (a valid history may come from Falcor's 3x3 fallback).
   vec4 own_aux;
-  bool continues = CONVERGE_STILL && valid && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
+  bool continues = CONVERGE_STILL && surface_kept && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
   bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
   if (has_sample && !still_unchanged(p, pos, continues) && continues) {
     continues = false;

@@ -26,7 +26,7 @@ constexpr uint64_t kAuxHistoryBytes = 16;
 // rewritten at p by svgf_reproject.
 constexpr uint64_t kStillMeanBytes = 16;
 constexpr uint64_t kStillM2Bytes = 4;
-constexpr uint64_t kStillChangeBytes = 8;
+constexpr uint64_t kStillChangeBytes = 16;
 // With emission: a still pixel's running mean of its emission, vec4(rgb,
 // samples), and its change test's (M2 of the luminance, suspect), fp32, one
 // copy each, read and rewritten at p by svgf_remodulate.

@@ -274,35 +274,38 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     ch.still_n[i] = k;
   };
 
-  // The still mean's change test: the luminance of the current samples over
-  // the 3x3 foreground pixels, averaged without its largest and smallest,
-  // keeps its own running mean and M2;
-  // from 8 samples on, beyond 3 standard deviations of its samples (plus 1e-3
-  // of it) twice in a row restarts the still mean and the history (the first
-  // failure: merged into the mean, not M2). Decided in single precision, as on the device.
-  auto still_unchanged = [&](Chain& ch, int i, float b, bool continues) {
-    if (ch.change_mean.empty()) {
-      ch.change_mean.assign(n, 0.0f);
-      ch.change_m2.assign(n, 0.0f);
-      ch.change_suspect.assign(n, false);
-    }
-    const float cn = ch.still_n.empty() ? 0.0f : float(ch.still_n[i]), mean = ch.change_mean[i];
-    float m2 = ch.change_m2[i];
-    bool fail = false;
-    if (continues && cn >= 8.0f) {
-      const float dev = b - mean, bound = 1e-3f * std::max(b, mean);
-      fail = dev * dev > 9.0f * m2 / (cn - 1.0f) * (1.0f + 1.0f / cn) + bound * bound;
-    }
-    if (!continues || !(cn > 0.0f) || (fail && ch.change_suspect[i])) {
-      ch.change_mean[i] = b;
-      ch.change_m2[i] = 0.0f;
-      ch.change_suspect[i] = false;
+  // The still mean's change test: b, the luminance of the current samples
+  // over the 3x3 foreground pixels averaged without its largest and
+  // smallest, and its variance from their spread (over count - 2), keep b's
+  // running mean and M2 and the recent means (exponential, weight
+  // max(1/k, 1/4)) of b and of that variance; from 8 samples on, the recent
+  // b beyond t standard deviations of itself from the running mean (the
+  // larger of the M2's before b and the recent spread's, times
+  // a / (2 - a) + 1/n), plus 1e-3 of it, restarts the still mean and the
+  // history; t = 3 darker, 4 brighter. Single precision, as on the device.
+  auto still_unchanged = [&](Chain& ch, int i, float b, float spread, bool continues) {
+    if (ch.change.empty()) ch.change.assign(4 * n, 0.0f);
+    float* s = &ch.change[4 * i];
+    const float cn = ch.still_n.empty() ? 0.0f : float(ch.still_n[i]);
+    auto restart = [&] {
+      s[0] = s[2] = b;
+      s[1] = 0.0f;
+      s[3] = spread;
       return false;
-    }
-    const float k = std::min(cn + 1.0f, 65536.0f), next = mean + (b - mean) / k;
-    if (!fail) ch.change_m2[i] = (k == cn ? m2 * (1.0f - 1.0f / k) : m2) + (b - mean) * (b - next);
-    ch.change_mean[i] = next;
-    ch.change_suspect[i] = fail;
+    };
+    if (!continues || !(cn > 0.0f)) return restart();
+    const float k = std::min(cn + 1.0f, 65536.0f);
+    const float a = std::max(1.0f / k, 0.25f);
+    const float recent = s[2] * (1.0f - a) + b * a, recent_spread = s[3] * (1.0f - a) + spread * a;
+    const float dev = recent - s[0], bound = 1e-3f * std::max(recent, s[0]);
+    const float t2 = dev < 0.0f ? 9.0f : 16.0f;
+    const float v = std::max(cn > 1.0f ? s[1] / (cn - 1.0f) : 0.0f, recent_spread);
+    if (cn >= 8.0f && dev * dev > t2 * v * (a / (2.0f - a) + 1.0f / cn) + bound * bound) return restart();
+    const float mean = s[0] * (1.0f - 1.0f / k) + b * (1.0f / k);
+    s[1] = (k == cn ? s[1] * (1.0f - 1.0f / k) : s[1]) + (b - s[0]) * (b - mean);
+    s[0] = mean;
+    s[2] = recent;
+    s[3] = recent_spread;
     return true;
   };
 
@@ -400,6 +403,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       // the 3x3 history pixels around p's previous pixel.
       // Threshold decisions: made in single precision, as the device makes
       // them, so rounding does not flip them (m2 - m1^2 cancels in fp32).
+      const bool surface_kept = valid;  // the still mean goes on through the clip's rejection
       const int prev_x = static_cast<int>(std::floor(px)), prev_y = static_cast<int>(std::floor(py));
       auto moments_sigma = [](float m1, float m2) {  // clip.glsl's dn_moments_sigma
         const float v = m2 - m1 * m1;
@@ -469,23 +473,26 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
       // The still mean is p's own: it goes on only where p's own previous
       // pixel passes the consistency test (valid may come from the 3x3 fallback).
-      const bool own_same = valid && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
+      const bool own_same = surface_kept && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
                             !(distance3(nc, &n_[3 * i]) / (dn[i] + 0.01) > 16.0);
       bool continues = own_same && std::hypot(mvx, mvy) < 0.005;
       if (keeps_still && !masked && sample_ok[i]) {
-        float box = 0.0f, count = 0.0f, lo = 1e38f, hi = 0.0f;
+        float box = 0.0f, box2 = 0.0f, count = 0.0f, lo = 1e38f, hi = 0.0f;
         for (int yy = -1; yy <= 1; ++yy)
           for (int xx = -1; xx <= 1; ++xx) {
             const int qx = x + xx, qy = y + yy;
             if (qx < 0 || qy < 0 || qx >= w || qy >= h || !fg[qy * w + qx]) continue;
             const float lq = float(luminance(&d[3 * (qy * w + qx)]));
             box += lq;
+            box2 += lq * lq;
             count += 1.0f;
             lo = std::min(lo, lq);
             hi = std::max(hi, lq);
           }
-        const float trimmed = count > 2.0f ? (box - lo - hi) / (count - 2.0f) : box / count;
-        if (!still_unchanged(ch, i, trimmed, continues) && continues) continues = valid = false;
+        const float trimmed = count >= 3.0f ? (box - lo - hi) / (count - 2.0f) : box / count;
+        const float spread =
+            count >= 3.0f ? std::max(box2 - box * box / count, 0.0f) / (count - 1.0f) / (count - 2.0f) : 0.0f;
+        if (!still_unchanged(ch, i, trimmed, spread, continues) && continues) continues = valid = false;
       }
       update_still(ch, i, &d[3 * i], (!masked || sampled(f.sample_count[i])) && sample_ok[i], continues);
       // Not sampled this frame: the history as reprojected (no data without one).
@@ -765,26 +772,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       for (int k = 0; k < 3; ++k) filtered[4 * i + k] = w > 0.0 ? m[k] + (s[k] - m[k]) * w : m[k];
     }
   };
-  // What a kept still pixel blends toward: its temporal mean m, guarded
-  // toward the still mean with a = sqrt(s2 / n) / 2 (the still target's a
-  // over 2k) by a^2 / Y(m - mean)^2 beyond a, then mixed toward the still
-  // mean by clamp((n - 8) / 24, 0, 1), all mixed by w.
+  // What a kept still pixel blends toward: its still running mean once that
+  // holds a sample, else its temporal mean (unchanged where it has no data).
   auto guard_mean = [&](const Chain& ch, int i, double* t) {
     Target moving, still;
     double w;
     if (!guard_target(ch, i, moving, still, w)) return;
-    if (!(w > 0.0)) {
-      for (int k = 0; k < 3; ++k) t[k] = moving.rgb[k];
-      return;
-    }
-    still.allowed /= 4.0 * p_.converge_still * p_.converge_still;
-    double g[3];
-    guarded_toward(moving.rgb, still, false, g);
-    const double handover = std::clamp((ch.still_n[i] - 8.0) / 24.0, 0.0, 1.0);
-    for (int k = 0; k < 3; ++k) {
-      g[k] += (still.rgb[k] - g[k]) * handover;
-      t[k] = moving.rgb[k] + (g[k] - moving.rgb[k]) * w;
-    }
+    const bool has_mean = keeps_still && ch.still_n[i] >= 1.0;
+    for (int k = 0; k < 3; ++k) t[k] = has_mean ? ch.still_mean[3 * i + k] : moving.rgb[k];
   };
   guard(cur, chains_[0]);
   if (split) guard(spec, chains_[1]);
@@ -923,6 +918,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         const double moving = p_.taa_alpha > 0.0 && !kept[i] ? p_.taa_alpha : 1.0;
         const bool young = p_.display_lag && chains_[0].length[i] < p_.luminance_min_age;
         if (young) lag[i] = -1.0;
+        if (kept[i] && keeps_still) continue;  // it shows its still running mean as it is
         const double mvx = f.motion[2 * i], mvy = f.motion[2 * i + 1];
         if (reset || !fg[i] || !usable_motion(mvx, mvy)) continue;
         const double fx = x + mvx, fy = y + mvy;  // previous position - 0.5

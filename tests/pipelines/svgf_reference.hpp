@@ -94,8 +94,7 @@ class SvgfReference {
     std::vector<double> colour, length, m1, m2;
     std::vector<double> still_mean, still_n;  // converge_still: a still pixel's running mean of its samples (3 + 1 per pixel)
     std::vector<double> still_m2;             // and the M2 of their luminance
-    std::vector<float> change_mean, change_m2;  // its change test: running mean and M2 of the 3x3 box luminance
-    std::vector<bool> change_suspect;           // the last test failed
+    std::vector<float> change;                // its change test: running mean, M2, recent mean of the 3x3 box luminance
     std::vector<double> temporal, variance;
     std::vector<std::vector<double>> atrous;
   };
