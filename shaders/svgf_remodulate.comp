@@ -118,15 +118,20 @@ vec3 raw_specular(uint p) {
   return dn_sanitize_radiance(DN_LOAD3(raw2, RAW2_HALF, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
 }
 
-// The current radiance of an unexplained pixel, less emission; ga: its guarded albedo.
-vec3 kept_radiance(uint p, vec3 ga) {
+// The current radiance of an unexplained pixel, less emission; a: its
+// albedo, ga: guarded. Blended toward its means only where the albedo is
+// no reflectance (then the demodulated means are radiance, ga 1): one above
+// DN_REFLECTANCE_MAX is a frame's own (Cycles' Denoising Albedo of the light
+// one reflected sample hit), and the means of other frames' samples times
+// it were 15 times the light on Cycles' still room.
+vec3 kept_radiance(uint p, vec3 a, vec3 ga) {
   vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
   if (HAS_SPECULAR) {
     c += raw_specular(p);
   } else if (HAS_EMISSION) {
     c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
   }
-  if (HARM_GUARD) {
+  if (HARM_GUARD && dn_no_reflectance(a)) {
     vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
     vec4 m = dn_guard_mean(own_at(p), 0, p);
     vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), 1, p) : vec4(0.0);
@@ -199,7 +204,7 @@ vec3 remodulate(uint p, out bool kept) {
   kept = keeping && dn_unexplained(a);
   vec3 c;
   if (kept) {
-    c = kept_radiance(p, ga);
+    c = kept_radiance(p, a, ga);
   } else {
     c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own_at(p) : vec4(-1.0),
                       HARM_GUARD ? colour_history_at(p).a : 0.0, 0, p) * ga;

@@ -800,9 +800,12 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     dsan = sanitize(f.diffuse);
     ssan = sanitize(f.specular);
   }
-  // Where still (and with the guard's buffer: harm_guard, a-trous), toward the guard's targets (guard_mean).
+  // Where still (and with the guard's buffer: harm_guard, a-trous), toward
+  // the guard's targets (guard_mean); not where the albedo is above 1.5 (a
+  // frame's own, which the means of other frames' samples are not).
   auto stillness = [&](int i) {
-    bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0;
+    bool own = p_.harm_guard > 0.0 && iterations > 0 && chains_[0].variance[i] >= 0.0 &&
+               !(largest_f32(f.albedo, i) >= static_cast<double>(1e-3f));
     if (split) own = own && chains_[1].variance[i] >= 0.0;
     const double mx = f.motion[2 * i], my = f.motion[2 * i + 1];
     return own && usable_motion(mx, my) ? std::clamp(1.0 - std::hypot(mx, my) / 0.05, 0.0, 1.0) : 0.0;
