@@ -62,11 +62,13 @@ float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
   }
   return max(m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
+// Whether the still running means are kept and used (converge_still > 0).
+bool dn_converging_still() { return CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0; }
 // Signal s's still running mean (1: the specular chain); w: its weight as
 // the target, 0 where the pixel is not still.
 vec4 dn_still_mean(vec4 m, int s, uint p, out float w) {
   w = 0.0;
-  if (!CONVERGE_STILL || !(DN_PARAM_VALUE(svgf, converge_still) > 0.0) || !(m.w >= 0.0)) return vec4(0.0);
+  if (!dn_converging_still() || !(m.w >= 0.0)) return vec4(0.0);
   vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
   w = dn_still_weight(mean.a);
   return w > 0.0 ? mean : vec4(0.0);
@@ -90,7 +92,7 @@ vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
 // of its samples shows), else its temporal mean m. .w negative: no data.
 vec4 dn_guard_mean(vec4 m, int s, uint p) {
   if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
-  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) {
+  if (dn_converging_still()) {
     vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
     if (mean.a >= 1.0) return vec4(mean.rgb, 1.0);
   }
@@ -122,8 +124,8 @@ vec3 raw_specular(uint p) {
 // albedo, ga: guarded. Blended toward its means only where the albedo is
 // no reflectance (then the demodulated means are radiance, ga 1): one above
 // DN_REFLECTANCE_MAX is a frame's own (Cycles' Denoising Albedo of the light
-// one reflected sample hit), and the means of other frames' samples times
-// it were 15 times the light on Cycles' still room.
+// one reflected sample hit), and the means of other frames' samples, which
+// other albedos demodulated, are not radiance times it.
 vec3 kept_radiance(uint p, vec3 a, vec3 ga) {
   vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
   if (HAS_SPECULAR) {
@@ -228,7 +230,7 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // of its surface, is not that of what it shows), and not with a still
 // running mean (converge_still), which it then shows as it is.
 float taa_weight(vec2 mv, bool kept) {
-  if (kept && CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) return 1.0;
+  if (kept && dn_converging_still()) return 1.0;
   float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
   if (still <= 0.0 || still >= moving) return moving;

@@ -22,8 +22,8 @@ constexpr uint64_t kColourHistoryBytes = 16;
 constexpr uint64_t kAuxHistoryBytes = 16;
 // converge_still: a still pixel's running mean of its own samples,
 // vec4(demodulated rgb, samples), the M2 of their luminance, and its change
-// test's vec2(running mean, M2) of the 3x3 box luminance, fp32, read and
-// rewritten at p by svgf_reproject.
+// test's vec4(running mean, M2, recent mean, recent spread variance) of the
+// 3x3 box luminance, fp32, read and rewritten at p by svgf_reproject.
 constexpr uint64_t kStillMeanBytes = 16;
 constexpr uint64_t kStillM2Bytes = 4;
 constexpr uint64_t kStillChangeBytes = 16;
