@@ -14,7 +14,7 @@
 # references' own noise.
 # Writes OUT/still.tsv (every frame) and OUT/still.md: per variant and
 # method, RMSE / nc relMSE / ꟻLIP HDR after 1, 2, 4, ... frames, at how many
-# of those counts the method is above the running mean (RMSE / nc relMSE),
+# of those counts the method is above the running mean (by each),
 # and at how many it rises from the previous count (nc relMSE). A pipeline
 # that fails (e.g. svgf-fb without the F0 AOV) is reported in the table.
 # Environment: BLENDER, DN_BUILD_DIR (default build), DN_SKIP_SETUP=1 as
@@ -117,18 +117,19 @@ awk -F'\t' -v frames="$frames" -v failures="$failures" '
   END {
     line = "| variant | method |"; sep = "|---|---|"
     for (f = 1; f <= frames; f *= 2) { line = line " " f " |"; sep = sep "---|" }
-    print line " above the mean (RMSE / nc relMSE) | rises (nc relMSE) |"; print sep "---|---|"
+    print line " above the mean (RMSE / nc relMSE / ꟻLIP) | rises (nc relMSE) |"; print sep "---|---|"
     for (i = 1; i <= n; ++i) {
       split(order[i], k, SUBSEP); mean = k[1] SUBSEP "mean"
-      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; c = 0; r = 0; prev = ""
+      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; d = 0; c = 0; r = 0; prev = ""
       for (f = 1; f <= frames; f *= 2) {
         line = line sprintf(" %.4f / %.4f / %.4f |", rmse[order[i], f], rel[order[i], f], flip[order[i], f]); ++c
         if (rmse[order[i], f] > rmse[mean, f]) ++a
         if (rel[order[i], f] > rel[mean, f]) ++b
+        if (flip[order[i], f] > flip[mean, f]) ++d
         if (prev != "" && rel[order[i], f] > prev) ++r
         prev = rel[order[i], f]
       }
-      print line " " a " / " b " of " c " | " r " |"
+      print line " " a " / " b " / " d " of " c " | " r " |"
     }
     while ((getline l < failures) > 0) { split(l, fl, "\t"); print "| " fl[1] " | " fl[2] " | failed: " fl[3] " |" }
   }' "$tsv" > "$out/still.md"

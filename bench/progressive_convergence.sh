@@ -169,7 +169,7 @@ for s in $scenes; do
       "$dn" denoise -q --server "$server_url" --pipeline "$pipeline" --preset dnrender \
         ${pipeline_params[@]+"${pipeline_params[@]}"} --input "$input" --start 0 --end $((frames - 1)) \
         --output "$res/frame_%04d.exr" --exr-float --summary "$res.summary.tsv"
-      "$metrics" --output "$res/frame_%04d.exr" "${ref[@]}" --input "$input" --frames "$frames" > "$res.tsv"
+      "$metrics" --output "$res/frame_%04d.exr" "${ref[@]}" --input "$input" --frames "$frames" | cut -f1-12 > "$res.tsv"
       if [ "$camera" = still ]; then
         "$metrics" --output "$res/frame_%04d.exr" --reference "$point1" --reference2 "$point2" --frames "$frames" |
           cut -f2,3,10 > "$res.point.tsv"

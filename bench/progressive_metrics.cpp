@@ -36,8 +36,10 @@
 //                 emission (input emission.R/G/B all 0) in their 3x3
 //                 neighbourhood, i.e. without light sources (and background)
 //                 and their edges; noemit_px counts those pixels.
+//   flip_hdr      mean HDR-FLIP against r1 (dn/image/flip.hpp: default
+//                 viewing, automatic exposures of r1).
 // Prints a TSV: frame rmse nc_mse ref_noise_mse temporal holes zero_px nonfinite
-// uncovered nc_relmse nc_mse_noemit noemit_px.
+// uncovered nc_relmse nc_mse_noemit noemit_px flip_hdr.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -47,6 +49,7 @@
 #include <vector>
 
 #include "dn/image/exr_io.hpp"
+#include "dn/image/flip.hpp"
 #include "dn/image/metrics.hpp"
 #include "frame_path.hpp"
 
@@ -145,7 +148,7 @@ std::pair<double, size_t> nc_mse_without_emitters(const std::vector<float>& out,
 
 int run(const Options& o) {
   if (!o.average.empty()) return average(o);
-  std::printf("frame\trmse\tnc_mse\tref_noise_mse\ttemporal\tholes\tzero_px\tnonfinite\tuncovered\tnc_relmse\tnc_mse_noemit\tnoemit_px\n");
+  std::printf("frame\trmse\tnc_mse\tref_noise_mse\ttemporal\tholes\tzero_px\tnonfinite\tuncovered\tnc_relmse\tnc_mse_noemit\tnoemit_px\tflip_hdr\n");
   std::vector<float> previous;
   std::vector<unsigned char> covered;
   for (int f = o.first; f < o.first + o.frames; ++f) {
@@ -199,8 +202,9 @@ int run(const Options& o) {
         if (surface && (r[0] > 0.0f || r[1] > 0.0f || r[2] > 0.0f)) holes++;
       }
     }
-    std::printf("%d\t%.6g\t%.6g\t%.6g\t%.6g\t%zu\t%zu\t%zu\t%s\t%.6g\t%.6g\t%s\n", f, rmse, nc, ref_noise, temporal,
-                holes, zero, nonfinite, uncovered.c_str(), nc_rel, nc_noemit, noemit_px.c_str());
+    const double flip = dn::image::flip_hdr(out.data(), ref.data(), w, h).mean;
+    std::printf("%d\t%.6g\t%.6g\t%.6g\t%.6g\t%zu\t%zu\t%zu\t%s\t%.6g\t%.6g\t%s\t%.6g\n", f, rmse, nc, ref_noise,
+                temporal, holes, zero, nonfinite, uncovered.c_str(), nc_rel, nc_noemit, noemit_px.c_str(), flip);
     previous = out;
   }
   return 0;

@@ -10,10 +10,11 @@
 # frame, so the noisy frames converge to that image, not to a box-filtered
 # render: bench/progressive_convergence.sh, whose cached references these
 # are): rmse against the first, and the noise-corrected MSE and relMSE over
-# both (bench/progressive_metrics), which take out the references' own noise.
+# both (bench/progressive_metrics), which take out the references' own noise,
+# and the HDR-FLIP against the first.
 # Writes OUT/still.tsv (every frame) and OUT/still.md: per scene and method
-# RMSE / nc relMSE after 1, 2, 4, ... frames, and at how many of those frame
-# counts the method is above the running mean (by RMSE / by nc relMSE).
+# RMSE / nc relMSE / HDR-FLIP after 1, 2, 4, ... frames, and at how many of
+# those frame counts the method is above the running mean (by each).
 # Environment: DN_BUILD_DIR (default build) holds the binaries; DN_SKIP_SETUP=1
 # skips scripts/setup.sh.
 set -euo pipefail
@@ -64,7 +65,7 @@ start_bench_server still "$bin" "$dn" "$out/dnserver.log"
 rows=("mean accumulate alpha_min=0 max_history=1024" "svgf svgf" "svgf-fb svgf-fb" "reflect reflect"
       "progressive progressive" "stat-temporal stat-temporal" "svgf-no-converge svgf converge_still=0")
 tsv="$out/still.tsv"
-printf 'scene\tmethod\tframes\trmse\tnc_mse\tnc_relmse\n' > "$tsv"
+printf 'scene\tmethod\tframes\trmse\tnc_mse\tnc_relmse\tflip_hdr\n' > "$tsv"
 for s in $scenes; do
   dir="$out/scene$s"
   echo "still_convergence: scene $s: $frames still frames at ${width}x${height}, point references of $point_frames frames (cached)"
@@ -80,30 +81,31 @@ for s in $scenes; do
       --input "$dir/input/frame_%04d.exr" --start 0 --end $((frames - 1)) --output "$dir/$label/frame_%04d.exr" \
       --exr-float > /dev/null
     "$metrics" --output "$dir/$label/frame_%04d.exr" --reference "$point1" --reference2 "$point2" --frames "$frames" |
-      awk -F'\t' -v OFS='\t' -v s="$s" -v m="$label" 'NR > 1 { print s, m, $1 + 1, $2, $3, $10 }' >> "$tsv"
+      awk -F'\t' -v OFS='\t' -v s="$s" -v m="$label" 'NR > 1 { print s, m, $1 + 1, $2, $3, $10, $13 }' >> "$tsv"
   done
 done
 
-# The table: per scene and method, RMSE / nc relMSE at 1, 2, 4, ... frames,
-# and at how many of those the method is above the running mean.
+# The table: per scene and method, RMSE / nc relMSE / HDR-FLIP at 1, 2, 4,
+# ... frames, and at how many of those the method is above the running mean.
 awk -F'\t' -v frames="$frames" '
   NR == 1 { next }
-  { key = $1 SUBSEP $2; rmse[key, $3] = $4; rel[key, $3] = $6
+  { key = $1 SUBSEP $2; rmse[key, $3] = $4; rel[key, $3] = $6; flip[key, $3] = $7
     if (!(key in seen)) { seen[key] = 1; order[++n] = key } }
   END {
     line = "| scene | method |"; sep = "|---|---|"
     for (f = 1; f <= frames; f *= 2) { line = line " " f " |"; sep = sep "---|" }
-    print line " above the mean (RMSE / nc relMSE) |"; print sep "---|"
+    print line " above the mean (RMSE / nc relMSE / ꟻLIP) |"; print sep "---|"
     for (i = 1; i <= n; ++i) {
       split(order[i], k, SUBSEP); mean = k[1] SUBSEP "mean"
-      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; c = 0
+      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; d = 0; c = 0
       for (f = 1; f <= frames; f *= 2) {
-        line = line sprintf(" %.4f / %.4f |", rmse[order[i], f], rel[order[i], f]); ++c
+        line = line sprintf(" %.4f / %.4f / %.4f |", rmse[order[i], f], rel[order[i], f], flip[order[i], f]); ++c
         if (rmse[order[i], f] > rmse[mean, f]) ++a
         if (rel[order[i], f] > rel[mean, f]) ++b
+        if (flip[order[i], f] > flip[mean, f]) ++d
       }
-      print line " " a " / " b " of " c " |"
+      print line " " a " / " b " / " d " of " c " |"
     }
   }' "$tsv" > "$out/still.md"
-echo "still_convergence: table $out/still.md (RMSE against the first point reference / noise-corrected relMSE)"
+echo "still_convergence: table $out/still.md (RMSE against the first point reference / noise-corrected relMSE / HDR-FLIP)"
 cat "$out/still.md"

@@ -26,8 +26,8 @@
 // single-sample form of the test, its variance taken from the neighbour's
 // sample variance, var_p = var_q n_q / n_p, and nu = n_q - 1 (a prediction
 // interval: is p's sample plausible under q's distribution). A pixel without
-// data (n = 0, or a non-finite statistic) keeps its raw mean. One invocation
-// per pixel pair.
+// data (n = 0, or a non-finite statistic) keeps its raw mean, and so does a
+// pixel stat_prepare marked kept (DN_STAT_KEPT). One invocation per pixel pair.
 //
 // Resources: passes/stat_filter.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -38,21 +38,22 @@
 #include "passes/stat_filter.pass"
 
 #include "stat_filter_io.glsl"
+#include "stat_class.glsl"
 #include "stat_gather.glsl"
 
 vec3 filter_pixel(uint p) {
   vec3 raw_p = dn_stat_value(p);
   vec4 theta_p = theta_at(p);
-  if (!(theta_p.w > 0.0)) return dn_stat_remodulate(raw_p, p);
+  vec4 var_p4 = variance_at(p);
+  if (!(theta_p.w > 0.0) || var_p4.w == DN_STAT_KEPT) return dn_stat_remodulate(raw_p, p);
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec4 var_p4 = variance_at(p);
   vec3 var_p = var_p4.rgb;
   vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
   vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
-  k.asymmetric = k.asymmetric || var_p4.w > 0.0;  // stat_prepare marked p moving
+  k.asymmetric = k.asymmetric || var_p4.w == DN_STAT_MOVING;
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy) {

@@ -21,6 +21,7 @@
 #include "passes/stat_filter_tiled.pass"
 
 #include "stat_filter_io.glsl"
+#include "stat_class.glsl"
 #include "stat_gather.glsl"
 
 struct Tap {
@@ -40,10 +41,10 @@ Tap dn_tile_fetch(ivec2 p) {
 vec3 filter_pixel() {
   Tap c = dn_tile_at(ivec2(0));
   vec3 raw_p = c.raw.rgb;
-  if (!(c.theta.w > 0.0)) return dn_stat_remodulate(raw_p, dn_grid_index(dn_pixel(), dn_grid.size));
+  if (!(c.theta.w > 0.0) || c.variance.w == DN_STAT_KEPT) return dn_stat_remodulate(raw_p, dn_grid_index(dn_pixel(), dn_grid.size));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
-  k.asymmetric = k.asymmetric || c.variance.w > 0.0;  // stat_prepare marked p moving
+  k.asymmetric = k.asymmetric || c.variance.w == DN_STAT_MOVING;
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy)

@@ -15,10 +15,18 @@
 // have a variance to test. Its theta stays its own mean: the window's mean
 // made a light seen in a mirror one with its dark neighbours (dnrender scene
 // 6, first frame: RMSE 0.593 against the frame's 0.517). n = 0 or any
-// non-finite statistic gets n = 0 in theta.w: no data. With MOVING_ASYMMETRIC
-// (stat-temporal) variance.w is 1 where the pixel moves (motion not usable
-// or 0.005 px or more): stat_filter tests its neighbours by Eq. 14 there.
-// One invocation per pixel.
+// non-finite statistic gets n = 0 in theta.w: no data. variance.w is p's
+// class (stat_class.glsl): with MOVING_ASYMMETRIC (stat-temporal)
+// DN_STAT_MOVING where the pixel moves (motion not usable or 0.005 px or
+// more): stat_filter tests its neighbours by Eq. 14 there. With
+// KEEP_STILL_UNEXPLAINED (stat-temporal) DN_STAT_KEPT where a still pixel
+// with 2 or more samples is unexplained (dn_unexplained: a metal or mirror,
+// whose guides say nothing of what it shows): stat_filter returns its own
+// mean. Its few samples' variance is so wide that the test accepted dark
+// neighbours into a highlight (dnrender scene 6 after 2 still frames: a lit
+// line of reference 25 shown at 0.55, its mean 15), and at 64 samples the
+// test still let darker neighbours of high variance in; svgf's chain keeps
+// such pixels too. Else DN_STAT_TESTED. One invocation per pixel.
 //
 // DEMODULATED (the statistics are over demodulated samples): also the
 // value stat_filter averages, the demodulated mean from the moments
@@ -35,6 +43,7 @@
 #include "inside.glsl"
 #include "reproject.glsl"
 #include "stat.glsl"
+#include "stat_class.glsl"
 #include "pass.glsl"
 #include "passes/stat_prepare.pass"
 
@@ -106,7 +115,7 @@ vec3 quadrant_variance(uint p, out float count) {
   return count >= 2.0 ? second : smallest;
 }
 
-float moving = 0.0;  // variance.w
+float pixel_class = DN_STAT_TESTED;  // variance.w
 
 bool pixel_moves(uint p) {
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
@@ -116,7 +125,8 @@ bool pixel_moves(uint p) {
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
-  if (MOVING_ASYMMETRIC && pixel_moves(p)) moving = 1.0;
+  bool moves = (MOVING_ASYMMETRIC || KEEP_STILL_UNEXPLAINED) && pixel_moves(p);
+  if (MOVING_ASYMMETRIC && moves) pixel_class = DN_STAT_MOVING;
   DnStat s = stat_at(p);
   if (!dn_stat_usable(s)) {
     theta.data[p] = vec4(0.0);
@@ -131,16 +141,17 @@ void main() {
     if (quadrants > 0.0) {  // then the window holds 2 or more samples too
       vec3 var = max(s2 / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
       theta.data[p] = vec4(s.mean, window_count(p));
-      variance.data[p] = vec4(var, moving);
+      variance.data[p] = vec4(var, pixel_class);
       return;
     }
   }
   if (s.n < 2.0) {  // samples but no variance: the mean, for the single-sample test
     theta.data[p] = vec4(s.mean, s.n);
-    variance.data[p] = vec4(vec3(0.0), moving);
+    variance.data[p] = vec4(vec3(0.0), pixel_class);
     return;
   }
+  if (KEEP_STILL_UNEXPLAINED && !moves && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p))) pixel_class = DN_STAT_KEPT;
   vec3 var = max(dn_stat_sample_variance(s) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
   theta.data[p] = vec4(dn_stat_theta(s), s.n);
-  variance.data[p] = vec4(var, moving);
+  variance.data[p] = vec4(var, pixel_class);
 }

@@ -358,8 +358,13 @@ void main() {
                           floatBitsToUint(grad.x), REFLECTION ? uint(reflection_at(p).z) : 0u);
   // The still mean is p's own: it goes on only where p's own previous pixel
   // is its surface (a valid history may come from Falcor's 3x3 fallback).
+  // SURFACE_STILL: p's surface is the pixel's, whose still mean the first
+  // chain kept (2 or more samples) or restarted this frame; the reflected
+  // hit's guides and Eq. 1 follow each sample's reflected hit, which at a
+  // still pixel differs from frame to frame without any change.
   vec4 own_aux;
-  bool continues = CONVERGE_STILL && surface_kept && dn_is_still(mv) && tap_valid(pos, z, n, grad, own_aux);
+  bool continues = CONVERGE_STILL && dn_is_still(mv) &&
+                   (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : surface_kept && tap_valid(pos, z, n, grad, own_aux));
   bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
   if (has_sample && !still_unchanged(p, pos, continues) && continues) {
     continues = false;

@@ -10,7 +10,7 @@ namespace {
 
 using protocol::ChannelId;
 
-// Per pixel, fp32: vec4(theta rgb, n) and vec4(variance of the mean rgb, 0).
+// Per pixel, fp32: vec4(theta rgb, n) and vec4(variance of the mean rgb, class).
 constexpr uint64_t kThetaBytes = 16;
 constexpr uint64_t kVarianceBytes = 16;
 
@@ -69,10 +69,13 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
                           .bind("theta", "stat_theta")
                           .bind("variance", "stat_variance");
   prepare.pixels_per_invocation = 1;
-  if (s.moving_asymmetric)
-    prepare.bind("motion", "motion")
-        .set("MOVING_ASYMMETRIC", true)
-        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+  if (s.moving_asymmetric || s.keep_still_unexplained)
+    prepare.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+  if (s.moving_asymmetric) prepare.set("MOVING_ASYMMETRIC", true);
+  if (s.keep_still_unexplained) prepare.set("KEEP_STILL_UNEXPLAINED", true);
+  const bool modulates = demodulated && s.prepare_modulates;
+  if (s.keep_still_unexplained || modulates)
+    prepare.bind("albedo", "albedo").set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.
     g.add_scratch("stat_value", kStatRgbBytes);
@@ -80,12 +83,9 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
         .bind("radiance", "radiance")
         .set("DEMODULATED", true)
         .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)));
-    if (s.prepare_modulates) {
+    if (modulates) {
       g.add_scratch(kStatModulation, kStatRgbBytes);
-      prepare.bind("albedo", "albedo")
-          .bind("modulation", kStatModulation)
-          .set("MODULATION", true)
-          .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+      prepare.bind("modulation", kStatModulation).set("MODULATION", true);
     }
   }
   // The shared-memory tile measured faster on lavapipe (docs/results.md);

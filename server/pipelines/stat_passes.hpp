@@ -31,6 +31,9 @@ struct StatSources {
   // stat-temporal: the filter tests a moving pixel's neighbours by Eq. 14
   // (their histories may hold what moved over them); stat_prepare reads "motion".
   bool moving_asymmetric = false;
+  // stat-temporal: a still pixel the guides do not explain (a metal, a
+  // mirror) shows its own mean; stat_prepare reads "albedo" and "motion".
+  bool keep_still_unexplained = false;
 };
 
 // The channels both take besides their own: radiance, albedo, normal and the

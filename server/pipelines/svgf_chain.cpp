@@ -244,6 +244,9 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
         .bind("still_m2", still_m2_of(s.history))
         .bind("still_change", still_change_of(s.history))
         .set("CONVERGE_STILL", 1u);
+  // A signal on the reflected hit's features keeps its still mean while the pixel's surface does.
+  if (keeps_still_mean(v) && index > 0 && s.features)
+    reproject.bind("surface_still", still_mean_of(v.signals[0].history)).set("SURFACE_STILL", 1u);
   if (s.subtract_emission)
     reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
   if (clip)

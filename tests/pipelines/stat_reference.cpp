@@ -161,7 +161,8 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       const float n_p = prep.theta[4 * i + 3];
       const bool single = n_p < 2.0f;  // gathers with the single-sample test
       const bool asymmetric = p.asymmetric || (!prep.moving.empty() && prep.moving[i]);
-      if (n_p > 0.0f) {
+      const bool kept = !prep.kept.empty() && prep.kept[i];
+      if (n_p > 0.0f && !kept) {
         for (int dy = -r; dy <= r; ++dy)
           for (int dx = -r; dx <= r; ++dx) {
             const int qx = x + dx, qy = y + dy, d2xy = dx * dx + dy * dy;

@@ -49,6 +49,7 @@ struct StatPrepared {
   std::vector<float> theta;     // 4 per pixel: rgb, n (0: no statistics)
   std::vector<float> variance;  // 3 per pixel
   std::vector<char> moving;     // per pixel (stat-temporal): p's neighbours are tested by Eq. 14; empty: none
+  std::vector<char> kept;       // per pixel (stat-temporal): p shows its own mean, gathering nothing; empty: none
 };
 
 struct StatResult {

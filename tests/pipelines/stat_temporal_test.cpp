@@ -420,8 +420,8 @@ TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
   int marked = 0, wrong = 0;
   for (int i = 0; i < n; ++i) {
-    marked += variance[4 * i + 3] > 0.0f;
-    wrong += (variance[4 * i + 3] > 0.0f) != (prep.moving[i] != 0);
+    marked += variance[4 * i + 3] == 1.0f;  // DN_STAT_MOVING
+    wrong += (variance[4 * i + 3] == 1.0f) != (prep.moving[i] != 0);
   }
   const double rms = test::relative_rms(got, want.output), apart = test::relative_rms(got, symmetric.output);
   std::printf("[ info     ] %d of %d pixels moving; relative RMS %.3g to the reference, %.3g to the symmetric one\n",
@@ -429,6 +429,68 @@ TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
   EXPECT_EQ(wrong, 0);
   EXPECT_GT(marked, n / 2);
   EXPECT_LT(marked, n);
+  EXPECT_LE(rms, 1e-5);
+  EXPECT_GT(apart, 1e-3);
+}
+
+// A still metal (albedo 0: its guides say nothing of what it shows) shows
+// the plain mean of its own samples once it has two, gathering nothing: the
+// Welch test of a few samples is too wide to keep a highlight's darker
+// neighbours out. From the radiance alone over 6 still frames, stat_prepare
+// marks exactly the metal pixels with 2 or more samples, each shows the mean
+// of the radiance it was sent, and the whole output matches the CPU
+// reference over the device's accumulators with those pixels kept.
+TEST_F(StatTemporalTest, AStillMetalShowsTheMeanOfItsSamples) {
+  SceneSpec scene;
+  scene.pan = 0.0f;
+  scene.metal = true;
+  scene.shadow_light = 1.0f;  // no shadow: the pixels keep their samples
+  const int frames = 6, n = scene.w * scene.h;
+  Session s = make(ctx(), scene.w, scene.h, {{"radius", 4}}, false);
+  std::vector<double> sum(3 * n, 0.0);
+  test::StatTemporalFrame f;
+  std::vector<float> got;
+  for (int k = 0; k < frames; ++k) {
+    f = scene_frame(scene, k, 5);
+    for (int i = 0; i < 3 * n; ++i) sum[i] += f.stats.radiance[i];
+    got = svgf_inputs::run(*s.pipe, host_frame(f, false));
+  }
+  const DeviceState d = device_state(s);
+  const test::StatFrame acc = accumulated(f, d);
+  const test::StatParams p = session_filter_params();
+  test::StatPrepared prep = test::stat_prepare(acc, p);
+  const test::StatResult filtered = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  prep.kept.assign(n, 0);
+  int metal_pixels = 0, complete = 0, off_mean = 0;
+  for (int y = 0; y < scene.h; ++y)
+    for (int x = 0; x < scene.w; ++x) {
+      const int i = y * scene.w + x;
+      const bool in_box = x >= 8 && x < 18 && y >= 8 && y < 22;
+      if (!metal_block(scene, in_box, x / 6)) continue;
+      ++metal_pixels;
+      prep.kept[i] = d.count[i] >= 2.0f;
+      if (d.count[i] != static_cast<float>(frames)) continue;
+      ++complete;
+      for (int c = 0; c < 3; ++c) {
+        const double mean = sum[3 * i + c] / frames;
+        off_mean += std::fabs(got[3 * i + c] - mean) > 1e-5 * (1e-3 + mean);
+      }
+    }
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
+  int marked = 0, wrong = 0;
+  for (int i = 0; i < n; ++i) {
+    const bool kept = variance[4 * i + 3] == 2.0f;  // DN_STAT_KEPT
+    marked += kept;
+    wrong += kept != (prep.kept[i] != 0);
+  }
+  const double rms = test::relative_rms(got, want.output), apart = test::relative_rms(got, filtered.output);
+  std::printf("[ info     ] %d of %d metal pixels kept, %d with all %d samples; relative RMS %.3g to the reference, "
+              "%.3g to the one that filters them\n",
+              marked, metal_pixels, complete, frames, rms, apart);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(complete, metal_pixels / 2);
+  EXPECT_EQ(off_mean, 0) << "channels of metal pixels with every sample off the mean of their radiance";
   EXPECT_LE(rms, 1e-5);
   EXPECT_GT(apart, 1e-3);
 }
