@@ -385,6 +385,20 @@ void main() {
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
+  // A still pixel whose running mean holds more than DN_STILL_FILTER_FROM
+  // samples, or more than its history (after a rejection the mean went
+  // through): the filter starts from that plain mean, and its length is their
+  // count, so its variance and the a-trous's luminance edge-stopping fall as
+  // 1 / n and the filter lets go as the mean converges. The history is an
+  // exponential blend of the filtered colour (feedback_tap): it keeps the
+  // filter's blur.
+  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) {
+    vec4 sm = still_mean.data[p];
+    if (sm.a > min(len, DN_STILL_FILTER_FROM)) {
+      colour = sm.rgb;
+      len = sm.a;
+    }
+  }
   illum.data[p] = vec4(colour, 0.0);
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));
 }

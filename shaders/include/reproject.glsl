@@ -27,6 +27,11 @@ bool dn_is_still(vec2 mv) { return length(mv) < DN_STILL_MOTION; }
 // error had grown above the plain mean's by then), 1/4 there, rising over
 // DN_STILL_RAMP samples to 1 from 7 on, so the output does not jump.
 const float DN_STILL_MIN_SAMPLES = 4.0;
+// From how many samples svgf_reproject hands a still pixel's running mean to
+// the filter instead of its history: from 4 the error of a flat still view
+// tripled at the switch (the filtered history of a few frames is the less
+// noisy); from 8 and from 12 every count of dnrender's still scenes fell.
+const float DN_STILL_FILTER_FROM = 8.0;
 const float DN_STILL_RAMP = 4.0;
 float dn_still_weight(float n) {
   return n >= DN_STILL_MIN_SAMPLES ? clamp((n - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0) : 0.0;

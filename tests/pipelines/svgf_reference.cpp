@@ -509,6 +509,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       for (int k = 0; k < 3; ++k) colour[3 * i + k] = (1 - ac) * pc[k] + ac * d[3 * i + k];
       m1[i] = (1 - am) * pm1 + am * l;
       m2[i] = (1 - am) * pm2 + am * l * l;
+      // A still pixel whose running mean holds more than 8 samples
+      // (DN_STILL_FILTER_FROM) or more than its history: the filter starts
+      // from that mean, and its length (so its variance) is their count.
+      if (keeps_still && ch.still_n[i] > std::min(len[i], 8.0)) {
+        for (int k = 0; k < 3; ++k) colour[3 * i + k] = ch.still_mean[3 * i + k];
+        len[i] = ch.still_n[i];
+      }
     }
   ch.temporal = colour;
   // No data: a foreground pixel of length 0 (only an unsampled pixel without history has one).
