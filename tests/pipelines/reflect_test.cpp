@@ -86,12 +86,18 @@ struct Rendered {
   render::Camera camera;
 };
 
-// Frame t of a dnrender scene, `stride` path frames apart (more motion per frame).
-Rendered render_frame(const render::Scene& scene, int scene_id, int t, int stride, int w, int h) {
+// dnrender's settings for a w x h frame with the reflection features.
+render::RenderSettings reflection_settings(int w, int h) {
   render::RenderSettings settings;
   settings.width = w;
   settings.height = h;
   settings.channels.reflection = true;
+  return settings;
+}
+
+// Frame t of a dnrender scene, `stride` path frames apart (more motion per frame).
+Rendered render_frame(const render::Scene& scene, int scene_id, int t, int stride, int w, int h) {
+  const render::RenderSettings settings = reflection_settings(w, h);
   const render::Camera cam = render::frame_camera(scene_id, stride * t, settings);
   const render::Camera prev = render::frame_camera(scene_id, stride * (t - 1), settings);
   return {render::render_frame(scene, cam, prev, t, settings), cam};
@@ -768,10 +774,7 @@ INSTANTIATE_TEST_SUITE_P(Taa, ReflectMedianTest, testing::Bool(),
 TEST_F(ReflectTest, AStillViewIsNearerTheReferenceThanTheRunningMean) {
   const int w = 128, h = 72, scene_id = 3;
   const auto scene = render::build_scene(scene_id);
-  render::RenderSettings settings;
-  settings.width = w;
-  settings.height = h;
-  settings.channels.reflection = true;
+  const render::RenderSettings settings = reflection_settings(w, h);
   const render::Camera cam = render::frame_camera(scene_id, 0, settings);
   const size_t n = size_t(w) * h * 3;
   std::vector<double> reference(n, 0.0);
@@ -813,10 +816,7 @@ TEST_F(ReflectTest, AStillViewIsNearerTheReferenceThanTheRunningMean) {
 TEST_F(ReflectTest, AStillMirrorKeepsItsMeanWhenItsMatchIsRejected) {
   const int w = 96, h = 54, scene_id = 6, frames = 6;
   const auto scene = render::build_scene(scene_id);
-  render::RenderSettings settings;
-  settings.width = w;
-  settings.height = h;
-  settings.channels.reflection = true;
+  const render::RenderSettings settings = reflection_settings(w, h);
   const render::Camera cam = render::frame_camera(scene_id, 0, settings);
   std::vector<Rendered> seq;
   for (int t = 0; t < frames; ++t) {

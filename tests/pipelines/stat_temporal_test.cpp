@@ -180,6 +180,22 @@ test::StatParams session_filter_params() {
   return p;
 }
 
+// What the filter passes read after frame f of a session make() opened from
+// the radiance alone: the device's accumulators, the session's filter
+// parameters and the CPU reference's test inputs over them.
+struct FilterInputs {
+  DeviceState device;
+  test::StatFrame acc;
+  test::StatParams params;
+  test::StatPrepared prep;
+};
+FilterInputs filter_inputs(const Session& s, const test::StatTemporalFrame& f) {
+  FilterInputs in{device_state(s), {}, session_filter_params(), {}};
+  in.acc = accumulated(f, in.device);
+  in.prep = test::stat_prepare(in.acc, in.params);
+  return in;
+}
+
 // Pixels whose demodulated mean or modulation is off the reference's: the
 // mean from the accumulated moments, and radiance over the frame's own
 // demodulated mean (the guarded albedo where the frame brought no data, 1
@@ -325,10 +341,10 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
 
   Session s = make(ctx(), still.w, still.h, {{"radius", 4}}, false);
   const auto got = svgf_inputs::run(*s.pipe, host_frame(f, false));
-  const DeviceState d = device_state(s);
-  const test::StatFrame acc = accumulated(f, d);
-  const test::StatParams p = session_filter_params();
-  const test::StatPrepared prep = test::stat_prepare(acc, p);
+  const FilterInputs in = filter_inputs(s, f);
+  const test::StatFrame& acc = in.acc;
+  const test::StatParams& p = in.params;
+  const test::StatPrepared& prep = in.prep;
   const auto theta = test::decode_output(s.graph->captured("stat_prepare", "stat_theta"), Format::F32);
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
   size_t off = 0;
@@ -408,10 +424,10 @@ TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
     f = scene_frame(scene, k, 11);
     got = svgf_inputs::run(*s.pipe, host_frame(f, false));
   }
-  const DeviceState d = device_state(s);
-  const test::StatFrame acc = accumulated(f, d);
-  const test::StatParams p = session_filter_params();
-  test::StatPrepared prep = test::stat_prepare(acc, p);
+  FilterInputs in = filter_inputs(s, f);
+  const test::StatFrame& acc = in.acc;
+  const test::StatParams& p = in.params;
+  test::StatPrepared& prep = in.prep;
   const test::StatResult symmetric = test::stat_filter(acc, prep, p, t_squared(p.alpha));
   const int n = scene.w * scene.h;
   prep.moving.assign(n, 0);
@@ -455,10 +471,11 @@ TEST_F(StatTemporalTest, AStillMetalShowsTheMeanOfItsSamples) {
     for (int i = 0; i < 3 * n; ++i) sum[i] += f.stats.radiance[i];
     got = svgf_inputs::run(*s.pipe, host_frame(f, false));
   }
-  const DeviceState d = device_state(s);
-  const test::StatFrame acc = accumulated(f, d);
-  const test::StatParams p = session_filter_params();
-  test::StatPrepared prep = test::stat_prepare(acc, p);
+  FilterInputs in = filter_inputs(s, f);
+  const DeviceState& d = in.device;
+  const test::StatFrame& acc = in.acc;
+  const test::StatParams& p = in.params;
+  test::StatPrepared& prep = in.prep;
   const test::StatResult filtered = test::stat_filter(acc, prep, p, t_squared(p.alpha));
   prep.kept.assign(n, 0);
   int metal_pixels = 0, complete = 0, off_mean = 0;
