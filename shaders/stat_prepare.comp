@@ -16,10 +16,9 @@
 // made a light seen in a mirror one with its dark neighbours (dnrender scene
 // 6, first frame: RMSE 0.593 against the frame's 0.517). n = 0 or any
 // non-finite statistic gets n = 0 in theta.w: no data. variance.w is p's
-// class (stat_class.glsl): with MOVING_ASYMMETRIC (stat-temporal)
+// class (stat_class.glsl), with CLASSIFY (stat-temporal):
 // DN_STAT_MOVING where the pixel moves (motion not usable or 0.005 px or
-// more): stat_filter tests its neighbours by Eq. 14 there. With
-// KEEP_STILL_UNEXPLAINED (stat-temporal) DN_STAT_KEPT where a still pixel
+// more): stat_filter tests its neighbours by Eq. 14 there; DN_STAT_KEPT where a still pixel
 // with 2 or more samples is unexplained (dn_unexplained: a metal or mirror,
 // whose guides say nothing of what it shows): stat_filter returns its own
 // mean. Its few samples' variance is so wide that the test accepted dark
@@ -125,8 +124,8 @@ bool pixel_moves(uint p) {
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
-  bool moves = (MOVING_ASYMMETRIC || KEEP_STILL_UNEXPLAINED) && pixel_moves(p);
-  if (MOVING_ASYMMETRIC && moves) pixel_class = DN_STAT_MOVING;
+  bool moves = CLASSIFY && pixel_moves(p);
+  if (moves) pixel_class = DN_STAT_MOVING;
   DnStat s = stat_at(p);
   if (!dn_stat_usable(s)) {
     theta.data[p] = vec4(0.0);
@@ -150,7 +149,7 @@ void main() {
     variance.data[p] = vec4(vec3(0.0), pixel_class);
     return;
   }
-  if (KEEP_STILL_UNEXPLAINED && !moves && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p))) pixel_class = DN_STAT_KEPT;
+  if (CLASSIFY && !moves && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p))) pixel_class = DN_STAT_KEPT;
   vec3 var = max(dn_stat_sample_variance(s) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
   theta.data[p] = vec4(dn_stat_theta(s), s.n);
   variance.data[p] = vec4(var, pixel_class);

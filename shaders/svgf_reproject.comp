@@ -152,16 +152,17 @@ void add_tap(ivec2 q, float w, float z, vec3 n, vec2 grad, inout vec3 sc, inout 
 // CONVERGE_STILL: p's running mean of its own samples d (and the M2 of their
 // luminance) goes on where p's surface keeps its history and p is still (continues),
 // else it restarts from d; a pixel without a sample this frame keeps it while
-// it continues, else has none.
-void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
-  if (!CONVERGE_STILL) return;
+// it continues, else has none. Returns the mean as stored (.a: samples).
+vec4 update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
+  if (!CONVERGE_STILL) return vec4(0.0);
   vec4 prev = still_mean.data[p];
   if (!has_sample) {
     if (!continues) {
       still_mean.data[p] = vec4(0.0);
       still_m2.data[p] = 0.0;
+      return vec4(0.0);
     }
-    return;
+    return prev;
   }
   float n = continues && prev.a > 0.0 ? min(prev.a + 1.0, DN_STILL_MAX_SAMPLES) : 1.0;
   vec3 mean = n == 1.0 ? d : mix(prev.rgb, d, 1.0 / n);
@@ -170,6 +171,7 @@ void update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
   float m2 = n == prev.a ? still_m2.data[p] * (1.0 - 1.0 / n) : still_m2.data[p];
   still_m2.data[p] = n == 1.0 ? 0.0 : m2 + (l - dn_luminance(prev.rgb)) * (l - dn_luminance(mean));
   still_mean.data[p] = vec4(mean, n);
+  return vec4(mean, n);
 }
 
 // A change in a still view (a shadow falls, a light is switched): b, the
@@ -379,7 +381,7 @@ void main() {
     return;
   }
   // A sample the sanitizer changed is none for the still mean: it would stay in it.
-  update_still_mean(p, d, has_sample, continues);
+  vec4 still = update_still_mean(p, d, has_sample, continues);
   float len = valid ? min(prev_len + 1.0, DN_PARAM_VALUE(svgf, max_history)) : 1.0;
   float alpha = valid ? max(1.0 / len, DN_SVGF_ALPHA_COLOUR) : 1.0;
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
@@ -392,12 +394,9 @@ void main() {
   // 1 / n and the filter lets go as the mean converges. The history is an
   // exponential blend of the filtered colour (feedback_tap): it keeps the
   // filter's blur.
-  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0) {
-    vec4 sm = still_mean.data[p];
-    if (sm.a > min(len, DN_STILL_FILTER_FROM)) {
-      colour = sm.rgb;
-      len = sm.a;
-    }
+  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0 && still.a > min(len, DN_STILL_FILTER_FROM)) {
+    colour = still.rgb;
+    len = still.a;
   }
   illum.data[p] = vec4(colour, 0.0);
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));

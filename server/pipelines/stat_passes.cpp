@@ -69,12 +69,12 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
                           .bind("theta", "stat_theta")
                           .bind("variance", "stat_variance");
   prepare.pixels_per_invocation = 1;
-  if (s.moving_asymmetric || s.keep_still_unexplained)
-    prepare.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
-  if (s.moving_asymmetric) prepare.set("MOVING_ASYMMETRIC", true);
-  if (s.keep_still_unexplained) prepare.set("KEEP_STILL_UNEXPLAINED", true);
+  if (s.classify)
+    prepare.bind("motion", "motion")
+        .set("CLASSIFY", true)
+        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
   const bool modulates = demodulated && s.prepare_modulates;
-  if (s.keep_still_unexplained || modulates)
+  if (s.classify || modulates)
     prepare.bind("albedo", "albedo").set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.

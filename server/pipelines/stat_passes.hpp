@@ -28,12 +28,11 @@ struct StatSources {
   // the frame's planes (the sources are the frame's: stat), or a pass before
   // it (stat_temporal, which sees the frame; the accumulators do not).
   bool prepare_modulates = true;
-  // stat-temporal: the filter tests a moving pixel's neighbours by Eq. 14
-  // (their histories may hold what moved over them); stat_prepare reads "motion".
-  bool moving_asymmetric = false;
-  // stat-temporal: a still pixel the guides do not explain (a metal, a
-  // mirror) shows its own mean; stat_prepare reads "albedo" and "motion".
-  bool keep_still_unexplained = false;
+  // stat-temporal: stat_prepare classifies each pixel from "motion" and
+  // "albedo" (stat_class.glsl): the filter tests a moving pixel's neighbours
+  // by Eq. 14 (their histories may hold what moved over them), and a still
+  // pixel the guides do not explain (a metal, a mirror) shows its own mean.
+  bool classify = false;
 };
 
 // The channels both take besides their own: radiance, albedo, normal and the

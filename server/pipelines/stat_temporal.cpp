@@ -68,8 +68,7 @@ GraphSpec build(const SessionConfig& config) {
   }
   StatSources accumulators{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw"};
   accumulators.prepare_modulates = false;  // stat_temporal wrote the modulation from the frame
-  accumulators.moving_asymmetric = true;
-  accumulators.keep_still_unexplained = true;
+  accumulators.classify = true;
   add_stat_filter(g, config, accumulators);
   // RESULT.samples: from the radiance alone a pixel's accumulated count is its frames (the renderer's counts are samples).
   if (from_radiance) add_sample_count_summary(g, "stat_acc_count");
