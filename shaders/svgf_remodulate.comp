@@ -48,7 +48,7 @@ vec4 dn_moving_target(vec4 m) {
 // source) are often all 0, or hold one firefly, and the variance of p's own
 // would pull the filtered value onto that mean; the moments' exponential
 // average forgets a firefly that the running mean keeps.
-float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
+float dn_still_sample_variance(vec4 m, float len, float still_n, int s, uint p) {
   float sum = 0.0, count = 0.0;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   [[dont_unroll]] for (int o = 0; o < 9; ++o) {
@@ -60,7 +60,7 @@ float dn_still_sample_variance(vec4 m, float len, int s, uint p) {
     sum += (s == 0 ? still_m2.data[iq] : still_m2_2.data[iq]) / (n - 1.0);
     count += 1.0;
   }
-  return max(m.w * dn_svgf_samples_averaged(len, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
+  return max(m.w * dn_svgf_samples_averaged(len, still_n, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
 // Whether the still running means are kept and used (converge_still > 0).
 bool dn_converging_still() { return CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0; }
@@ -78,7 +78,7 @@ vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
   vec4 mean = dn_still_mean(m, s, p, w);
   if (!(w > 0.0)) return vec4(0.0);
   float k = DN_PARAM_VALUE(svgf, converge_still);
-  return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, s, p) / mean.a);
+  return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, mean.a, s, p) / mean.a);
 }
 // f beyond a (t.w = a^2) from t.rgb in luminance: shrunk toward it by (a / Y(f - t))^1, or ^3 (cubic).
 vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
@@ -228,13 +228,18 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // the flicker the a-trous leaves (docs/pipelines.md, "svgf in detail", 5).
 // A pixel kept as rendered blends only where it is still (its motion, that
 // of its surface, is not that of what it shows), and not with a still
-// running mean (converge_still), which it then shows as it is.
-float taa_weight(vec2 mv, bool kept) {
+// running mean (converge_still), which it then shows as it is. Where the
+// filter starts from the still mean (more than DN_STILL_FILTER_FROM
+// samples) its output converges, and a blend of small weight (progressive's
+// 0.1) lags behind it: at least DN_STILL_BLEND_WEIGHT there.
+const float DN_STILL_BLEND_WEIGHT = 0.5;
+float taa_weight(uint p, vec2 mv, bool kept) {
   if (kept && dn_converging_still()) return 1.0;
   float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
-  if (still <= 0.0 || still >= moving) return moving;
-  return mix(moving, still, dn_stillness(mv));
+  float weight = still <= 0.0 || still >= moving ? moving : mix(moving, still, dn_stillness(mv));
+  bool converging = dn_converging_still() && still_mean_at(p).a > DN_STILL_FILTER_FROM;
+  return converging ? max(weight, DN_STILL_BLEND_WEIGHT) : weight;
 }
 
 // DISPLAY_LAG (progressive's display_lag; paper 004 5's buffer one step
@@ -263,7 +268,7 @@ void taa_prepare(uint p, vec3 c, bool kept) {
   float prev_lag = 0.0;
   bool valid = false;
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
-  float weight = dn_motion_usable(mv) ? taa_weight(mv, kept) : 1.0;
+  float weight = dn_motion_usable(mv) ? taa_weight(p, mv, kept) : 1.0;
   ivec2 origin;
   vec4 weights;
   if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&

@@ -239,6 +239,24 @@ bool still_unchanged(uint p, ivec2 pos, bool continues) {
   return true;
 }
 
+// The temporal colour (.w: the samples it averages) and moments of p. A
+// still pixel whose running mean holds more than DN_STILL_FILTER_FROM
+// samples, or more than its history (after a rejection the mean went
+// through): the filter starts from that plain mean, and its length and the
+// samples it averages are their count, so its variance and the a-trous's
+// luminance edge-stopping fall as 1 / n and the filter lets go as the mean
+// converges. The history is an exponential blend of the filtered colour
+// (feedback_tap): it keeps the filter's blur.
+void write_temporal(uint p, vec3 colour, vec2 moments, float len, vec4 still) {
+  float still_n = 0.0;
+  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0 && still.a > min(len, DN_STILL_FILTER_FROM)) {
+    colour = still.rgb;
+    len = still_n = still.a;
+  }
+  illum.data[p] = vec4(colour, dn_svgf_samples_averaged(len, still_n, SPECULAR_ALPHA));
+  temporal.data[p] = vec4(moments, len, dn_luminance(colour));
+}
+
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
@@ -258,7 +276,7 @@ void main() {
       l = dn_luminance(d);
       m = vec2(l, l * l);
     }
-    illum.data[p] = vec4(d, 0.0);
+    illum.data[p] = vec4(d, 1.0);
     if (WRITE_GUIDE) guide.data[p] = uvec4(0u);
     temporal.data[p] = vec4(m, 0.0, l);
     update_still_mean(p, d, false, false);
@@ -375,9 +393,7 @@ void main() {
   // MASKED and no sample here this frame (a NaN count is none): the history
   // as reprojected, or no data (length 0) without one.
   if (MASKED && !sampled(p)) {
-    illum.data[p] = vec4(prev, 0.0);
-    temporal.data[p] = vec4(prev_m, valid ? prev_len : 0.0, dn_luminance(prev));
-    update_still_mean(p, d, false, continues);
+    write_temporal(p, prev, prev_m, valid ? prev_len : 0.0, update_still_mean(p, d, false, continues));
     return;
   }
   // A sample the sanitizer changed is none for the still mean: it would stay in it.
@@ -387,17 +403,5 @@ void main() {
   float alpha_m = valid ? max(1.0 / len, DN_PARAM_VALUE(svgf, alpha_moments)) : 1.0;
   vec3 colour = mix(prev, d, alpha);
   vec2 moments = mix(prev_m, m, alpha_m);
-  // A still pixel whose running mean holds more than DN_STILL_FILTER_FROM
-  // samples, or more than its history (after a rejection the mean went
-  // through): the filter starts from that plain mean, and its length is their
-  // count, so its variance and the a-trous's luminance edge-stopping fall as
-  // 1 / n and the filter lets go as the mean converges. The history is an
-  // exponential blend of the filtered colour (feedback_tap): it keeps the
-  // filter's blur.
-  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0 && still.a > min(len, DN_STILL_FILTER_FROM)) {
-    colour = still.rgb;
-    len = still.a;
-  }
-  illum.data[p] = vec4(colour, 0.0);
-  temporal.data[p] = vec4(moments, len, dn_luminance(colour));
+  write_temporal(p, colour, moments, len, still);
 }

@@ -46,10 +46,9 @@
 #include "passes/svgf_variance.pass"
 #include "svgf_joint.glsl"
 
-// Signal s's samples averaged (dn_svgf_samples_averaged): reflect's alpha_specular for the last with SPECULAR_ALPHA.
-float samples_averaged(float len, int s) { return dn_svgf_samples_averaged(len, SPECULAR_ALPHA && dn_last_signal(s)); }
-
 vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.data[i].rgb; }
+// The samples signal s's temporal colour averages: svgf_reproject's .w (dn_svgf_samples_averaged).
+float samples_averaged(int s, uint i) { return s == 0 ? illum.data[i].w : illum2.data[i].w; }
 
 void main() {
   ivec2 size = ivec2(frame.size.xy);
@@ -168,7 +167,7 @@ void main() {
       vec2 m = (s == 0 ? moments.xy : moments.zw) / weights[s];
       v = max(0.0, m.y - m.x * m.x) * 4.0 / len[s];
     }
-    v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(len[s], s);
+    v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(s, pi);
     if (s == 0) illum.data[pi].w = v;
     else illum2.data[pi].w = v;
   }

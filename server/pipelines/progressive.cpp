@@ -30,8 +30,7 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   // frame, and SVGF's 7x7 spatial estimate stands in for it (no luminance
   // switch at coming of age, so no display lag across one).
   const bool sparse = has_channel(config, ChannelId::SampleCount);
-  const bool finest_first = p.progressive_step_order == 0.0f || (p.progressive_step_order == 2.0f && sparse);
-  v.steps = finest_first ? StepOrder::FinestFirst : StepOrder::Increasing;
+  v.steps = p.progressive_step_order == 0.0f ? StepOrder::FinestFirst : StepOrder::Increasing;
   v.luminance_weight = p.progressive_luminance_form == 0.0f ? LuminanceWeight::VarianceGuided : LuminanceWeight::Variance;
   v.young_variance = sparse ? YoungVariance::LuminanceOff : YoungVariance::SpatialEstimate;
   if (sparse) v.validity_mask = ChannelId::SampleCount;

@@ -271,7 +271,6 @@ void add_variance(GraphSpec& g, const SvgfVariant& v) {
       .bind("illum", first.illum)
       .bind("colour_history", v.signals[0].history + "_colour")
       .bind("aux_history", v.signals[0].history + "_aux")
-      .set("SPECULAR_ALPHA", v.signals.back().specular_alpha)
       .set("SPATIAL_ESTIMATE", v.young_variance == YoungVariance::SpatialEstimate)
       .set("SIGNALS", static_cast<uint32_t>(v.signals.size()));
   variance.pixels_per_invocation = 1;

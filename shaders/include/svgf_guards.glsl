@@ -3,6 +3,8 @@
 #ifndef DN_SVGF_GUARDS_GLSL
 #define DN_SVGF_GUARDS_GLSL
 
+#include "reproject.glsl"
+
 // Added to the filtered variance under the square root of the luminance
 // edge-stopping function (Falcor adds 1e-10, which breaks scale equivariance
 // near k = 1e-3); it matters only for luminance std devs below about 1e-10.
@@ -23,9 +25,12 @@ const float DN_SVGF_NO_DATA = -1.0;
 
 // The samples the temporal colour averages (variance_of_mean): its first
 // 1/alpha frames are a true mean of `len` samples, after that an exponential
-// average whose variance is alpha / (2 - alpha) of a sample's; 1 when off.
-float dn_svgf_samples_averaged(float len, bool specular_alpha) {
+// average whose variance is alpha / (2 - alpha) of a sample's; where
+// svgf_reproject handed the filter a still pixel's running mean of still_n
+// samples (more than DN_STILL_FILTER_FROM; 0: none), all of them. 1 when off.
+float dn_svgf_samples_averaged(float len, float still_n, bool specular_alpha) {
   if (DN_PARAM_VALUE(svgf, variance_of_mean) == 0.0) return 1.0;
+  if (still_n > DN_STILL_FILTER_FROM) return still_n;
   float a = DN_SVGF_ALPHA_OF(specular_alpha);
   return a > 0.0 ? clamp(len, 1.0, (2.0 - a) / a) : max(len, 1.0);
 }

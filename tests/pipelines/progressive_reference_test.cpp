@@ -58,17 +58,13 @@ test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps, 
   p.taa_static_alpha = 0.1;
   p.clip_roughness = 0;
   p.kernel_radius = 1;
-  p.finest_first = true;
   p.spatial_estimate = false;
   p.luminance_form = 0;
   p.sigma_luminance = 4;
   p.epsilon_luminance = 0.05;
   p.luminance_min_age = 4;
   p.display_lag = true;
-  p.finest_first = sparse;  // step_order 2
   test::apply_parameters(p, ps);
-  for (const auto& q : ps)
-    if (q.name == "step_order" && q.value == 2.0) p.finest_first = sparse;
   if (!sparse) {
     p.spatial_estimate = true;
     p.luminance_min_age = 0;
@@ -109,14 +105,14 @@ struct Variant {
   std::vector<protocol::Parameter> params;
   float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
   int w = 64, h = 40;
+  int frames = 8, reset_at = 5;  // reset_at -1: none
 };
 
 void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }
 
 class ProgressiveReferenceTest : public test::GpuTest, public testing::WithParamInterface<Variant> {};
 
-// Output after every frame against the reference (reset at frame 5), with
-// SvgfReferenceTest's tolerances.
+// Output after every frame against the reference, with SvgfReferenceTest's tolerances.
 TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
   const Variant& v = GetParam();
   const int w = v.w, h = v.h;
@@ -126,12 +122,12 @@ TEST_P(ProgressiveReferenceTest, MatchesCpuReferenceOverFrames) {
   auto pipe = pipelines::create(ctx(), config);
   test::SvgfReference ref(w, h, progressive_params(v.params, masked));
   SvgfSceneGen scene(w, h, 4321, v.vx, v.vy, v.motion_noise, 0.8f, 0.003);
-  const int frames = 8;
+  const int frames = v.frames;
   double worst = 0.0;
   size_t no_data_first = 0;
   for (int t = 0; t < frames; ++t) {
     SCOPED_TRACE(testing::Message() << "frame " << t);
-    const uint32_t flags = t == 5 ? protocol::kFrameReset : 0u;
+    const uint32_t flags = t == v.reset_at ? protocol::kFrameReset : 0u;
     SvgfScene s = scene.frame(t);
     std::vector<float> spec = v.split ? specular_of(s, 77 + t) : std::vector<float>{};
     const std::vector<float> count = v.mask == Mask::Quarter ? quarter_spp(w, h, t)
@@ -189,11 +185,12 @@ INSTANTIATE_TEST_SUITE_P(
         Variant{"split", true, true, Mask::None, {}},
         // Paper 004's regime at 1 spp (sample_count 1 everywhere), moving.
         Variant{"full_mask_moving", false, true, Mask::Full, {}},
-        Variant{"full_mask_step_order_increasing", false, true, Mask::Full, {{"step_order", 1}}},
+        Variant{"full_mask_finest_first", false, true, Mask::Full, {{"step_order", 0}}},
         // 1/4 spp: a static camera (unsampled pixels keep their history
         // exactly) and a moving one (they keep the reprojected history).
         Variant{"quarter_spp_static", false, true, Mask::Quarter, {}, 0.0f, 0.0f, 0.0f},
         Variant{"quarter_spp_moving", false, true, Mask::Quarter, {}},
+        Variant{"quarter_spp_moving_finest_first", false, true, Mask::Quarter, {{"step_order", 0}}},
         // A still camera at 1 spp: pixels come of age at frame 3, and the
         // display lags across the switch (display_lag) until the reset at 5;
         // and the same clamped throughout.
@@ -215,7 +212,12 @@ INSTANTIATE_TEST_SUITE_P(
         Variant{"quarter_spp_static_luminance", false, false, Mask::Quarter, {{"luminance_min_age", 0}}, 0.0f, 0.0f,
                 0.0f},
         Variant{"quarter_spp_moving_variance_form", false, true, Mask::Quarter,
-                {{"luminance_min_age", 0}, {"luminance_form", 1}}, 1.0f, -1.0f, 0.0f}),
+                {{"luminance_min_age", 0}, {"luminance_form", 1}}, 1.0f, -1.0f, 0.0f},
+        // Still at 1/4 spp for 48 frames: from 9 samples every pixel, sampled
+        // or not, filters its still running mean, whose variance falls with
+        // all its samples (past alpha_colour 0.2's 9 of the exponential blend).
+        Variant{"quarter_spp_still_converging", false, true, Mask::Quarter, {{"alpha_colour", 0.2}}, 0.0f, 0.0f,
+                0.0f, 64, 40, 48, -1}),
     [](const testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 }  // namespace

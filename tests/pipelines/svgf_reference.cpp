@@ -241,9 +241,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   auto clipped_here = [&](int i) { return sanitized_roughness(f.roughness[i]) < p_.clip_roughness; };
 
   // The samples a temporal mean of length l averages (variance_of_mean): l
-  // while the blend weight is 1/l, then the exponential average's (2 - alpha) / alpha.
-  auto samples_averaged = [&](double l) {
+  // while the blend weight is 1/l, then the exponential average's (2 - alpha)
+  // / alpha; all of a still running mean's still_n (more than 8) handed to the filter.
+  auto samples_averaged = [&](double l, double still_n) {
     if (!p_.variance_of_mean) return 1.0;
+    if (still_n > 8.0) return still_n;
     const double a = p_.alpha_colour;
     return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
   };
@@ -327,6 +329,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   const std::vector<double>& m2_ = ch.m2;
   // Pass 1: reprojection, history clipping and temporal integration.
   std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n);
+  std::vector<double> samples(n, 1.0);  // the samples each temporal colour averages (samples_averaged)
   for (int i = 0; i < 3 * n; ++i) d[i] = c[i] / demod[i];
   std::vector<double> lo, hi, pre;
   std::vector<bool> has_box, has_pre;
@@ -501,21 +504,23 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         len[i] = valid ? plen : 0.0;
         m1[i] = pm1;
         m2[i] = pm2;
-        continue;
+      } else {
+        len[i] = valid ? std::min(plen + 1.0, p_.max_history) : 1.0;
+        const double ac = valid ? std::max(1.0 / len[i], p_.alpha_colour) : 1.0;
+        const double am = valid ? std::max(1.0 / len[i], p_.alpha_moments) : 1.0;
+        for (int k = 0; k < 3; ++k) colour[3 * i + k] = (1 - ac) * pc[k] + ac * d[3 * i + k];
+        m1[i] = (1 - am) * pm1 + am * l;
+        m2[i] = (1 - am) * pm2 + am * l * l;
       }
-      len[i] = valid ? std::min(plen + 1.0, p_.max_history) : 1.0;
-      const double ac = valid ? std::max(1.0 / len[i], p_.alpha_colour) : 1.0;
-      const double am = valid ? std::max(1.0 / len[i], p_.alpha_moments) : 1.0;
-      for (int k = 0; k < 3; ++k) colour[3 * i + k] = (1 - ac) * pc[k] + ac * d[3 * i + k];
-      m1[i] = (1 - am) * pm1 + am * l;
-      m2[i] = (1 - am) * pm2 + am * l * l;
       // A still pixel whose running mean holds more than 8 samples
       // (DN_STILL_FILTER_FROM) or more than its history: the filter starts
-      // from that mean, and its length (so its variance) is their count.
+      // from that mean, and its length and the samples it averages are their count.
+      double still_n = 0.0;
       if (keeps_still && ch.still_n[i] > std::min(len[i], 8.0)) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = ch.still_mean[3 * i + k];
-        len[i] = ch.still_n[i];
+        len[i] = still_n = ch.still_n[i];
       }
+      samples[i] = samples_averaged(len[i], still_n);
     }
   ch.temporal = colour;
   // No data: a foreground pixel of length 0 (only an unsampled pixel without history has one).
@@ -540,7 +545,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // m2 - m1^2 cancels; in single precision as on the device, which
         // decides the HDR step gate and the edge-stopping of sharp pixels.
         const float f1 = float(m1[i]), f2 = float(m2[i]);
-        var[i] = std::max(0.0f, f2 - f1 * f1) / samples_averaged(len[i]);
+        var[i] = std::max(0.0f, f2 - f1 * f1) / samples[i];
         continue;
       }
       if (!p_.spatial_estimate) {
@@ -548,7 +553,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // one sample's (or a copy's) cancel exactly, as on the device, where
         // fp32 rounding of the double moments would leave a residual that a
         // luminance weight on sqrt(variance) blows up.
-        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]) / samples_averaged(len[i]);
+        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]) / samples[i];
         continue;
       }
       // Luminance weight relative to the darker of p and q (HDR step rule),
@@ -588,7 +593,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       s1 /= sw;
       s2 /= sw;
       var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i] /  // cancels: fp32 as on the device
-               samples_averaged(len[i]);
+               samples[i];
     }
   ch.variance = var;
 
@@ -756,7 +761,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           sum += ch.still_m2[q] / (ch.still_n[q] - 1.0);
           count += 1.0;
         }
-      const double s2 = std::max(v * samples_averaged(ch.length[i]), sum / std::max(count, 1.0));
+      const double s2 = std::max(v * samples_averaged(ch.length[i], ch.still_n[i]), sum / std::max(count, 1.0));
       still.allowed = p_.converge_still * p_.converge_still * s2 / ch.still_n[i];
     }
     return true;
@@ -911,8 +916,9 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // to the min/max of the current colour over the 3x3 foreground neighbours
   // within 10 depth gradients of p (and not kept), out = mix(clamped, current, a):
   // a = taa_alpha (1 when 0) where |mv| >= 0.05 px, falling linearly to
-  // taa_static_alpha at |mv| = 0 when that is smaller; no blend when a = 1.
-  // display_lag: a state s per pixel, -1 while chain 0's length is below
+  // taa_static_alpha at |mv| = 0 when that is smaller, at least 0.5 where
+  // the still mean holds more than 8 samples (converge_still); no blend when
+  // a = 1 or at a pixel kept as rendered. display_lag: a state s per pixel, -1 while chain 0's length is below
   // luminance_min_age, else 0 without that blend, else (1 where the previous
   // state, at the bilinear tap of the largest weight (the first of equals),
   // is below 0, else that state x (1 - a)) x the stillness; the clamped value
@@ -949,9 +955,10 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         }
         if (!(sw >= static_cast<double>(1e-3f))) continue;
         const double still = std::clamp(1.0 - std::hypot(mvx, mvy) / 0.05, 0.0, 1.0);
-        const double a = p_.taa_static_alpha > 0.0 && p_.taa_static_alpha < moving
-                             ? moving + (p_.taa_static_alpha - moving) * still
-                             : moving;
+        double a = p_.taa_static_alpha > 0.0 && p_.taa_static_alpha < moving
+                       ? moving + (p_.taa_static_alpha - moving) * still
+                       : moving;
+        if (keeps_still && chains_[0].still_n[i] > 8.0) a = std::max(a, 0.5);  // the filter starts from that mean
         if (a >= 1.0) continue;
         if (p_.display_lag && !young) lag[i] = (prev_lag < 0.0 ? 1.0 : prev_lag * (1.0 - a)) * still;
         const double give = std::max(lag[i], 0.0);
