@@ -43,7 +43,7 @@ vec4 dn_moving_target(vec4 m) {
   return vec4(m.rgb, m.w >= 0.0 ? g * g * m.w : -1.0);
 }
 // A still sample's variance at p: the larger of the temporal mean's v times
-// the samples it averages and the mean over p's 3x3 still neighbours of their
+// its variance divisor and the mean over p's 3x3 still neighbours of their
 // own samples' variance. A few samples of sparse light (a caustic, a small
 // source) are often all 0, or hold one firefly, and the variance of p's own
 // would pull the filtered value onto that mean; the moments' exponential
@@ -60,7 +60,7 @@ float dn_still_sample_variance(vec4 m, float len, float still_n, int s, uint p) 
     sum += (s == 0 ? still_m2.data[iq] : still_m2_2.data[iq]) / (n - 1.0);
     count += 1.0;
   }
-  return max(m.w * dn_svgf_samples_averaged(len, still_n, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
+  return max(m.w * dn_svgf_variance_divisor(len, still_n, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
 // Whether the still running means are kept and used (converge_still > 0).
 bool dn_converging_still() { return CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0; }

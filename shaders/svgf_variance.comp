@@ -47,8 +47,8 @@
 #include "svgf_joint.glsl"
 
 vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.data[i].rgb; }
-// The samples signal s's temporal colour averages: svgf_reproject's .w (dn_svgf_samples_averaged).
-float samples_averaged(int s, uint i) { return s == 0 ? illum.data[i].w : illum2.data[i].w; }
+// Signal s's variance divisor: svgf_reproject's .w (dn_svgf_variance_divisor).
+float variance_divisor(int s, uint i) { return s == 0 ? illum.data[i].w : illum2.data[i].w; }
 
 void main() {
   ivec2 size = ivec2(frame.size.xy);
@@ -167,7 +167,7 @@ void main() {
       vec2 m = (s == 0 ? moments.xy : moments.zw) / weights[s];
       v = max(0.0, m.y - m.x * m.x) * 4.0 / len[s];
     }
-    v = v == DN_SVGF_NO_DATA ? v : v / samples_averaged(s, pi);
+    v = v == DN_SVGF_NO_DATA ? v : v / variance_divisor(s, pi);
     if (s == 0) illum.data[pi].w = v;
     else illum2.data[pi].w = v;
   }

@@ -240,12 +240,14 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   };
   auto clipped_here = [&](int i) { return sanitized_roughness(f.roughness[i]) < p_.clip_roughness; };
 
-  // The samples a temporal mean of length l averages (variance_of_mean): l
-  // while the blend weight is 1/l, then the exponential average's (2 - alpha)
-  // / alpha; all of a still running mean's still_n (more than 8) handed to the filter.
-  auto samples_averaged = [&](double l, double still_n) {
+  // What a sample's variance is divided by (variance_of_mean): the samples a
+  // temporal mean of length l averages, l while the blend weight is 1/l,
+  // then the exponential average's (2 - alpha) / alpha; for a still running
+  // mean of still_n samples (more than 8) handed to the filter, still_n
+  // sqrt(still_n / 8): its edge-stopping narrows faster than its noise falls.
+  auto variance_divisor = [&](double l, double still_n) {
     if (!p_.variance_of_mean) return 1.0;
-    if (still_n > 8.0) return still_n;
+    if (still_n > 8.0) return still_n * std::sqrt(still_n / 8.0);
     const double a = p_.alpha_colour;
     return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
   };
@@ -329,7 +331,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   const std::vector<double>& m2_ = ch.m2;
   // Pass 1: reprojection, history clipping and temporal integration.
   std::vector<double> d(3 * n), colour(3 * n), len(n), m1(n), m2(n);
-  std::vector<double> samples(n, 1.0);  // the samples each temporal colour averages (samples_averaged)
+  std::vector<double> divisor(n, 1.0);  // each temporal colour's variance divisor (variance_divisor)
   for (int i = 0; i < 3 * n; ++i) d[i] = c[i] / demod[i];
   std::vector<double> lo, hi, pre;
   std::vector<bool> has_box, has_pre;
@@ -514,13 +516,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
       // A still pixel whose running mean holds more than 8 samples
       // (DN_STILL_FILTER_FROM) or more than its history: the filter starts
-      // from that mean, and its length and the samples it averages are their count.
+      // from that mean, and its length is their count.
       double still_n = 0.0;
       if (keeps_still && ch.still_n[i] > std::min(len[i], 8.0)) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = ch.still_mean[3 * i + k];
         len[i] = still_n = ch.still_n[i];
       }
-      samples[i] = samples_averaged(len[i], still_n);
+      divisor[i] = variance_divisor(len[i], still_n);
     }
   ch.temporal = colour;
   // No data: a foreground pixel of length 0 (only an unsampled pixel without history has one).
@@ -531,7 +533,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   }
 
   // Pass 2: variance, of one sample or (variance_of_mean) of the temporal
-  // mean: divided by the samples it averages (samples_averaged).
+  // mean: divided by variance_divisor.
   std::vector<double> var(n, 0.0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -545,7 +547,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // m2 - m1^2 cancels; in single precision as on the device, which
         // decides the HDR step gate and the edge-stopping of sharp pixels.
         const float f1 = float(m1[i]), f2 = float(m2[i]);
-        var[i] = std::max(0.0f, f2 - f1 * f1) / samples[i];
+        var[i] = std::max(0.0f, f2 - f1 * f1) / divisor[i];
         continue;
       }
       if (!p_.spatial_estimate) {
@@ -553,7 +555,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         // one sample's (or a copy's) cancel exactly, as on the device, where
         // fp32 rounding of the double moments would leave a residual that a
         // luminance weight on sqrt(variance) blows up.
-        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]) / samples[i];
+        var[i] = std::max(0.0, m2[i] - m1[i] * m1[i]) / divisor[i];
         continue;
       }
       // Luminance weight relative to the darker of p and q (HDR step rule),
@@ -593,7 +595,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       s1 /= sw;
       s2 /= sw;
       var[i] = std::max(0.0f, float(s2) - float(s1) * float(s1)) * 4.0 / len[i] /  // cancels: fp32 as on the device
-               samples[i];
+               divisor[i];
     }
   ch.variance = var;
 
@@ -736,7 +738,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // moving target is the temporal mean m of variance v, a = g sqrt(v). With
   // converge_still k, where the still running mean holds n >= 4 samples, the
   // still target is that mean, a = k sqrt(s2 / n), s2 the larger of v
-  // samples_averaged(length) and the mean over the 3x3 pixels whose still
+  // variance_divisor(length, n) and the mean over the 3x3 pixels whose still
   // mean holds n >= 2 of M2 / (n - 1),
   // factor (a / Y(f - t))^3, and the result is mix(moving, still, w) with
   // w = min((n - 3) / 4, 1). guard_target gives the moving target, the still
@@ -761,7 +763,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
           sum += ch.still_m2[q] / (ch.still_n[q] - 1.0);
           count += 1.0;
         }
-      const double s2 = std::max(v * samples_averaged(ch.length[i], ch.still_n[i]), sum / std::max(count, 1.0));
+      const double s2 = std::max(v * variance_divisor(ch.length[i], ch.still_n[i]), sum / std::max(count, 1.0));
       still.allowed = p_.converge_still * p_.converge_still * s2 / ch.still_n[i];
     }
     return true;
