@@ -239,12 +239,13 @@ bool still_unchanged(uint p, ivec2 pos, bool continues) {
   return true;
 }
 
-// The temporal colour (.w: its variance divisor, dn_svgf_variance_divisor) and moments of p. A
-// still pixel whose running mean holds more than DN_STILL_FILTER_FROM
-// samples, or more than its history (after a rejection the mean went
-// through): the filter starts from that plain mean, and its length is
-// their count, so its variance and the a-trous's luminance edge-stopping
-// fall (faster than 1 / n) and the filter lets go as the mean converges. The history is an exponential blend of the filtered colour
+// The temporal colour (.w: its variance divisor, dn_svgf_variance_divisor)
+// and moments of p. A still pixel whose running mean holds more than
+// DN_STILL_FILTER_FROM samples, or more than its history (after a rejection
+// the mean went through): the filter starts from that plain mean, and its
+// length is their count, so its variance and the a-trous's luminance
+// edge-stopping fall (faster than 1 / n) and the filter lets go as the mean
+// converges. The history is an exponential blend of the filtered colour
 // (feedback_tap): it keeps the filter's blur.
 void write_temporal(uint p, vec3 colour, vec2 moments, float len, vec4 still) {
   float still_n = 0.0;
