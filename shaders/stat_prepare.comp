@@ -16,12 +16,12 @@
 // made a light seen in a mirror one with its dark neighbours (dnrender scene
 // 6, first frame: RMSE 0.593 against the frame's 0.517). n = 0 or any
 // non-finite statistic gets n = 0 in theta.w: no data. variance.w is p's
-// class (stat_class.glsl), with CLASSIFY (stat-temporal):
-// DN_STAT_MOVING where the pixel moves (motion not usable or 0.005 px or
-// more): stat_filter tests its neighbours by Eq. 14 there; DN_STAT_KEPT where a still pixel
-// with 2 or more samples is unexplained (dn_unexplained: a metal or mirror,
-// whose guides say nothing of what it shows): stat_filter returns its own
-// mean. Its few samples' variance is so wide that the test accepted dark
+// class (stat_class.glsl), with CLASSIFY (stat-temporal): DN_STAT_MOVING
+// where the pixel moves (motion not usable or 0.005 px or more):
+// stat_filter tests its neighbours by Eq. 14 there; DN_STAT_KEPT where a
+// still pixel with 2 or more samples is unexplained (dn_unexplained: a
+// metal or mirror, whose guides say nothing of what it shows): stat_filter
+// returns its own mean. Its few samples' variance is so wide that the test accepted dark
 // neighbours into a highlight (dnrender scene 6 after 2 still frames: a lit
 // line of reference 25 shown at 0.55, its mean 15), and at 64 samples the
 // test still let darker neighbours of high variance in; svgf's chain keeps

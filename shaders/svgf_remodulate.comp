@@ -62,13 +62,11 @@ float dn_still_sample_variance(vec4 m, float len, float still_n, int s, uint p) 
   }
   return max(m.w * dn_svgf_variance_divisor(len, still_n, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
-// Whether the still running means are kept and used (converge_still > 0).
-bool dn_converging_still() { return CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0; }
 // Signal s's still running mean (1: the specular chain); w: its weight as
 // the target, 0 where the pixel is not still.
 vec4 dn_still_mean(vec4 m, int s, uint p, out float w) {
   w = 0.0;
-  if (!dn_converging_still() || !(m.w >= 0.0)) return vec4(0.0);
+  if (!DN_CONVERGING_STILL || !(m.w >= 0.0)) return vec4(0.0);
   vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
   w = dn_still_weight(mean.a);
   return w > 0.0 ? mean : vec4(0.0);
@@ -92,7 +90,7 @@ vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
 // of its samples shows), else its temporal mean m. .w negative: no data.
 vec4 dn_guard_mean(vec4 m, int s, uint p) {
   if (!(m.w >= 0.0)) return vec4(m.rgb, -1.0);
-  if (dn_converging_still()) {
+  if (DN_CONVERGING_STILL) {
     vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
     if (mean.a >= 1.0) return vec4(mean.rgb, 1.0);
   }
@@ -234,11 +232,11 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // 0.1) lags behind it: at least DN_STILL_BLEND_WEIGHT there.
 const float DN_STILL_BLEND_WEIGHT = 0.5;
 float taa_weight(uint p, vec2 mv, bool kept) {
-  if (kept && dn_converging_still()) return 1.0;
+  if (kept && DN_CONVERGING_STILL) return 1.0;
   float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
   float weight = still <= 0.0 || still >= moving ? moving : mix(moving, still, dn_stillness(mv));
-  bool converging = dn_converging_still() && still_mean_at(p).a > DN_STILL_FILTER_FROM;
+  bool converging = DN_CONVERGING_STILL && still_mean_at(p).a > DN_STILL_FILTER_FROM;
   return converging ? max(weight, DN_STILL_BLEND_WEIGHT) : weight;
 }
 

@@ -249,7 +249,7 @@ bool still_unchanged(uint p, ivec2 pos, bool continues) {
 // (feedback_tap): it keeps the filter's blur.
 void write_temporal(uint p, vec3 colour, vec2 moments, float len, vec4 still) {
   float still_n = 0.0;
-  if (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0 && still.a > min(len, DN_STILL_FILTER_FROM)) {
+  if (DN_CONVERGING_STILL && still.a > min(len, DN_STILL_FILTER_FROM)) {
     colour = still.rgb;
     len = still_n = still.a;
   }

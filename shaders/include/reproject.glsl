@@ -32,6 +32,9 @@ const float DN_STILL_MIN_SAMPLES = 4.0;
 // tripled at the switch (the filtered history of a few frames is the less
 // noisy); from 8 and from 12 every count of dnrender's still scenes fell.
 const float DN_STILL_FILTER_FROM = 8.0;
+// Whether the still running means are kept and used (svgf converge_still > 0),
+// in a pass with the CONVERGE_STILL constant.
+#define DN_CONVERGING_STILL (CONVERGE_STILL && DN_PARAM_VALUE(svgf, converge_still) > 0.0)
 const float DN_STILL_RAMP = 4.0;
 float dn_still_weight(float n) {
   return n >= DN_STILL_MIN_SAMPLES ? clamp((n - DN_STILL_MIN_SAMPLES + 1.0) / DN_STILL_RAMP, 0.0, 1.0) : 0.0;

@@ -7,6 +7,9 @@
 namespace dn::test {
 namespace {
 
+// A still running mean of more samples than this is where the filter starts (DN_STILL_FILTER_FROM).
+constexpr double kStillFilterFrom = 8.0;
+
 double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
 // The guide rules of docs/pipelines.md "Sanitize rule" (the device's fp32
@@ -247,7 +250,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // sqrt(still_n / 8): its edge-stopping narrows faster than its noise falls.
   auto variance_divisor = [&](double l, double still_n) {
     if (!p_.variance_of_mean) return 1.0;
-    if (still_n > 8.0) return still_n * std::sqrt(still_n / 8.0);
+    if (still_n > kStillFilterFrom) return still_n * std::sqrt(still_n / kStillFilterFrom);
     const double a = p_.alpha_colour;
     return a > 0.0 ? std::clamp(l, 1.0, (2.0 - a) / a) : std::max(l, 1.0);
   };
@@ -518,7 +521,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       // (DN_STILL_FILTER_FROM) or more than its history: the filter starts
       // from that mean, and its length is their count.
       double still_n = 0.0;
-      if (keeps_still && ch.still_n[i] > std::min(len[i], 8.0)) {
+      if (keeps_still && ch.still_n[i] > std::min(len[i], kStillFilterFrom)) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = ch.still_mean[3 * i + k];
         len[i] = still_n = ch.still_n[i];
       }
@@ -960,7 +963,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         double a = p_.taa_static_alpha > 0.0 && p_.taa_static_alpha < moving
                        ? moving + (p_.taa_static_alpha - moving) * still
                        : moving;
-        if (keeps_still && chains_[0].still_n[i] > 8.0) a = std::max(a, 0.5);  // the filter starts from that mean
+        if (keeps_still && chains_[0].still_n[i] > kStillFilterFrom) a = std::max(a, 0.5);  // the filter starts from that mean
         if (a >= 1.0) continue;
         if (p_.display_lag && !young) lag[i] = (prev_lag < 0.0 ? 1.0 : prev_lag * (1.0 - a)) * still;
         const double give = std::max(lag[i], 0.0);
