@@ -18,14 +18,17 @@
 // non-finite statistic gets n = 0 in theta.w: no data. variance.w is p's
 // class (stat_class.glsl), with CLASSIFY (stat-temporal): DN_STAT_MOVING
 // where the pixel moves (motion not usable or 0.005 px or more):
-// stat_filter tests its neighbours by Eq. 14 there; DN_STAT_KEPT where a
-// still pixel with 2 or more samples is unexplained (dn_unexplained: a
-// metal or mirror, whose guides say nothing of what it shows): stat_filter
-// returns its own mean. Its few samples' variance is so wide that the test accepted dark
-// neighbours into a highlight (dnrender scene 6 after 2 still frames: a lit
-// line of reference 25 shown at 0.55, its mean 15), and at 64 samples the
-// test still let darker neighbours of high variance in; svgf's chain keeps
-// such pixels too. Else DN_STAT_TESTED. One invocation per pixel.
+// stat_filter tests its neighbours by Eq. 14 there; DN_STAT_KEPT where an
+// unexplained pixel (dn_unexplained: a metal or mirror, whose guides say
+// nothing of what it shows) moves, or is still with 2 or more samples:
+// stat_filter returns its own mean (moving: its frame, stat_temporal keeps
+// no history there). Its few samples' variance is so wide that the test
+// accepted dark neighbours into a highlight (dnrender scene 6 after 2 still
+// frames: a lit line of reference 25 shown at 0.55, its mean 15), at 64
+// samples it still let darker neighbours of high variance in, and a moving
+// one's variance, pooled from its window, counts a sharp reflection's edges
+// as noise; svgf's chain keeps such pixels too. Else DN_STAT_TESTED. One
+// invocation per pixel.
 //
 // DEMODULATED (the statistics are over demodulated samples): also the
 // value stat_filter averages, the demodulated mean from the moments
@@ -125,7 +128,8 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   bool moves = CLASSIFY && pixel_moves(p);
-  if (moves) pixel_class = DN_STAT_MOVING;
+  bool unexplained = CLASSIFY && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p));
+  if (moves) pixel_class = unexplained ? DN_STAT_KEPT : DN_STAT_MOVING;
   DnStat s = stat_at(p);
   if (!dn_stat_usable(s)) {
     theta.data[p] = vec4(0.0);
@@ -149,7 +153,7 @@ void main() {
     variance.data[p] = vec4(vec3(0.0), pixel_class);
     return;
   }
-  if (CLASSIFY && !moves && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p))) pixel_class = DN_STAT_KEPT;
+  if (unexplained) pixel_class = DN_STAT_KEPT;
   vec3 var = max(dn_stat_sample_variance(s) / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
   theta.data[p] = vec4(dn_stat_theta(s), s.n);
   variance.data[p] = vec4(var, pixel_class);

@@ -11,10 +11,11 @@
 //   beta = mix(fading, 1, stillness(mv)): H's n, M2 and M3 scaled by beta
 //        (a still pixel keeps all its samples, a moving one a fading memory);
 //        at an unexplained pixel (dn_unexplained: a mirror or metal) fading
-//        is DN_UNEXPLAINED_FADING: what it shows does not move with its
+//        is 0, a moving one keeps none: what it shows does not move with its
 //        surface, and the Welch test cannot reject a history that holds a
-//        reflected highlight's samples (their variance is too large), so at
-//        fading they trailed the highlight for many frames
+//        reflected highlight's samples (their variance is too large), so a
+//        fading memory trailed the highlight (stat_prepare keeps the pixel's
+//        own frame)
 //   test: the Welch test of stat_filter, between the history and the
 //        frame over p's 3x3 window (the same-surface previous pixels around
 //        p_prev, merged and faded, against the same-surface current pixels
@@ -115,9 +116,6 @@ uint welch_nu(float var_a, float na, float var_b, float nb) {
 // (2t: no chance failure of a test at alpha).
 const uint DN_HISTORY_PASSES = 0u, DN_HISTORY_FAILS = 1u, DN_HISTORY_FAILS_FAR = 2u;
 const float DN_PRIOR_DOF = 2.0;
-// About two frames of memory: a longer one let a mirror's highlight trail, none
-// kept a dark metal's fireflies (docs/pipelines.md, "stat-temporal").
-const float DN_UNEXPLAINED_FADING = 0.5;
 uint history_test(ivec2 pos, ivec2 prev, float z, vec3 n, vec2 grad, float beta) {
   DnStat h = dn_stat_empty(), c = dn_stat_empty();
   for (int yy = -1; yy <= 1; ++yy)
@@ -186,8 +184,7 @@ void main() {
   bool suspect = false;
   if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, w)) {
-    bool unexplained = dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p));
-    float fading = unexplained ? DN_UNEXPLAINED_FADING : DN_PARAM_VALUE(stat_temporal, fading);
+    float fading = dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p)) ? 0.0 : DN_PARAM_VALUE(stat_temporal, fading);
     float beta = mix(fading, 1.0, dn_stillness(mv));
     DnStat h = dn_stat_scale(reprojected(origin, w, z, n, grad), beta);
     ivec2 prev = ivec2(floor(dn_previous_position(p, size.x, mv)));

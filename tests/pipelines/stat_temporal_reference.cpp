@@ -44,8 +44,9 @@ StatAccumulator frame_statistics(const StatFrame& f, int q) {
 
 const double kPriorDof = 2.0;
 // A pixel whose albedo is no reflectance (every component below 1e-3, one
-// above 1.5, or not finite: a metal's diffuse colour) fades at this instead.
-const double kUnexplainedFading = 0.5;
+// above 1.5, or not finite: a metal's diffuse colour) fades at this instead:
+// moving, it keeps no history.
+const double kUnexplainedFading = 0.0;
 bool unexplained(const float* a) {
   const float m = std::max({a[0], a[1], a[2]});
   return !(m >= 1e-3f) || !(m <= 1.5f);
