@@ -227,16 +227,16 @@ vec4 taa_history_of(ivec2 q) { return taa_history_at(uint(q.y) * frame.size.x + 
 // A pixel kept as rendered blends only where it is still (its motion, that
 // of its surface, is not that of what it shows), and not with a still
 // running mean (converge_still), which it then shows as it is. Where the
-// filter starts from the still mean (more than DN_STILL_FILTER_FROM
-// samples) its output converges, and a blend of small weight (progressive's
-// 0.1) lags behind it: at least DN_STILL_BLEND_WEIGHT there.
+// still mean is the guard's target (DN_STILL_MIN_SAMPLES or more samples)
+// the output converges, and a blend of small weight (progressive's 0.1)
+// lags behind it: at least DN_STILL_BLEND_WEIGHT there.
 const float DN_STILL_BLEND_WEIGHT = 0.5;
 float taa_weight(uint p, vec2 mv, bool kept) {
   if (kept && DN_CONVERGING_STILL) return 1.0;
   float moving = DN_PARAM_VALUE(svgf, taa_alpha) > 0.0 && !kept ? DN_PARAM_VALUE(svgf, taa_alpha) : 1.0;
   float still = DN_PARAM_VALUE(svgf, taa_static_alpha);
   float weight = still <= 0.0 || still >= moving ? moving : mix(moving, still, dn_stillness(mv));
-  bool converging = DN_CONVERGING_STILL && still_mean_at(p).a > DN_STILL_FILTER_FROM;
+  bool converging = DN_CONVERGING_STILL && still_mean_at(p).a >= DN_STILL_MIN_SAMPLES;
   return converging ? max(weight, DN_STILL_BLEND_WEIGHT) : weight;
 }
 

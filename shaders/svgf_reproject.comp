@@ -382,9 +382,16 @@ void main() {
   // chain kept (2 or more samples) or restarted this frame; the reflected
   // hit's guides and Eq. 1 follow each sample's reflected hit, which at a
   // still pixel differs from frame to frame without any change.
+  // A sample without a normal (a renderer's guide left empty, as Cycles'
+  // Denoising Normal on some paths) is one more of the same pixel: across
+  // it p's own depth alone decides, and its still mean goes on.
   vec4 own_aux;
-  bool continues = CONVERGE_STILL && dn_is_still(mv) &&
-                   (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : surface_kept && tap_valid(pos, z, n, grad, own_aux));
+  float own_z = uintBitsToFloat(prev_aux_at(p).z);  // negative: it had no normal
+  bool depth_only = !has_normal || own_z < 0.0;
+  bool own_kept = depth_only ? history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && own_z != 0.0 &&
+                                   dn_same_depth(z, grad.x, abs(own_z))
+                             : surface_kept && tap_valid(pos, z, n, grad, own_aux);
+  bool continues = CONVERGE_STILL && dn_is_still(mv) && (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : own_kept);
   bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
   if (has_sample && !still_unchanged(p, pos, continues) && continues) {
     continues = false;

@@ -85,9 +85,11 @@ void main() {
     len[s] = t.z;
     // No data (a foreground pixel of length 0: only a MASKED reprojection
     // makes one): no history depth, so the next frame reprojects nothing from it.
+    // A pixel without a normal leaves its depth negated: no history, but its
+    // still mean goes on (svgf_reproject).
     bool no_data = gz != 0.0 && t.z == 0.0;
     vec4 colour = vec4(signal_colour(s, pi), t.z);
-    uvec4 aux = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : max(gz, 0.0)), gds[g].y);
+    uvec4 aux = uvec4(floatBitsToUint(t.xy), floatBitsToUint(no_data ? 0.0 : gz), gds[g].y);
     if (s == 0) {
       colour_history.data[pi] = colour;
       aux_history.data[pi] = aux;

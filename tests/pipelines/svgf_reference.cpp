@@ -9,6 +9,8 @@ namespace {
 
 // A still running mean of more samples than this is where the filter starts (DN_STILL_FILTER_FROM).
 constexpr double kStillFilterFrom = 8.0;
+// From this many samples a still running mean is the guard's target (DN_STILL_MIN_SAMPLES).
+constexpr double kStillMinSamples = 4.0;
 
 double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
@@ -150,13 +152,17 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     }
 
   // The geometry history the next frame reads: depth and quantized normal of
-  // the foreground pixels with a normal.
+  // the foreground pixels with a normal; minus the depth without one (only
+  // the still mean goes on from it).
   std::vector<double> hz(n, 0.0), hn(3 * n, 0.0);
   for (int i = 0; i < n; ++i) {
     const double* nc = &nrm[3 * i];
-    if (fg[i] && nc[0] * nc[0] + nc[1] * nc[1] + nc[2] * nc[2] > 0.0) {
+    if (!fg[i]) continue;
+    if (nc[0] * nc[0] + nc[1] * nc[1] + nc[2] * nc[2] > 0.0) {
       hz[i] = z[i];
       quantize_normal(nc, &hn[3 * i]);
+    } else {
+      hz[i] = -z[i];
     }
   }
 
@@ -480,9 +486,13 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         }
       }
       // The still mean is p's own: it goes on only where p's own previous
-      // pixel passes the consistency test (valid may come from the 3x3 fallback).
-      const bool own_same = surface_kept && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
-                            !(distance3(nc, &n_[3 * i]) / (dn[i] + 0.01) > 16.0);
+      // pixel passes the consistency test (valid may come from the 3x3 fallback);
+      // its depth alone where either has no normal.
+      const bool depth_only = !has_normal || z_[i] < 0.0;
+      const bool own_same =
+          depth_only ? !reset && z_[i] != 0.0 && !(std::fabs(z[i] - std::fabs(z_[i])) / (dz[i] + 0.01) > 10.0)
+                     : surface_kept && z_[i] > 0.0 && !(std::fabs(z[i] - z_[i]) / (dz[i] + 0.01) > 10.0) &&
+                           !(distance3(nc, &n_[3 * i]) / (dn[i] + 0.01) > 16.0);
       bool continues = own_same && std::hypot(mvx, mvy) < 0.005;
       if (keeps_still && !masked && sample_ok[i]) {
         float box = 0.0f, box2 = 0.0f, count = 0.0f, lo = 1e38f, hi = 0.0f;
@@ -755,8 +765,8 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     if (!(v >= 0.0)) return false;
     for (int k = 0; k < 3; ++k) moving.rgb[k] = ch.temporal[3 * i + k];
     moving.allowed = p_.harm_guard * p_.harm_guard * v;
-    if (keeps_still && ch.still_n[i] >= 4.0) {
-      w = std::min((ch.still_n[i] - 3.0) / 4.0, 1.0);
+    if (keeps_still && ch.still_n[i] >= kStillMinSamples) {
+      w = std::min((ch.still_n[i] - kStillMinSamples + 1.0) / 4.0, 1.0);
       for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
       double sum = 0.0, count = 0.0;
       for (int dy = -1; dy <= 1; ++dy)
@@ -922,7 +932,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // within 10 depth gradients of p (and not kept), out = mix(clamped, current, a):
   // a = taa_alpha (1 when 0) where |mv| >= 0.05 px, falling linearly to
   // taa_static_alpha at |mv| = 0 when that is smaller, at least 0.5 where
-  // the still mean holds more than 8 samples (converge_still); no blend when
+  // the still mean holds 4 or more samples (converge_still); no blend when
   // a = 1 or at a pixel kept as rendered. display_lag: a state s per pixel, -1 while chain 0's length is below
   // luminance_min_age, else 0 without that blend, else (1 where the previous
   // state, at the bilinear tap of the largest weight (the first of equals),
@@ -963,7 +973,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
         double a = p_.taa_static_alpha > 0.0 && p_.taa_static_alpha < moving
                        ? moving + (p_.taa_static_alpha - moving) * still
                        : moving;
-        if (keeps_still && chains_[0].still_n[i] > kStillFilterFrom) a = std::max(a, 0.5);  // the filter starts from that mean
+        if (keeps_still && chains_[0].still_n[i] >= kStillMinSamples) a = std::max(a, 0.5);  // the guard's target
         if (a >= 1.0) continue;
         if (p_.display_lag && !young) lag[i] = (prev_lag < 0.0 ? 1.0 : prev_lag * (1.0 - a)) * still;
         const double give = std::max(lag[i], 0.0);
