@@ -386,7 +386,7 @@ void main() {
   // Denoising Normal on some paths) is one more of the same pixel: across
   // it p's own depth alone decides, and its still mean goes on.
   vec4 own_aux;
-  float own_z = uintBitsToFloat(prev_aux_at(p).z);  // negative: it had no normal
+  float own_z = CONVERGE_STILL ? uintBitsToFloat(prev_aux_at(p).z) : 0.0;  // negative: it had no normal
   bool depth_only = !has_normal || own_z < 0.0;
   bool own_kept = depth_only ? history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && own_z != 0.0 &&
                                    dn_same_depth(z, grad.x, abs(own_z))
