@@ -30,6 +30,7 @@ IdleTrimReport trim_idle_memory(gpu::Context& device) {
   r.resident_before = resident_bytes();
   r.transient_bytes = gpu::TransientPool::of(device).trim(gpu::TransientPool::Clock::duration::zero());
   r.kernels = device.kernels().drop_unused();
+  device.release_deferred_frees();
   // Free pages of every arena, not only the top of the main heap.
   ::malloc_trim(0);
   r.resident_after = resident_bytes();

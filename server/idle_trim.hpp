@@ -32,7 +32,8 @@ struct IdleTrimReport {
 };
 
 // Gives back what no session holds: the transient pool's free buffers, the
-// kernels KernelCache::drop_unused() lets go, and the allocator's free pages
+// kernels KernelCache::drop_unused() lets go (and what the driver keeps of
+// them until its next submission), and the allocator's free pages
 // (malloc_trim). Safe while sessions are open; nothing they hold is touched.
 IdleTrimReport trim_idle_memory(gpu::Context& device);
 
