@@ -286,11 +286,17 @@ void main() {
   bool has_normal = dot(n, n) > 0.0;
   vec2 grad = dn_svgf_gradients(pos, z, n);
   vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  // Whether p is still: its surface's motion, but at a mirror the
+  // reflection's (its modulator holds the reflected albedo, which a moving
+  // reflection changes). A still glossy pixel's representative-ray match
+  // follows each sample's reflected hit, which moves without any change.
+  vec2 still_mv = mv;
   bool history_allowed = READ_HISTORY;
   if (REFLECTION) {
     vec4 r = reflection_at(p);
     mv = r.xy;
     geometry_tests = r.z != DN_REFLECT_GLOSSY;
+    if (geometry_tests) still_mv = mv;
     history_allowed = history_allowed && r.w != DN_REFLECT_REJECTED;  // reflect's Eq. 1 threshold
   }
 
@@ -391,7 +397,7 @@ void main() {
   bool own_kept = depth_only ? history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && own_z != 0.0 &&
                                    dn_same_depth(z, grad.x, abs(own_z))
                              : surface_kept && tap_valid(pos, z, n, grad, own_aux);
-  bool continues = CONVERGE_STILL && dn_is_still(mv) && (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : own_kept);
+  bool continues = CONVERGE_STILL && dn_is_still(still_mv) && (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : own_kept);
   bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
   if (has_sample && !still_unchanged(p, pos, continues) && continues) {
     continues = false;

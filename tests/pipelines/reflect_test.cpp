@@ -840,6 +840,42 @@ TEST_F(ReflectTest, AStillMirrorKeepsItsMeanWhenItsMatchIsRejected) {
   EXPECT_EQ(whole, rejected);
 }
 
+// A still glossy pixel's representative-ray match (Eq. 4-5) follows each
+// sample's reflected hit, which at 1 spp changes with every sample (Cycles'
+// Denoising Depth ends some samples' chains before the glossy hit: no ray).
+// Here the glossy pixels of every other column have no ray in the odd
+// frames, so in the even ones their match lands beside them, and the other
+// columns' on them in the odd ones. The pixel and camera have not moved, so
+// its still mean goes on: after 7 frames of dnrender scene 6 every glossy
+// pixel whose match moved keeps all 7 samples in its specular still mean
+// (its stillness is its surface's motion; a mirror's is its reflection's).
+TEST_F(ReflectTest, AStillGlossyPixelKeepsItsMeanWhenItsRayMatchMoves) {
+  const int w = 96, h = 54, scene_id = 6, frames = 7;
+  const auto scene = render::build_scene(scene_id);
+  const render::RenderSettings settings = reflection_settings(w, h);
+  const render::Camera cam = render::frame_camera(scene_id, 0, settings);
+  std::vector<Rendered> seq;
+  for (int t = 0; t < frames; ++t) {
+    Rendered r{render::render_frame(*scene, cam, cam, t, settings), cam};
+    for (size_t i = 0; i < size_t(w) * h; ++i)
+      if (class_of(r.fb, i) == Glossy && t % 2 == 1 && i % 2 == 0) r.fb.reflection_distance[i] = 0.0f;
+    seq.push_back(std::move(r));
+  }
+  const CapturedRun run = run_captured(ctx(), pointers(seq), {});
+  const std::vector<float> motion = run.captured("reflect_motion", "reflect_motion");
+  const std::vector<float> still = run.captured("svgf_reproject_specular", "svgf_spec_still");
+  int moved = 0, whole = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    if (class_of(seq.back().fb, i) != Glossy || !(std::hypot(motion[4 * i], motion[4 * i + 1]) >= 0.005)) continue;
+    ++moved;
+    whole += still[4 * i + 3] == float(frames);
+  }
+  std::printf("[ info     ] %d still glossy pixels whose ray match moved; %d keep all %d samples in their still mean\n",
+              moved, whole, frames);
+  EXPECT_GT(moved, w * h / 40);
+  EXPECT_EQ(whole, moved);
+}
+
 // A pass's buffer bound at `binding` (1-based, the .pass file's numbering).
 std::string bound(const pipelines::GraphPipeline& graph, const std::string& pass, size_t binding) {
   for (const auto& p : graph.spec().passes)
