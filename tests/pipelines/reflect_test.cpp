@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <algorithm>
 #include <limits>
 #include <map>
@@ -804,6 +805,39 @@ TEST_F(ReflectTest, AStillViewIsNearerTheReferenceThanTheRunningMean) {
 }
 
 
+// Still frames of dnrender scene 6 at 96x54, frame t changed by
+// change(fb, t), through reflect with `params`: how many pixels of the last
+// frame `counts` picks (by class and reflect_motion's vec4), and how many of
+// those hold every frame's sample in their specular still mean.
+struct StillMeansKept {
+  int counted = 0, whole = 0;
+};
+StillMeansKept still_means_kept(gpu::Context& context, int frames,
+                                const std::function<void(render::FrameBuffers&, int)>& change,
+                                std::vector<protocol::Parameter> params,
+                                const std::function<bool(Class, const float*)>& counts) {
+  const int w = 96, h = 54, scene_id = 6;
+  const auto scene = render::build_scene(scene_id);
+  const render::RenderSettings settings = reflection_settings(w, h);
+  const render::Camera cam = render::frame_camera(scene_id, 0, settings);
+  std::vector<Rendered> seq;
+  for (int t = 0; t < frames; ++t) {
+    Rendered r{render::render_frame(*scene, cam, cam, t, settings), cam};
+    change(r.fb, t);
+    seq.push_back(std::move(r));
+  }
+  const CapturedRun run = run_captured(context, pointers(seq), std::move(params));
+  const std::vector<float> motion = run.captured("reflect_motion", "reflect_motion");
+  const std::vector<float> still = run.captured("svgf_reproject_specular", "svgf_spec_still");
+  StillMeansKept kept;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    if (!counts(class_of(seq.back().fb, i), &motion[4 * i])) continue;
+    ++kept.counted;
+    kept.whole += still[4 * i + 3] == float(frames);
+  }
+  return kept;
+}
+
 // A still mirror whose reflection match Eq. 1 rejects (at 1 spp a renderer's
 // reflected hit moves with each sample's position in the pixel: here every
 // mirror hit is shifted 0.05 along x, alternately each frame, against a
@@ -814,30 +848,17 @@ TEST_F(ReflectTest, AStillViewIsNearerTheReferenceThanTheRunningMean) {
 // catches a change of light). After 6 frames of dnrender scene 6 every such
 // pixel's specular still mean holds all 6 samples.
 TEST_F(ReflectTest, AStillMirrorKeepsItsMeanWhenItsMatchIsRejected) {
-  const int w = 96, h = 54, scene_id = 6, frames = 6;
-  const auto scene = render::build_scene(scene_id);
-  const render::RenderSettings settings = reflection_settings(w, h);
-  const render::Camera cam = render::frame_camera(scene_id, 0, settings);
-  std::vector<Rendered> seq;
-  for (int t = 0; t < frames; ++t) {
-    Rendered r{render::render_frame(*scene, cam, cam, t, settings), cam};
-    for (size_t i = 0; i < size_t(w) * h; ++i)
-      if (class_of(r.fb, i) == Mirror) r.fb.reflection_position[3 * i] += t % 2 ? 0.05f : -0.05f;
-    seq.push_back(std::move(r));
-  }
-  const CapturedRun run = run_captured(ctx(), pointers(seq), {{"mirror_match_threshold", 0.001}});
-  const std::vector<float> motion = run.captured("reflect_motion", "reflect_motion");
-  const std::vector<float> still = run.captured("svgf_reproject_specular", "svgf_spec_still");
-  int rejected = 0, whole = 0;
-  for (size_t i = 0; i < size_t(w) * h; ++i) {
-    if (class_of(seq.back().fb, i) != Mirror || motion[4 * i + 3] != -2.0f) continue;
-    ++rejected;
-    whole += still[4 * i + 3] == float(frames);
-  }
+  const int frames = 6;
+  auto shift = [](render::FrameBuffers& fb, int t) {
+    for (size_t i = 0; i < fb.reflection_depth.size(); ++i)
+      if (class_of(fb, i) == Mirror) fb.reflection_position[3 * i] += t % 2 ? 0.05f : -0.05f;
+  };
+  auto rejected = [](Class c, const float* motion) { return c == Mirror && motion[3] == -2.0f; };
+  const StillMeansKept kept = still_means_kept(ctx(), frames, shift, {{"mirror_match_threshold", 0.001}}, rejected);
   std::printf("[ info     ] %d still mirror pixels rejected by Eq. 1; %d keep all %d samples in their still mean\n",
-              rejected, whole, frames);
-  EXPECT_GT(rejected, w * h / 40);
-  EXPECT_EQ(whole, rejected);
+              kept.counted, kept.whole, frames);
+  EXPECT_GT(kept.counted, 96 * 54 / 40);
+  EXPECT_EQ(kept.whole, kept.counted);
 }
 
 // A still glossy pixel's representative-ray match (Eq. 4-5) follows each
@@ -850,30 +871,17 @@ TEST_F(ReflectTest, AStillMirrorKeepsItsMeanWhenItsMatchIsRejected) {
 // pixel whose match moved keeps all 7 samples in its specular still mean
 // (its stillness is its surface's motion; a mirror's is its reflection's).
 TEST_F(ReflectTest, AStillGlossyPixelKeepsItsMeanWhenItsRayMatchMoves) {
-  const int w = 96, h = 54, scene_id = 6, frames = 7;
-  const auto scene = render::build_scene(scene_id);
-  const render::RenderSettings settings = reflection_settings(w, h);
-  const render::Camera cam = render::frame_camera(scene_id, 0, settings);
-  std::vector<Rendered> seq;
-  for (int t = 0; t < frames; ++t) {
-    Rendered r{render::render_frame(*scene, cam, cam, t, settings), cam};
-    for (size_t i = 0; i < size_t(w) * h; ++i)
-      if (class_of(r.fb, i) == Glossy && t % 2 == 1 && i % 2 == 0) r.fb.reflection_distance[i] = 0.0f;
-    seq.push_back(std::move(r));
-  }
-  const CapturedRun run = run_captured(ctx(), pointers(seq), {});
-  const std::vector<float> motion = run.captured("reflect_motion", "reflect_motion");
-  const std::vector<float> still = run.captured("svgf_reproject_specular", "svgf_spec_still");
-  int moved = 0, whole = 0;
-  for (size_t i = 0; i < size_t(w) * h; ++i) {
-    if (class_of(seq.back().fb, i) != Glossy || !(std::hypot(motion[4 * i], motion[4 * i + 1]) >= 0.005)) continue;
-    ++moved;
-    whole += still[4 * i + 3] == float(frames);
-  }
+  const int frames = 7;
+  auto drop_rays = [](render::FrameBuffers& fb, int t) {
+    for (size_t i = 0; i < fb.reflection_distance.size(); ++i)
+      if (class_of(fb, i) == Glossy && t % 2 == 1 && i % 2 == 0) fb.reflection_distance[i] = 0.0f;
+  };
+  auto moved = [](Class c, const float* motion) { return c == Glossy && std::hypot(motion[0], motion[1]) >= 0.005; };
+  const StillMeansKept kept = still_means_kept(ctx(), frames, drop_rays, {}, moved);
   std::printf("[ info     ] %d still glossy pixels whose ray match moved; %d keep all %d samples in their still mean\n",
-              moved, whole, frames);
-  EXPECT_GT(moved, w * h / 40);
-  EXPECT_EQ(whole, moved);
+              kept.counted, kept.whole, frames);
+  EXPECT_GT(kept.counted, 96 * 54 / 40);
+  EXPECT_EQ(kept.whole, kept.counted);
 }
 
 // A pass's buffer bound at `binding` (1-based, the .pass file's numbering).
