@@ -5,8 +5,10 @@
 
 #include <fstream>
 
+#include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
+#include "gpu/error.hpp"
 #include "gpu/transient_pool.hpp"
 
 namespace dn::server {
@@ -24,13 +26,31 @@ uint64_t resident_bytes() {
   return resident_pages * static_cast<uint64_t>(::sysconf(_SC_PAGESIZE));
 }
 
+namespace {
+
+// A driver may free what earlier work used only at its next submission
+// (lavapipe destroys a pipeline that ran work there): two empty ones, each
+// waited on, the second after the first's clean-up. A lost device frees no more.
+void release_deferred_frees(gpu::Context& device) {
+  try {
+    gpu::CommandStream stream(device);
+    for (int i = 0; i < 2; ++i) {
+      stream.begin();
+      stream.submit_and_wait();
+    }
+  } catch (const gpu::VulkanError&) {
+  }
+}
+
+}  // namespace
+
 IdleTrimReport trim_idle_memory(gpu::Context& device) {
   IdleTrimReport r;
   const auto start = std::chrono::steady_clock::now();
   r.resident_before = resident_bytes();
   r.transient_bytes = gpu::TransientPool::of(device).trim(gpu::TransientPool::Clock::duration::zero());
   r.kernels = device.kernels().drop_unused();
-  device.release_deferred_frees();
+  release_deferred_frees(device);
   // Free pages of every arena, not only the top of the main heap.
   ::malloc_trim(0);
   r.resident_after = resident_bytes();

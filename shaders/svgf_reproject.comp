@@ -299,6 +299,7 @@ void main() {
     if (geometry_tests) still_mv = mv;
     history_allowed = history_allowed && r.w != DN_REFLECT_REJECTED;  // reflect's Eq. 1 threshold
   }
+  const bool reads_history = history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u;
 
   vec3 prev = vec3(0.0);
   vec2 prev_m = vec2(0.0);
@@ -306,7 +307,7 @@ void main() {
   bool valid = false;
   ivec2 origin;
   vec4 weights;
-  if (history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && has_normal && dn_motion_usable(mv) &&
+  if (reads_history && has_normal && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 sc = vec3(0.0);
     vec2 sm = vec2(0.0);
@@ -394,8 +395,7 @@ void main() {
   vec4 own_aux;
   float own_z = CONVERGE_STILL ? uintBitsToFloat(prev_aux_at(p).z) : 0.0;  // negative: it had no normal
   bool depth_only = !has_normal || own_z < 0.0;
-  bool own_kept = depth_only ? history_allowed && (frame.size.w & DN_FLAG_RESET) == 0u && own_z != 0.0 &&
-                                   dn_same_depth(z, grad.x, abs(own_z))
+  bool own_kept = depth_only ? reads_history && own_z != 0.0 && dn_same_depth(z, grad.x, abs(own_z))
                              : surface_kept && tap_valid(pos, z, n, grad, own_aux);
   bool continues = CONVERGE_STILL && dn_is_still(still_mv) && (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : own_kept);
   bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));

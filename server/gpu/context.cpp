@@ -266,23 +266,4 @@ void Context::submit(VkCommandBuffer command_buffer, VkFence fence) {
   check(r, "vkQueueSubmit");
 }
 
-void Context::release_deferred_frees() {
-  if (lost()) return;
-  VkFenceCreateInfo info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence fence = VK_NULL_HANDLE;
-  if (vkCreateFence(device_, &info, nullptr, &fence) != VK_SUCCESS) return;
-  // The second submission runs after the first has finished its clean-up.
-  for (int i = 0; i < 2; ++i) {
-    VkResult r;
-    {
-      std::lock_guard lock(submit_mutex_);
-      r = vkQueueSubmit(queue_, 0, nullptr, fence);
-    }
-    if (r == VK_SUCCESS) r = vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX);
-    if (r == VK_ERROR_DEVICE_LOST) mark_lost();
-    if (r != VK_SUCCESS || vkResetFences(device_, 1, &fence) != VK_SUCCESS) break;
-  }
-  vkDestroyFence(device_, fence, nullptr);
-}
-
 }  // namespace dn::gpu

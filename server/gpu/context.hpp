@@ -88,10 +88,6 @@ class Context {
   // vkQueueSubmit under the queue mutex. Throws VulkanError; a device loss
   // marks the context lost, after which every submit fails immediately.
   void submit(VkCommandBuffer command_buffer, VkFence fence);
-  // Two empty submissions, each waited on: a driver that frees objects used by
-  // earlier work only at its next submission (lavapipe's destroyed pipelines)
-  // frees them now. For an idle server giving memory back.
-  void release_deferred_frees();
   bool lost() const { return lost_.load(); }
   void mark_lost() { lost_.store(true); }
 

@@ -11,6 +11,8 @@ namespace {
 constexpr double kStillFilterFrom = 8.0;
 // From this many samples a still running mean is the guard's target (DN_STILL_MIN_SAMPLES).
 constexpr double kStillMinSamples = 4.0;
+// Over how many samples from there its weight rises to 1 (DN_STILL_RAMP).
+constexpr double kStillRamp = 4.0;
 
 double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
@@ -766,7 +768,7 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     for (int k = 0; k < 3; ++k) moving.rgb[k] = ch.temporal[3 * i + k];
     moving.allowed = p_.harm_guard * p_.harm_guard * v;
     if (keeps_still && ch.still_n[i] >= kStillMinSamples) {
-      w = std::min((ch.still_n[i] - kStillMinSamples + 1.0) / 4.0, 1.0);
+      w = std::min((ch.still_n[i] - kStillMinSamples + 1.0) / kStillRamp, 1.0);
       for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
       double sum = 0.0, count = 0.0;
       for (int dy = -1; dy <= 1; ++dy)
