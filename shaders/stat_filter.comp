@@ -13,7 +13,9 @@
 //     sample counts are exact), read as t^2 from the host's table
 //   weight(p, q) = exp(-|q - p|^2 / (2 s_s^2) - |a_p - a_q|^2 / (2 s_a^2)
 //                      - |n_p - n_q|^2 / (2 s_n^2))   (Eq. 16, the authors'
-//                      code's standard deviations)
+//                      code's standard deviations; with spatial_shrink_from
+//                      N a still p of n > N samples has s_s sqrt(N / n) and
+//                      its disc 3 of those at most)
 //   out_p = (raw_p + sum over members q != p of weight * raw_q) / (1 + sum of weights),
 //           computed as raw_p + sum weight * (raw_q - raw_p) / (1 + sum of weights)
 //           so that a constant image comes back exactly
@@ -54,6 +56,7 @@ vec3 filter_pixel(uint p) {
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
   k.asymmetric = k.asymmetric || var_p4.w == DN_STAT_MOVING;
+  dn_stat_narrow_still(k, r, theta_p, var_p4.w);
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy) {

@@ -45,6 +45,7 @@ vec3 filter_pixel() {
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
   k.asymmetric = k.asymmetric || c.variance.w == DN_STAT_MOVING;
+  dn_stat_narrow_still(k, r, c.theta, c.variance.w);
   vec3 sum = vec3(0.0);  // of weight * (raw_q - raw_p)
   float weight_sum = 1.0;
   for (int dy = -r; dy <= r; ++dy)

@@ -27,8 +27,9 @@
 // frames: a lit line of reference 25 shown at 0.55, its mean 15), at 64
 // samples it still let darker neighbours of high variance in, and a moving
 // one's variance, pooled from its window, counts a sharp reflection's edges
-// as noise; svgf's chain keeps such pixels too. Else DN_STAT_TESTED. One
-// invocation per pixel.
+// as noise; svgf's chain keeps such pixels too. Else DN_STAT_POOLED where
+// pool_single gave the variance, DN_STAT_TESTED elsewhere. One invocation
+// per pixel.
 //
 // DEMODULATED (the statistics are over demodulated samples): also the
 // value stat_filter averages, the demodulated mean from the moments
@@ -144,7 +145,7 @@ void main() {
     if (quadrants > 0.0) {  // then the window holds 2 or more samples too
       vec3 var = max(s2 / s.n, vec3(DN_PARAM_VALUE(stat, variance_floor)));
       theta.data[p] = vec4(s.mean, window_count(p));
-      variance.data[p] = vec4(var, pixel_class);
+      variance.data[p] = vec4(var, pixel_class == DN_STAT_TESTED ? DN_STAT_POOLED : pixel_class);
       return;
     }
   }

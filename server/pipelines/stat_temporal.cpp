@@ -89,7 +89,8 @@ PipelineDefinition stat_temporal_definition() {
   d.description.optional_channels = statistics_channels();
   d.parameter_groups = {"stat", "stat_temporal"};
   // A first frame from the radiance alone has no pixel with 2 samples: test each with its window's variance.
-  d.parameter_defaults = {{"pool_single", 1}};
+  // A still pixel's kernel narrows as its samples accumulate: its output tends to its own mean.
+  d.parameter_defaults = {{"pool_single", 1}, {"spatial_shrink_from", 16}};
   d.description.parameters = parameters_of(d.parameter_groups, d.parameter_defaults);
   d.build = build;
   d.check_channels = check_optional_statistics;

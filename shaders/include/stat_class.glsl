@@ -11,5 +11,8 @@ const float DN_STAT_MOVING = 1.0;
 // A still pixel the guides do not explain (stat-temporal): it shows the mean
 // of its own samples and gathers nothing.
 const float DN_STAT_KEPT = 2.0;
+// Tested as DN_STAT_TESTED, with its 3x3 window's variance (pool_single: it
+// has fewer than 2 samples); its theta.w counts the window's samples, not its own.
+const float DN_STAT_POOLED = 3.0;
 
 #endif

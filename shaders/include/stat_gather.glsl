@@ -23,6 +23,18 @@ DnStatKernel dn_stat_kernel_from_parameters() {
                       DN_PARAM_VALUE(stat, membership) != 0.0, DN_PARAM_VALUE(stat, asymmetric) != 0.0,
                       DN_PARAM_VALUE(stat, membership_falloff));
 }
+
+// With spatial_shrink_from N > 0, the kernel of a still pixel p holding n > N
+// samples of its own (class DN_STAT_TESTED, theta_p.w = n): sigma_spatial
+// sqrt(N / n), gathering within 3 of those sigmas (r at most); as n grows it
+// narrows to p itself, whose mean is consistent.
+void dn_stat_narrow_still(inout DnStatKernel k, inout int r, vec4 theta_p, float pixel_class) {
+  float n0 = DN_PARAM_VALUE(stat, spatial_shrink_from);
+  if (!(n0 > 0.0) || pixel_class != DN_STAT_TESTED || !(theta_p.w > n0)) return;
+  float sigma = DN_PARAM_VALUE(stat, sigma_spatial) * sqrt(n0 / theta_p.w);
+  k.ks = -0.5 / (sigma * sigma);
+  r = min(r, int(ceil(3.0 * sigma)));
+}
 #endif
 
 // symmetric:  (theta_p - theta_q)^2 <= t^2 (var_p + var_q)

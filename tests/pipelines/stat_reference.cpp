@@ -160,13 +160,23 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       double sum[3] = {0, 0, 0}, weight_sum = 1.0;
       const float n_p = prep.theta[4 * i + 3];
       const bool single = n_p < 2.0f;  // gathers with the single-sample test
-      const bool asymmetric = p.asymmetric || (!prep.moving.empty() && prep.moving[i]);
+      const bool moving = !prep.moving.empty() && prep.moving[i];
+      const bool asymmetric = p.asymmetric || moving;
       const bool kept = !prep.kept.empty() && prep.kept[i];
+      // A pooled pixel's n_p is its window's count, not its own.
+      const bool own_n = n_p == f.count[i];
+      const float shrink_from = static_cast<float>(p.spatial_shrink_from);
+      float sigma_spatial = static_cast<float>(p.sigma_spatial);
+      int r_p = r;
+      if (shrink_from > 0.0f && !moving && own_n && n_p > shrink_from) {
+        sigma_spatial *= std::sqrt(shrink_from / n_p);
+        r_p = std::min(r, static_cast<int>(std::ceil(3.0f * sigma_spatial)));
+      }
       if (n_p > 0.0f && !kept) {
-        for (int dy = -r; dy <= r; ++dy)
-          for (int dx = -r; dx <= r; ++dx) {
+        for (int dy = -r_p; dy <= r_p; ++dy)
+          for (int dx = -r_p; dx <= r_p; ++dx) {
             const int qx = x + dx, qy = y + dy, d2xy = dx * dx + dy * dy;
-            if (qx < 0 || qy < 0 || qx >= w || qy >= h || d2xy > r * r || d2xy == 0) continue;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h || d2xy > r_p * r_p || d2xy == 0) continue;
             const int q = qy * w + qx;
             if (prep.theta[4 * q + 3] < 2.0f) continue;
             const float n_q = prep.theta[4 * q + 3];
@@ -198,7 +208,7 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
               da2 += da * da;
               dn2 += (nn_p - nn_q) * (nn_p - nn_q);
             }
-            const double wgt = membership * std::exp(-d2xy / (2.0 * p.sigma_spatial * p.sigma_spatial) -
+            const double wgt = membership * std::exp(-d2xy / (2.0 * sigma_spatial * sigma_spatial) -
                                         da2 / (2.0 * p.sigma_albedo * p.sigma_albedo) -
                                         dn2 / (2.0 * p.sigma_normal * p.sigma_normal));
             for (int c = 0; c < 3; ++c) sum[c] += wgt * (value(q, c) - raw_p[c]);

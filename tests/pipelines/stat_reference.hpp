@@ -28,6 +28,10 @@ struct StatParams {
   // variance of the merged statistics of the 2x2 quadrants of its 3x3 window
   // that hold it (fp32 merges in the device's row order).
   bool pool_single = false;
+  // stat-temporal's spatial_shrink_from N: a pixel that is not moving, with
+  // n > N samples of its own, has the spatial sigma sigma_spatial sqrt(N / n)
+  // (fp32) and its disc min(radius, ceil(3 sigma)).
+  double spatial_shrink_from = 0.0;
 
   // Paper 003's setting: alpha 0.005, all-or-nothing membership.
   static StatParams paper() {

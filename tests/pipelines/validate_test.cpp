@@ -111,7 +111,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
   EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
                                                   "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated",
-                                                  "pool_single"}));
+                                                  "pool_single", "spatial_shrink_from"}));
   // stat-temporal: stat's channels plus depth and motion (reprojection), the
   // four statistics optional (without them the radiance is one sample per
   // frame); stat's parameters and its own.
