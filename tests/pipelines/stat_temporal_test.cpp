@@ -687,7 +687,6 @@ TEST_F(StatTemporalTest, AStillPixelsKernelNarrowsAsItsSamplesAccumulate) {
   run(0.0, &lift_unshrunk);
   FilterInputs in = filter_inputs(s, sequence.back());
   in.params.radius = radius;
-  in.params.spatial_shrink_from = 16.0;
   const test::StatResult want = test::stat_filter(in.acc, in.prep, in.params, t_squared(in.params.alpha));
   const double rms = test::relative_rms(got, want.output);
   std::printf("[ info     ] beside the fireflies: lifted %.4f (%.4f with spatial_shrink_from 0); relative RMS %.3g "
