@@ -13,6 +13,8 @@ constexpr double kStillFilterFrom = 8.0;
 constexpr double kStillMinSamples = 4.0;
 // Over how many samples from there its weight rises to 1 (DN_STILL_RAMP).
 constexpr double kStillRamp = 4.0;
+// Below this history length a still pixel's guard is widened (DN_GUARD_SURE_LENGTH).
+constexpr double kGuardSureLength = 8.0;
 
 double luminance(const double* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
 
@@ -756,8 +758,11 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
   // variance_divisor(length, n) and the mean over the 3x3 pixels whose still
   // mean holds n >= 2 of M2 / (n - 1),
   // factor (a / Y(f - t))^3, and the result is mix(moving, still, w) with
-  // w = min((n - 3) / 4, 1). guard_target gives the moving target, the still
-  // one and w (0: not still); false where pixel i has no data.
+  // w = min((n - 3) / 4, 1). Where the still mean holds n >= 2 samples, the
+  // moving target's a = g sqrt(s2 / variance_divisor(length, n)), and while
+  // the history length is below 8 both a^2 are multiplied by (8 / length)^2.
+  // guard_target gives the moving target, the still one and w (0: not
+  // still); false where pixel i has no data.
   struct Target {
     double rgb[3], allowed;
   };
@@ -767,19 +772,24 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
     if (!(v >= 0.0)) return false;
     for (int k = 0; k < 3; ++k) moving.rgb[k] = ch.temporal[3 * i + k];
     moving.allowed = p_.harm_guard * p_.harm_guard * v;
-    if (keeps_still && ch.still_n[i] >= kStillMinSamples) {
-      w = std::min((ch.still_n[i] - kStillMinSamples + 1.0) / kStillRamp, 1.0);
+    const double n_still = keeps_still ? ch.still_n[i] : 0.0;
+    if (!(n_still >= 2.0)) return true;
+    double sum = 0.0, count = 0.0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = i % w_ + dx, y = i / w_ + dy, q = y * w_ + x;
+        if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(ch.still_n[q] >= 2.0)) continue;
+        sum += ch.still_m2[q] / (ch.still_n[q] - 1.0);
+        count += 1.0;
+      }
+    const double divisor = variance_divisor(ch.length[i], n_still);
+    const double s2 = std::max(v * divisor, sum / std::max(count, 1.0));
+    const double widening = std::pow(std::max(1.0, kGuardSureLength / ch.length[i]), 2.0);
+    moving.allowed = p_.harm_guard * p_.harm_guard * s2 / divisor * widening;
+    if (n_still >= kStillMinSamples) {
+      w = std::min((n_still - kStillMinSamples + 1.0) / kStillRamp, 1.0);
       for (int k = 0; k < 3; ++k) still.rgb[k] = ch.still_mean[3 * i + k];
-      double sum = 0.0, count = 0.0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int x = i % w_ + dx, y = i / w_ + dy, q = y * w_ + x;
-          if (x < 0 || y < 0 || x >= w_ || y >= h_ || !(ch.still_n[q] >= 2.0)) continue;
-          sum += ch.still_m2[q] / (ch.still_n[q] - 1.0);
-          count += 1.0;
-        }
-      const double s2 = std::max(v * variance_divisor(ch.length[i], ch.still_n[i]), sum / std::max(count, 1.0));
-      still.allowed = p_.converge_still * p_.converge_still * s2 / ch.still_n[i];
+      still.allowed = p_.converge_still * p_.converge_still * s2 / n_still * widening;
     }
     return true;
   };
