@@ -86,7 +86,8 @@ for s in $scenes; do
 done
 
 # The table: per scene and method, RMSE / nc relMSE / HDR-FLIP at 1, 2, 4,
-# ... frames, and at how many of those the method is above the running mean.
+# ... frames, at how many of those the method is above the running mean, and
+# at how many it is above its own value at the count before (rises).
 awk -F'\t' -v frames="$frames" '
   NR == 1 { next }
   { key = $1 SUBSEP $2; rmse[key, $3] = $4; rel[key, $3] = $6; flip[key, $3] = $7
@@ -94,17 +95,20 @@ awk -F'\t' -v frames="$frames" '
   END {
     line = "| scene | method |"; sep = "|---|---|"
     for (f = 1; f <= frames; f *= 2) { line = line " " f " |"; sep = sep "---|" }
-    print line " above the mean (RMSE / nc relMSE / ꟻLIP) |"; print sep "---|"
+    print line " above the mean (RMSE / nc relMSE / ꟻLIP) | rises |"; print sep "---|---|"
     for (i = 1; i <= n; ++i) {
       split(order[i], k, SUBSEP); mean = k[1] SUBSEP "mean"
-      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; d = 0; c = 0
+      line = "| " k[1] " | " k[2] " |"; a = 0; b = 0; d = 0; c = 0; ra = 0; rb = 0; rd = 0
       for (f = 1; f <= frames; f *= 2) {
         line = line sprintf(" %.4f / %.4f / %.4f |", rmse[order[i], f], rel[order[i], f], flip[order[i], f]); ++c
         if (rmse[order[i], f] > rmse[mean, f]) ++a
         if (rel[order[i], f] > rel[mean, f]) ++b
         if (flip[order[i], f] > flip[mean, f]) ++d
+        if (f > 1 && rmse[order[i], f] > rmse[order[i], f / 2]) ++ra
+        if (f > 1 && rel[order[i], f] > rel[order[i], f / 2]) ++rb
+        if (f > 1 && flip[order[i], f] > flip[order[i], f / 2]) ++rd
       }
-      print line " " a " / " b " / " d " of " c " |"
+      print line " " a " / " b " / " d " of " c " | " ra " / " rb " / " rd " |"
     }
   }' "$tsv" > "$out/still.md"
 echo "still_convergence: table $out/still.md (RMSE against the first point reference / noise-corrected relMSE / HDR-FLIP)"
