@@ -62,42 +62,29 @@ float dn_still_sample_variance(vec4 m, float len, float still_n, int s, uint p) 
   }
   return max(m.w * dn_svgf_variance_divisor(len, still_n, s == 1 && SPECULAR_ALPHA), sum / max(count, 1.0));
 }
-// Signal s's still running mean (1: the specular chain); w: its weight as
-// the target, 0 where the pixel is not still.
-vec4 dn_still_mean(vec4 m, int s, uint p, out float w) {
-  w = 0.0;
-  if (!DN_CONVERGING_STILL || !(m.w >= 0.0)) return vec4(0.0);
-  vec4 mean = s == 0 ? still_mean_at(p) : still_mean2_at(p);
-  w = dn_still_weight(mean.a);
-  return w > 0.0 ? mean : vec4(0.0);
-}
-// Signal s's still target (its alpha floor for s = 1): the running mean and its a^2.
-vec4 dn_still_target(vec4 m, float len, int s, uint p, out float w) {
-  vec4 mean = dn_still_mean(m, s, p, w);
-  if (!(w > 0.0)) return vec4(0.0);
-  float k = DN_PARAM_VALUE(svgf, converge_still);
-  return vec4(mean.rgb, k * k * dn_still_sample_variance(m, len, mean.a, s, p) / mean.a);
-}
-// A still pixel's guard (its running mean holds 2 or more samples): the
-// moving target's variance is that of a still sample (above) over the
-// samples the temporal mean averages, and while its history holds fewer
-// than DN_GUARD_SURE_LENGTH samples both targets' a^2 are widened by
+// A still pixel (its running mean holds 2 or more samples): the moving
+// target's variance is that of a still sample (above) over the samples the
+// temporal mean averages, and while its history holds fewer than
+// DN_GUARD_SURE_LENGTH samples both targets' a^2 are widened by
 // (DN_GUARD_SURE_LENGTH / len)^2: a variance from 4 samples of sparse light
 // is mostly 0 (dnrender scene 2, 1 spp: HDR-FLIP rose from 3 to 4 frames
 // as the guard switched on, 0.5190 to 0.5674 for svgf; 0.5082 with this).
 // Moving pixels keep the guard as it was measured on moving sequences.
 const float DN_GUARD_SURE_LENGTH = 8.0;
-float dn_still_guard_widening(float len) {
+// Signal s's guard targets at a still pixel: moving's a^2 (as above) and the
+// still target, its running mean and a^2, of weight w (0: none).
+void dn_still_targets(vec4 own, float len, int s, uint p, inout vec4 moving, out vec4 still, out float w) {
+  still = vec4(0.0);
+  w = 0.0;
+  vec4 mean = DN_CONVERGING_STILL ? (s == 0 ? still_mean_at(p) : still_mean2_at(p)) : vec4(0.0);
+  if (!(mean.a >= 2.0)) return;
+  float s2 = dn_still_sample_variance(own, len, mean.a, s, p);
   float r = max(1.0, DN_GUARD_SURE_LENGTH / len);
-  return r * r;
-}
-vec4 dn_still_moving_target(vec4 own, float len, int s, uint p) {
-  vec4 t = dn_moving_target(own);
-  float n = DN_CONVERGING_STILL ? (s == 0 ? still_mean_at(p).a : still_mean2_at(p).a) : 0.0;
-  if (!(n >= 2.0)) return t;
-  float g = DN_PARAM_VALUE(svgf, harm_guard);
-  float v = dn_still_sample_variance(own, len, n, s, p) / dn_svgf_variance_divisor(len, n, s == 1 && SPECULAR_ALPHA);
-  return vec4(t.rgb, g * g * v * dn_still_guard_widening(len));
+  float widening = r * r;
+  float g = DN_PARAM_VALUE(svgf, harm_guard), k = DN_PARAM_VALUE(svgf, converge_still);
+  moving.w = g * g * (s2 / dn_svgf_variance_divisor(len, mean.a, s == 1 && SPECULAR_ALPHA)) * widening;
+  w = dn_still_weight(mean.a);
+  if (w > 0.0) still = vec4(mean.rgb, k * k * s2 / mean.a * widening);
 }
 // f beyond a (t.w = a^2) from t.rgb in luminance: shrunk toward it by (a / Y(f - t))^1, or ^3 (cubic).
 vec3 dn_guarded(vec3 f, vec4 t, bool cubic) {
@@ -120,10 +107,10 @@ vec4 dn_guard_mean(vec4 m, int s, uint p) {
 // f guarded toward signal s's targets (own: its temporal mean and variance).
 vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
   if (!HARM_GUARD || DN_PARAM_VALUE(svgf, harm_guard) <= 0.0 || !(own.w >= 0.0) || len < DN_GUARD_MIN_LENGTH) return f;
+  vec4 moving_target = dn_moving_target(own), still;
   float w;
-  vec4 still = dn_still_target(own, len, s, p, w);
-  still.w *= dn_still_guard_widening(len);
-  vec3 moving = dn_guarded(f, dn_still_moving_target(own, len, s, p), false);
+  dn_still_targets(own, len, s, p, moving_target, still, w);
+  vec3 moving = dn_guarded(f, moving_target, false);
   return w > 0.0 ? mix(moving, dn_guarded(f, still, true), w) : moving;
 }
 
