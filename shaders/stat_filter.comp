@@ -10,7 +10,9 @@
 //                   asymmetric or where stat_prepare marked p moving
 //                   (stat-temporal)
 //     t = the two-sided quantile for nu = n_p + n_q - 2 (per pair, so unequal
-//     sample counts are exact), read as t^2 from the host's table
+//     sample counts are exact), read as t^2 from the host's table at alpha,
+//     or at still_alpha where p and q are both DN_STAT_TESTED (still, with
+//     statistics of their own: stat-temporal's accumulated means)
 //   weight(p, q) = exp(-|q - p|^2 / (2 s_s^2) - |a_p - a_q|^2 / (2 s_a^2)
 //                      - |n_p - n_q|^2 / (2 s_n^2))   (Eq. 16, the authors'
 //                      code's standard deviations; with spatial_shrink_from
@@ -67,7 +69,8 @@ vec3 filter_pixel(uint p) {
       int d2xy = dx * dx + dy * dy;
       if (x < 0 || x >= size.x || d2xy > r * r || d2xy == 0) continue;
       uint q = uint(y) * frame.size.x + uint(x);
-      float m = dn_stat_membership(theta_p, var_p, theta_at(q), variance_at(q).rgb, k);
+      vec4 var_q4 = variance_at(q);
+      float m = dn_stat_membership(theta_p, var_p, theta_at(q), var_q4.rgb, k, var_p4.w == DN_STAT_TESTED && var_q4.w == DN_STAT_TESTED);
       if (m == 0.0) continue;
       vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));

@@ -48,13 +48,16 @@ bool declares_statistics(const SessionConfig& config) {
   return (declared & statistics_channels()) == statistics_channels();
 }
 
-void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics) {
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics, double still_alpha) {
   g.add_input(config, ChannelId::Radiance, "radiance");
   g.add_input(config, ChannelId::Albedo, "albedo");
   g.add_input(config, ChannelId::Normal, "normal");
   if (with_statistics)
     for (ChannelId id : kStatistics) g.add_input(config, id, std::string(protocol::find_channel(id)->name));
-  g.add_constant("stat_t_squared", t_squared_table(g.parameters.stat_alpha));
+  std::vector<uint8_t> table = t_squared_table(g.parameters.stat_alpha);
+  const std::vector<uint8_t> still = t_squared_table(still_alpha);
+  table.insert(table.end(), still.begin(), still.end());
+  g.add_constant("stat_t_squared", std::move(table));
 }
 
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& s) {

@@ -44,8 +44,10 @@ inline constexpr uint64_t kStatRgbBytes = 12;
 inline constexpr const char* kStatModulation = "stat_modulation";
 // Declares the frame's planes of stat_channels(), named by their channels'
 // names (radiance, albedo, normal, stat_count, ...), and the table
-// "stat_t_squared"; with_statistics false: all but the four statistics.
-void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics = true);
+// "stat_t_squared" (t_squared_table at stat's alpha, then at still_alpha for
+// two still pixels with statistics of their own); with_statistics false: all
+// but the four statistics.
+void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics, double still_alpha);
 // The four statistics channels' mask.
 uint64_t statistics_channels();
 // Whether the session declares all four statistics channels (none: false;

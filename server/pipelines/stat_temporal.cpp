@@ -21,7 +21,7 @@ GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   // Without the renderer's statistics each frame's radiance is one sample.
   const bool from_radiance = !declares_statistics(config);
-  add_stat_inputs(g, config, !from_radiance);
+  add_stat_inputs(g, config, !from_radiance, g.parameters.stat_temporal_still_alpha);
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   g.add_constant("stat_history_t_squared", t_squared_table(g.parameters.stat_temporal_history_alpha));

@@ -1,11 +1,12 @@
 // The per-tap decisions of stat's disc gather (docs/pipelines.md, "stat"),
 // shared by stat_filter and the tiling benchmark (bench_stat_gather): the
 // Welch membership (weight) of tap q in p's disc and q's base weight. The includer
-// defines `float dn_stat_t_squared(uint nu)`, the table entry for nu >= 1.
+// defines `float dn_stat_t_squared(uint nu, bool still)`, the table entry for
+// nu >= 1 at alpha, or at still_alpha for two still pixels with statistics.
 #ifndef DN_STAT_GATHER_GLSL
 #define DN_STAT_GATHER_GLSL
 
-float dn_stat_t_squared(uint nu);
+float dn_stat_t_squared(uint nu, bool still);
 
 struct DnStatKernel {
   float ks, ka, kn;  // -1 / (2 sigma^2) of the spatial, albedo and normal terms
@@ -56,8 +57,9 @@ bool dn_stat_member(vec3 d2, float t2, vec3 var_p, vec3 var_q, bool asymmetric) 
 // d^2 / (var_p (1 + 2 t^2) - var_q) (1 with falloff 0: the paper's
 // all-or-nothing membership). q must have statistics (n >= 2); a p without
 // variance (n_p < 2) takes q's sample variance as its own, var_q n_q / n_p,
-// with nu = n_q - 1.
-float dn_stat_membership(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnStatKernel k) {
+// with nu = n_q - 1. still: p and q are still pixels whose statistics are
+// their own (DN_STAT_TESTED); with n_p >= 2 the pair is tested at still_alpha.
+float dn_stat_membership(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnStatKernel k, bool still) {
   if (theta_q.w < 2.0) return 0.0;
   if (!k.membership) return 1.0;
   bool single = theta_p.w < 2.0;
@@ -66,7 +68,7 @@ float dn_stat_membership(vec4 theta_p, vec3 var_p, vec4 theta_q, vec3 var_q, DnS
   // nu >= 1; pairs of pixels with statistics: n_p + n_q - 2 >= 2
   uint nu = single ? max(uint(theta_q.w + 0.5), 2u) - 1u : uint(theta_p.w + theta_q.w + 0.5) - 2u;
   vec3 var_pq = single ? var_q * (theta_q.w / theta_p.w) : var_p;
-  float t2 = dn_stat_t_squared(nu);
+  float t2 = dn_stat_t_squared(nu, still && !single);
   if (!dn_stat_member(d2, t2, var_pq, var_q, k.asymmetric)) return 0.0;
   if (k.falloff == 0.0) return 1.0;
   // A member's bound exceeds its d^2 > 0; d^2 = 0 (equal means) has r = 0.

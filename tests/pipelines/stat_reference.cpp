@@ -138,7 +138,7 @@ bool stat_member(float theta_p, float theta_q, float t2, float var_p, float var_
 }
 
 StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatParams& p,
-                       const std::vector<float>& t_squared) {
+                       const std::vector<float>& t_squared, const std::vector<float>& still_t_squared) {
   const int w = f.width, h = f.height, r = p.radius;
   StatResult res;
   res.output.assign(3 * w * h, 0.0);
@@ -165,6 +165,11 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
       const bool kept = !prep.kept.empty() && prep.kept[i];
       // A pooled pixel's n_p is its window's count, not its own.
       const bool own_n = n_p == f.count[i];
+      // Still, with statistics of its own: a pair of such is tested at still_alpha.
+      auto still = [&](int k) {
+        return prep.theta[4 * k + 3] >= 2.0f && prep.theta[4 * k + 3] == f.count[k] &&
+               (prep.moving.empty() || !prep.moving[k]) && (prep.kept.empty() || !prep.kept[k]);
+      };
       const float shrink_from = static_cast<float>(p.spatial_shrink_from);
       float sigma_spatial = static_cast<float>(p.sigma_spatial);
       int r_p = r;
@@ -181,7 +186,8 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             if (prep.theta[4 * q + 3] < 2.0f) continue;
             const float n_q = prep.theta[4 * q + 3];
             const int nu = single ? std::max(static_cast<int>(n_q + 0.5f), 2) - 1 : static_cast<int>(n_p + n_q + 0.5f) - 2;
-            const float t2 = t_squared[std::min<size_t>(nu, t_squared.size()) - 1];
+            const std::vector<float>& table = still(i) && still(q) && !still_t_squared.empty() ? still_t_squared : t_squared;
+            const float t2 = table[std::min<size_t>(nu, table.size()) - 1];
             bool member = true;
             float share = 0.0f;  // the largest channel's d^2 over the test's bound
             for (int c = 0; c < 3; ++c) {

@@ -63,9 +63,11 @@ struct StatResult {
 };
 
 StatPrepared stat_prepare(const StatFrame& f, const StatParams& p);
-// t_squared: entry k holds t^2 for nu = k + 1 (the pipeline's table).
+// t_squared: entry k holds t^2 for nu = k + 1 (the pipeline's table at
+// alpha); still_t_squared the same at stat-temporal's still_alpha, for a pair
+// of still pixels with statistics of their own (empty: t_squared).
 StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatParams& p,
-                       const std::vector<float>& t_squared);
+                       const std::vector<float>& t_squared, const std::vector<float>& still_t_squared = {});
 // An albedo component as demodulation uses it: below 1e-3 (fp32) or not
 // finite, 1 (docs/protocol.md §7.7).
 // Whether a pixel's statistics (count, and 3 means, M2, M3) are data: finite,

@@ -119,6 +119,8 @@ std::vector<float> t_squared(double alpha = 0.001) {  // history_alpha's default
   for (float& v : t) v = v * v;
   return t;
 }
+// The membership table of two still pixels with accumulated statistics.
+std::vector<float> still_t_squared() { return t_squared(0.01); }  // still_alpha's default
 
 struct Session {
   std::unique_ptr<pipelines::Pipeline> pipe;
@@ -355,7 +357,7 @@ TEST_F(StatTemporalTest, AFirstFrameFromTheRadianceIsFiltered) {
       if (c < 3 && std::fabs(variance[4 * i + c] - prep.variance[3 * i + c]) > 1e-5f * prep.variance[3 * i + c]) ++off;
     }
   EXPECT_EQ(off, 0u) << "stat_prepare values off the reference";
-  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha), still_t_squared());
   long members = 0;
   for (int m : want.members) members += m;
   const double rms = test::relative_rms(got, want.output);
@@ -429,11 +431,11 @@ TEST_F(StatTemporalTest, MovingPixelsTestTheirNeighboursAsymmetrically) {
   const test::StatFrame& acc = in.acc;
   const test::StatParams& p = in.params;
   test::StatPrepared& prep = in.prep;
-  const test::StatResult symmetric = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const test::StatResult symmetric = test::stat_filter(acc, prep, p, t_squared(p.alpha), still_t_squared());
   const int n = scene.w * scene.h;
   prep.moving.assign(n, 0);
   for (int i = 0; i < n; ++i) prep.moving[i] = std::hypot(f.motion[2 * i], f.motion[2 * i + 1]) >= 0.005;
-  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha), still_t_squared());
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
   int marked = 0, wrong = 0;
   for (int i = 0; i < n; ++i) {
@@ -477,7 +479,7 @@ TEST_F(StatTemporalTest, AStillMetalShowsTheMeanOfItsSamples) {
   const test::StatFrame& acc = in.acc;
   const test::StatParams& p = in.params;
   test::StatPrepared& prep = in.prep;
-  const test::StatResult filtered = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const test::StatResult filtered = test::stat_filter(acc, prep, p, t_squared(p.alpha), still_t_squared());
   prep.kept.assign(n, 0);
   int metal_pixels = 0, complete = 0, off_mean = 0;
   for (int y = 0; y < scene.h; ++y)
@@ -494,7 +496,7 @@ TEST_F(StatTemporalTest, AStillMetalShowsTheMeanOfItsSamples) {
         off_mean += std::fabs(got[3 * i + c] - mean) > 1e-5 * (1e-3 + mean);
       }
     }
-  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha));
+  const test::StatResult want = test::stat_filter(acc, prep, p, t_squared(p.alpha), still_t_squared());
   const auto variance = test::decode_output(s.graph->captured("stat_prepare", "stat_variance"), Format::F32);
   int marked = 0, wrong = 0;
   for (int i = 0; i < n; ++i) {
@@ -687,7 +689,7 @@ TEST_F(StatTemporalTest, AStillPixelsKernelNarrowsAsItsSamplesAccumulate) {
   run(0.0, &lift_unshrunk);
   FilterInputs in = filter_inputs(s, sequence.back());
   in.params.radius = radius;
-  const test::StatResult want = test::stat_filter(in.acc, in.prep, in.params, t_squared(in.params.alpha));
+  const test::StatResult want = test::stat_filter(in.acc, in.prep, in.params, t_squared(in.params.alpha), still_t_squared());
   const double rms = test::relative_rms(got, want.output);
   std::printf("[ info     ] beside the fireflies: lifted %.4f (%.4f with spatial_shrink_from 0); relative RMS %.3g "
               "to the reference\n",

@@ -124,7 +124,7 @@ TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemp
   EXPECT_EQ(all[6].optional_channels, statistics);
   std::vector<std::string> temporal_names;
   for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
-  stat_names.insert(stat_names.end(), {"history_alpha", "fading"});
+  stat_names.insert(stat_names.end(), {"still_alpha", "history_alpha", "fading"});
   EXPECT_EQ(temporal_names, stat_names);
   // progressive: svgf's channels without roughness and extra samples, plus
   // sample_count; svgf's parameters with paper 004's defaults, and its own.
