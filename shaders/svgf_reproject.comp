@@ -242,16 +242,20 @@ bool still_unchanged(uint p, ivec2 pos, bool continues) {
 // The temporal colour (.w: its variance divisor, dn_svgf_variance_divisor)
 // and moments of p. A still pixel whose running mean holds more than
 // DN_STILL_FILTER_FROM samples, or more than its history (after a rejection
-// the mean went through): the filter starts from that plain mean, and its
-// length is their count, so its variance and the a-trous's luminance
-// edge-stopping fall (faster than 1 / n) and the filter lets go as the mean
-// converges. The history is an exponential blend of the filtered colour
-// (feedback_tap): it keeps the filter's blur.
+// the mean went through): the filter starts from that plain mean, its
+// length is their count and its moments theirs (the exponential moments
+// forget a firefly the mean still holds, and the filter let go of it), so
+// its variance and the a-trous's luminance edge-stopping fall (faster than
+// 1 / n) and the filter lets go as the mean converges. The history is an
+// exponential blend of the filtered colour (feedback_tap): it keeps the
+// filter's blur.
 void write_temporal(uint p, vec3 colour, vec2 moments, float len, vec4 still) {
   float still_n = 0.0;
   if (DN_CONVERGING_STILL && still.a > min(len, DN_STILL_FILTER_FROM)) {
     colour = still.rgb;
     len = still_n = still.a;
+    float l = dn_luminance(still.rgb);
+    moments = vec2(l, l * l + still_m2.data[p] / max(still.a - 1.0, 1.0));
   }
   illum.data[p] = vec4(colour, dn_svgf_variance_divisor(len, still_n, SPECULAR_ALPHA));
   temporal.data[p] = vec4(moments, len, dn_luminance(colour));

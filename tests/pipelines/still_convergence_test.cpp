@@ -9,8 +9,8 @@
 // signal (no specular light, F0 0.04, roughness 1); stat-temporal works from
 // the radiance alone. reflect has its own still-view test on path-traced
 // frames (reflect_test.cpp), as it needs the reflection features. svgf also
-// over 64 frames, with converge_still and without, and with svgf's
-// progressive on sparse light.
+// over 64 frames, with converge_still and without, with a firefly in its
+// still mean, and with progressive on sparse light.
 
 #include <gtest/gtest.h>
 
@@ -76,7 +76,11 @@ struct StillRegion {
   int columns = -1;     // >= 0: only the 4 columns from this one
   int blank_every = 0;  // > 0: those columns have no normal on every frame t with t % blank_every == 0
   int sparse = 0;       // > 0: a sample is `sparse` times the truth with probability 1 / sparse, else 0
+  int firefly_frame = 0;  // > 0: on this frame pixel kFirefly's sample is kFireflyGain times the truth
+  bool firefly_only = false;  // measure pixel kFirefly alone
 };
+constexpr int kFirefly = 8 * kWidth + 10;  // on the lit side, away from the edge
+constexpr float kFireflyGain = 50.0f;
 
 // The output's RMSE against the truth after each of `frames` still frames;
 // mean_rmse: the plain running mean's.
@@ -96,6 +100,8 @@ std::vector<double> still_rmse(gpu::Context& ctx, const std::string& pipeline, s
       const float path = region.sparse > 0 && hit(rng) ? static_cast<float>(region.sparse) : 0.0f;  // one per pixel
       for (int k = 0; k < 3; ++k) light[3 * i + k] = static_cast<float>(truth(i)) * (region.sparse > 0 ? path : noise(rng));
     }
+    if (t == region.firefly_frame)
+      for (int k = 0; k < 3; ++k) light[3 * kFirefly + k] = static_cast<float>(truth(kFirefly)) * kFireflyGain;
     const bool blank = region.blank_every > 0 && t % region.blank_every == 0;
     const std::vector<float> out = svgf_inputs::run(*pipe, still_frame(pipeline, light, blank ? region.columns : -1));
     double e = 0.0, em = 0.0;
@@ -103,6 +109,7 @@ std::vector<double> still_rmse(gpu::Context& ctx, const std::string& pipeline, s
     for (int j = 0; j < 3 * n; ++j) {
       sum[j] += light[j];
       if (region.columns >= 0 && (j / 3 % kWidth < region.columns || j / 3 % kWidth >= region.columns + 4)) continue;
+      if (region.firefly_only && j / 3 != kFirefly) continue;
       e += (out[j] - truth(j / 3)) * (out[j] - truth(j / 3));
       em += (sum[j] / t - truth(j / 3)) * (sum[j] / t - truth(j / 3));
       ++counted;
@@ -205,6 +212,22 @@ TEST_F(SvgfStillConvergenceTest, StatTemporalTestsAccumulatedMeansAtStillAlpha) 
     EXPECT_LE(out[t - 1], mean[t - 1]) << t << " frames";
     if (t >= 2) EXPECT_LT(out[t - 1], at_alpha[t - 1]) << t << " frames";
   }
+}
+
+// One sample 50 times the truth on the 12th frame: the pixel's still mean
+// holds it for good, and from 8 samples the filter starts from that mean.
+// The variance steering its edge-stopping is that of the samples the mean
+// holds, so the firefly stays filtered: after 32, 48 and 64 frames the
+// pixel's error is at most 1/20 of the running mean's there. With the
+// exponential moments' variance, which forgets the firefly within a few
+// dozen frames, the filter let go of it: 0.0008, 0.0481, 0.0891 against
+// the mean's 0.7408, 0.5059, 0.3680.
+TEST_F(SvgfStillConvergenceTest, AFireflyInAStillMeanStaysFiltered) {
+  std::vector<double> mean;
+  const std::vector<double> out = still_rmse(ctx(), "svgf", {}, 64, mean, {.firefly_frame = 12, .firefly_only = true});
+  std::printf("[ info     ] firefly pixel error after 12, 32, 48, 64 frames: %.4f %.4f %.4f %.4f; running mean %.4f %.4f %.4f %.4f\n",
+              out[11], out[31], out[47], out[63], mean[11], mean[31], mean[47], mean[63]);
+  for (int t : {32, 48, 64}) EXPECT_LE(out[t - 1], mean[t - 1] / 20.0) << t << " frames";
 }
 
 INSTANTIATE_TEST_SUITE_P(Pipelines, StillConvergenceTest,

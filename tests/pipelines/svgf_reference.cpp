@@ -533,11 +533,15 @@ std::vector<double> SvgfReference::step(const SvgfFrame& f) {
       }
       // A still pixel whose running mean holds more than 8 samples
       // (DN_STILL_FILTER_FROM) or more than its history: the filter starts
-      // from that mean, and its length is their count.
+      // from that mean, its length is their count and its moments theirs
+      // (luminance mean, and mean square: the mean's square plus the sample variance).
       double still_n = 0.0;
       if (keeps_still && ch.still_n[i] > std::min(len[i], kStillFilterFrom)) {
         for (int k = 0; k < 3; ++k) colour[3 * i + k] = ch.still_mean[3 * i + k];
         len[i] = still_n = ch.still_n[i];
+        const double sl = luminance(&ch.still_mean[3 * i]);
+        m1[i] = sl;
+        m2[i] = sl * sl + ch.still_m2[i] / std::max(ch.still_n[i] - 1.0, 1.0);
       }
       divisor[i] = variance_divisor(len[i], still_n);
     }
