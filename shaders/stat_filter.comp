@@ -70,7 +70,8 @@ vec3 filter_pixel(uint p) {
       if (x < 0 || x >= size.x || d2xy > r * r || d2xy == 0) continue;
       uint q = uint(y) * frame.size.x + uint(x);
       vec4 var_q4 = variance_at(q);
-      float m = dn_stat_membership(theta_p, var_p, theta_at(q), var_q4.rgb, k, var_p4.w == DN_STAT_TESTED && var_q4.w == DN_STAT_TESTED);
+      bool still = var_p4.w == DN_STAT_TESTED && var_q4.w == DN_STAT_TESTED;
+      float m = dn_stat_membership(theta_p, var_p, theta_at(q), var_q4.rgb, k, still);
       if (m == 0.0) continue;
       vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
       vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));

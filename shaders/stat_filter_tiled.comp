@@ -54,7 +54,8 @@ vec3 filter_pixel() {
       ivec2 offset = ivec2(dx, dy);
       if (d2xy > r * r || d2xy == 0 || !dn_tile_inside(offset, dn_grid.size)) continue;
       Tap q = dn_tile_at(offset);
-      float m = dn_stat_membership(c.theta, c.variance.rgb, q.theta, q.variance.rgb, k, c.variance.w == DN_STAT_TESTED && q.variance.w == DN_STAT_TESTED);
+      bool still = c.variance.w == DN_STAT_TESTED && q.variance.w == DN_STAT_TESTED;
+      float m = dn_stat_membership(c.theta, c.variance.rgb, q.theta, q.variance.rgb, k, still);
       if (m == 0.0) continue;
       float w = m * dn_stat_base_weight(d2xy, c.albedo.rgb - q.albedo.rgb, c.normal.rgb - q.normal.rgb, k);
       sum += w * (q.raw.rgb - raw_p);

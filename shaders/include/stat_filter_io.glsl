@@ -5,7 +5,9 @@
 #ifndef DN_STAT_FILTER_IO_GLSL
 #define DN_STAT_FILTER_IO_GLSL
 
-float dn_stat_t_squared(uint nu, bool still) { return t_squared.data[(still ? TABLE_SIZE : 0u) + min(nu, TABLE_SIZE) - 1u]; }
+float dn_stat_t_squared(uint nu, bool still) {
+  return t_squared.data[(still ? TABLE_SIZE : 0u) + min(nu, TABLE_SIZE) - 1u];
+}
 
 // What pixel q contributes to an average: its sanitized raw mean (the
 // radiance plane, stat-temporal's accumulated raw means, or with

@@ -186,7 +186,8 @@ StatResult stat_filter(const StatFrame& f, const StatPrepared& prep, const StatP
             if (prep.theta[4 * q + 3] < 2.0f) continue;
             const float n_q = prep.theta[4 * q + 3];
             const int nu = single ? std::max(static_cast<int>(n_q + 0.5f), 2) - 1 : static_cast<int>(n_p + n_q + 0.5f) - 2;
-            const std::vector<float>& table = still(i) && still(q) && !still_t_squared.empty() ? still_t_squared : t_squared;
+            const bool still_pair = still(i) && still(q) && !still_t_squared.empty();
+            const std::vector<float>& table = still_pair ? still_t_squared : t_squared;
             const float t2 = table[std::min<size_t>(nu, table.size()) - 1];
             bool member = true;
             float share = 0.0f;  // the largest channel's d^2 over the test's bound
