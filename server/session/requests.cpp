@@ -1,10 +1,10 @@
-// The server's session requests: OPEN_SESSION (validated here, built off the
+// The session service's requests: OPEN_SESSION (validated here, built off the
 // loop by the PipelineBuilder), FRAME, ATTACH, CLOSE_SESSION, and the fan-out
-// of each finished frame to the owner and its watchers. Runs on the event loop.
+// of each finished frame to the owner and its watchers.
 #include <algorithm>
 
 #include "server/log.hpp"
-#include "server/server.hpp"
+#include "server/session/service.hpp"
 #include "server/session/watch_key.hpp"
 
 namespace dn::server {
@@ -23,70 +23,62 @@ ResultForm watcher_form(const Session& s, const net::Connection& watcher) {
 
 }  // namespace
 
-void Server::on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m) {
-  if (shutting_down_) return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
+void SessionService::on_open_session(net::Connection& c, const protocol::Header& h, const protocol::OpenSession& m) {
+  if (shutting_down_) return error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down");
   if (m.width > options_.max_width || m.height > options_.max_height)
-    return send_error(c, h.request_id, ErrorCode::LimitExceeded, m.width > options_.max_width ? "OPEN_SESSION.width" : "OPEN_SESSION.height",
+    return error(c, h.request_id, ErrorCode::LimitExceeded, m.width > options_.max_width ? "OPEN_SESSION.width" : "OPEN_SESSION.height",
                       "resolution " + std::to_string(m.width) + "x" + std::to_string(m.height) + " exceeds the server's " +
-                          std::to_string(options_.max_width) + "x" + std::to_string(options_.max_height),
-                      false);
+                          std::to_string(options_.max_width) + "x" + std::to_string(options_.max_height));
   if (sessions_.size() + sessions_being_built_ >= options_.max_sessions)
-    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "sessions",
+    return error(c, h.request_id, ErrorCode::LimitExceeded, "sessions",
                       "server already has " + std::to_string(sessions_.size() + sessions_being_built_) +
                           " sessions (--max-sessions " +
-                          std::to_string(options_.max_sessions) + ")",
-                      false);
+                          std::to_string(options_.max_sessions) + ")");
 
   // Channel ids this connection's version does not define (docs/protocol.md §10).
   for (size_t i = 0; i < m.channels.size(); ++i)
     if (const auto* info = protocol::find_channel(m.channels[i].id); info && info->since_minor > c.negotiated_minor)
-      return send_error(c, h.request_id, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "]",
+      return error(c, h.request_id, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "]",
                         "channel '" + std::string(info->name) + "' (id " + std::to_string(int(info->id)) +
                             ") is defined from protocol 1." + std::to_string(int(info->since_minor)) +
-                            "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)),
-                        false);
+                            "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)));
 
   const bool share_input = (h.flags & protocol::kFlagShareInput) != 0;
   if (share_input && c.negotiated_minor < protocol::kShareInputMinor)
-    return send_error(c, h.request_id, ErrorCode::ReservedFlags, "header.flags",
+    return error(c, h.request_id, ErrorCode::ReservedFlags, "header.flags",
                       "flag SHARE_INPUT is defined from protocol 1." + std::to_string(int(protocol::kShareInputMinor)) +
-                          "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)),
-                      false);
+                          "; this connection speaks 1." + std::to_string(int(c.negotiated_minor)));
   if (share_input && std::none_of(m.channels.begin(), m.channels.end(), [](const protocol::ChannelDecl& d) {
         return d.id == protocol::ChannelId::Radiance;
       }))
-    return send_error(c, h.request_id, ErrorCode::MissingChannel, "OPEN_SESSION.channels",
-                      "flag SHARE_INPUT shares the 'radiance' plane with watchers, and this session declares none",
-                      false);
+    return error(c, h.request_id, ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+                      "flag SHARE_INPUT shares the 'radiance' plane with watchers, and this session declares none");
 
   // Validation builds the pass graph (pure data, no device work); the builder reuses it.
   auto prepared = pipelines::prepare({m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters});
   if (auto* err = std::get_if<pipelines::ConfigError>(&prepared))
-    return send_error(c, h.request_id, err->code, err->field, err->message, false);
+    return error(c, h.request_id, err->code, err->field, err->message);
   const pipelines::PreparedPipeline& ready = std::get<pipelines::PreparedPipeline>(prepared);
   const pipelines::SessionConfig& config = ready.config();
 
   // A frame of this session must fit one message.
   const uint64_t frame_bytes = frame_message_bytes(config);
   if (frame_bytes > options_.max_message_bytes)
-    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
+    return error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
                       "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
-                          std::to_string(options_.max_message_bytes) + "-byte message limit (--max-message)",
-                      false);
+                          std::to_string(options_.max_message_bytes) + "-byte message limit (--max-message)");
   const uint64_t estimate = ready.device_bytes();
   if (estimate > options_.max_session_bytes)
-    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+    return error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
                       "session needs " + std::to_string(estimate) + " bytes of device memory, above the " +
-                          std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)",
-                      false);
+                          std::to_string(options_.max_session_bytes) + "-byte limit (--max-session-memory)");
   // All sessions together stay within the device budget (docs/server.md "Capacity").
   if (const uint64_t committed = committed_device_bytes(); committed + estimate > device_budget_bytes_)
-    return send_error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+    return error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.width",
                       "session needs " + std::to_string(estimate) + " bytes of device memory; " +
                           std::to_string(device_budget_bytes_ - std::min(committed, device_budget_bytes_)) +
                           " of the server's " + std::to_string(device_budget_bytes_) +
-                          "-byte budget are free (--max-device-memory)",
-                      false);
+                          "-byte budget are free (--max-device-memory)");
 
   // Compiling and allocating happen on the builder thread: this loop goes on serving other connections.
   ++c.sessions_being_built;
@@ -95,11 +87,11 @@ void Server::on_open_session(net::Connection& c, const protocol::Header& h, cons
   builder_->submit(BuildRequest{c.id(), h.request_id, ready, share_input});
 }
 
-void Server::on_pipeline_built(BuiltPipeline&& built) {
+void SessionService::on_pipeline_built(BuiltPipeline&& built) {
   --sessions_being_built_;
   bytes_being_built_ -= built.request.prepared.device_bytes();
   counters_.add_build(built);
-  net::Connection* c = find_connection(built.request.connection_id);
+  net::Connection* c = connections_.find(built.request.connection_id);
   if (c) --c->sessions_being_built;
   const pipelines::SessionConfig& config = built.request.prepared.config();
   const uint64_t request_id = built.request.request_id;
@@ -109,13 +101,13 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
   }
   if (!built.pipeline) {
     log::error("session.create_failed", {{"conn", c->id()}, {"pipeline", config.pipeline}, {"reason", built.error}});
-    send_error(*c, request_id, ErrorCode::DeviceError, "OPEN_SESSION",
-               "could not create the pipeline on the device: " + built.error, false);
-    return update_interest(*c);
+    error(*c, request_id, ErrorCode::DeviceError, "OPEN_SESSION",
+               "could not create the pipeline on the device: " + built.error);
+    return connections_.update_interest(*c);
   }
   if (shutting_down_) {
-    send_error(*c, request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
-    return update_interest(*c);
+    error(*c, request_id, ErrorCode::ShuttingDown, "", "server is shutting down");
+    return connections_.update_interest(*c);
   }
 
   std::shared_ptr<Session> session;
@@ -123,9 +115,8 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
     session = sessions_.add(c->id(), config, std::move(built.pipeline));
   } catch (const std::runtime_error& e) {  // no randomness for the watch key: refuse rather than guessable
     log::error("session.create_failed", {{"conn", c->id()}, {"reason", e.what()}});
-    send_error(*c, request_id, ErrorCode::Internal, "OPEN_SESSION", std::string("cannot draw a watch key: ") + e.what(),
-               false);
-    return update_interest(*c);
+    error(*c, request_id, ErrorCode::Internal, "OPEN_SESSION", std::string("cannot draw a watch key: ") + e.what());
+    return connections_.update_interest(*c);
   }
   session->share_input = built.request.share_input;
   const uint64_t id = session->id();
@@ -145,21 +136,21 @@ void Server::on_pipeline_built(BuiltPipeline&& built) {
   // A 1.5 client cannot carry the key: its session can be watched by no one.
   if (c->negotiated_minor >= protocol::kWatchKeyMinor) reply.watch_key = session->watch_key();
   if (c->negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
-  send(*c, reply, request_id);
-  update_interest(*c);
+  connections_.send(*c, reply, request_id);
+  connections_.update_interest(*c);
 }
 
-void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
+void SessionService::on_frame(net::Connection& c, const protocol::Header& h, protocol::Frame&& m, std::vector<uint8_t>&& payload) {
   const std::shared_ptr<Session> s = sessions_.get(m.info.session_id);
   if (!s || s->owner() != c.id())
-    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
-                      "session " + std::to_string(m.info.session_id) + " is not open on this connection", false);
+    return error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(m.info.session_id) + " is not open on this connection");
   if (s->closing)
-    return send_error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
-                      "session " + std::to_string(s->id()) + " is closing", false);
+    return error(c, h.request_id, ErrorCode::UnknownSession, "FRAME.session_id",
+                      "session " + std::to_string(s->id()) + " is closing");
   if (shutting_down_)
-    return send_error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down", false);
-  if (auto err = s->check_frame(m)) return send_error(c, h.request_id, err->code, err->field, err->message, false);
+    return error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down");
+  if (auto err = s->check_frame(m)) return error(c, h.request_id, err->code, err->field, err->message);
 
   s->last_frame_index = m.info.frame_index;
   ++s->in_flight;
@@ -168,20 +159,19 @@ void Server::on_frame(net::Connection& c, const protocol::Header& h, protocol::F
   job.owner_wants_output = (h.flags & protocol::kFlagNoOutput) == 0;
   job.owner_gets_samples = c.negotiated_minor >= protocol::kSamplesMinor;
   for (uint64_t w : s->watchers)
-    if (const net::Connection* wc = find_connection(w)) job.watcher_forms[watcher_form(*s, *wc).index()] = true;
+    if (const net::Connection* wc = connections_.find(w)) job.watcher_forms[watcher_form(*s, *wc).index()] = true;
   job.frame = std::move(m);
   job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
   scheduler_->submit(s, std::move(job));
   if (s->in_flight >= options_.max_frames_in_flight) c.set_reading_paused(true);  // backpressure: stop reading
 }
 
-void Server::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
+void SessionService::on_attach(net::Connection& c, const protocol::Header& h, const protocol::Attach& m) {
   if (c.negotiated_minor < protocol::kWatchKeyMinor || !m.watch_key)
-    return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.watch_key",
+    return error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.watch_key",
                       "ATTACH needs the session's watch key, which protocol 1." +
                           std::to_string(int(protocol::kWatchKeyMinor)) + " adds; this connection speaks 1." +
-                          std::to_string(int(c.negotiated_minor)) + " (upgrade the client)",
-                      false);
+                          std::to_string(int(c.negotiated_minor)) + " (upgrade the client)");
   Session* found = sessions_.find(m.session_id);
   // Compare against a stand-in key when there is no session, so the time taken
   // does not tell the two refusals apart either.
@@ -190,8 +180,8 @@ void Server::on_attach(net::Connection& c, const protocol::Header& h, const prot
   // One refusal whether the id is unknown or the key wrong, so an id alone
   // (guessed, or seen in a log) says nothing about what runs here.
   if (!found || !key_ok || found->closing)
-    return send_error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
-                      "no open session " + std::to_string(m.session_id) + " with that watch key", false);
+    return error(c, h.request_id, ErrorCode::UnknownSession, "ATTACH.session_id",
+                      "no open session " + std::to_string(m.session_id) + " with that watch key");
   Session& s = *found;
   if (std::find(s.watchers.begin(), s.watchers.end(), c.id()) == s.watchers.end()) s.watchers.push_back(c.id());
   if (std::find(c.watched_sessions.begin(), c.watched_sessions.end(), s.id()) == c.watched_sessions.end())
@@ -203,42 +193,42 @@ void Server::on_attach(net::Connection& c, const protocol::Header& h, const prot
                           cfg.channels};
   reply.watch_key = std::string();
   if (c.negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
-  send(c, reply, h.request_id);
+  connections_.send(c, reply, h.request_id);
 }
 
-void Server::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {
+void SessionService::on_close_session(net::Connection& c, const protocol::Header& h, const protocol::CloseSession& m) {
   std::shared_ptr<Session> s = sessions_.get(m.session_id);
   if (!s || s->owner() != c.id() || s->closing)
-    return send_error(c, h.request_id, ErrorCode::UnknownSession, "CLOSE_SESSION.session_id",
-                      "session " + std::to_string(m.session_id) + " is not open on this connection", false);
+    return error(c, h.request_id, ErrorCode::UnknownSession, "CLOSE_SESSION.session_id",
+                      "session " + std::to_string(m.session_id) + " is not open on this connection");
   s->closing = true;
   s->close_request_id = h.request_id;
   if (s->in_flight == 0) finish_session(s, true);  // else finished when its last frame completes
 }
 
-void Server::finish_session(const std::shared_ptr<Session>& s, bool notify) {
+void SessionService::finish_session(const std::shared_ptr<Session>& s, bool notify) {
   scheduler_->cancel(s);
   protocol::SessionClosed closed{s->id(), s->frames_processed};
   if (notify) {
-    if (net::Connection* owner = find_connection(s->owner())) send(*owner, closed, s->close_request_id);
+    if (net::Connection* owner = connections_.find(s->owner())) connections_.send(*owner, closed, s->close_request_id);
   }
   for (uint64_t w : s->watchers) {
-    if (net::Connection* wc = find_connection(w)) {
-      send(*wc, closed, 0);
+    if (net::Connection* wc = connections_.find(w)) {
+      connections_.send(*wc, closed, 0);
       std::erase(wc->watched_sessions, s->id());
-      update_interest(*wc);
+      connections_.update_interest(*wc);
     }
   }
-  if (net::Connection* owner = find_connection(s->owner())) {
+  if (net::Connection* owner = connections_.find(s->owner())) {
     std::erase(owner->owned_sessions, s->id());
     refresh_message_limit(*owner);
-    update_interest(*owner);
+    connections_.update_interest(*owner);
   }
   log::info("session.close", {{"session", s->id()}, {"frames", s->frames_processed}});
   sessions_.erase(s->id());  // device memory is freed when the last worker reference goes
 }
 
-void Server::on_frame_done(FrameDone&& done) {
+void SessionService::on_frame_done(FrameDone&& done) {
   const std::shared_ptr<Session> found = sessions_.get(done.session_id);
   if (!found) return;  // session closed by a disconnect: nobody to deliver to
   const std::shared_ptr<Session>& s = found;
@@ -252,19 +242,17 @@ void Server::on_frame_done(FrameDone&& done) {
     counters_.add_frame_timings(done.timings);
     counters_.frame_times.add(s->config().pipeline, uint64_t{s->config().width} * s->config().height, done.timings);
   }
-  if (net::Connection* owner = find_connection(s->owner())) {
-    send_encoded(*owner, done.owner_message);
-    update_interest(*owner);
+  if (net::Connection* owner = connections_.find(s->owner())) {
+    connections_.send_encoded(*owner, done.owner_message);
+    connections_.update_interest(*owner);
   }
   for (uint64_t w : s->watchers) {
-    net::Connection* wc = find_connection(w);
+    net::Connection* wc = connections_.find(w);
     if (!wc) continue;
     // A watcher that attached after the frame was submitted has no copy encoded for it: it gets the next frame.
     const auto& message = done.watcher_messages[watcher_form(*s, *wc).index()];
     if (!message) continue;
-    wc->queue(message, s->id());
-    if (!wc->flush()) wc->close_after_flush = true;
-    update_interest(*wc);
+    connections_.send_watched(*wc, message, s->id());
   }
   if (s->closing && s->in_flight == 0) finish_session(s, true);
 }
