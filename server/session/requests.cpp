@@ -207,7 +207,7 @@ void SessionService::on_close_session(net::Connection& c, const protocol::Header
 }
 
 void SessionService::finish_session(const std::shared_ptr<Session>& s, bool notify) {
-  scheduler_->cancel(s);
+  scheduler_->cancel(*s);
   protocol::SessionClosed closed{s->id(), s->frames_processed};
   if (notify) {
     if (net::Connection* owner = connections_.find(s->owner())) connections_.send(*owner, closed, s->close_request_id);

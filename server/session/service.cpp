@@ -34,7 +34,9 @@ SessionService::SessionService(const ServerOptions& options, gpu::Context& devic
   for (const auto& r : shared_resources_)
     log::info("shared_resource", {{"name", r.name}, {"ms", r.ms}, {"device", device_name_}});
 
-  scheduler_ = std::make_unique<Scheduler>(options_.workers, [this, &loop](FrameDone&& done) {
+  // On a worker: the frame's device work, then its replies encoded there, so the loop only queues bytes.
+  scheduler_ = std::make_unique<Scheduler>(options_.workers, [this, &loop](Session& session, FrameJob& job) {
+    FrameDone done = encode_replies(session.id(), session.config().output_format, job, session.run(job));
     {
       std::lock_guard lock(completions_mutex_);
       completions_.push_back(std::move(done));

@@ -20,12 +20,6 @@ protocol::Error make_error(protocol::ErrorCode code, std::string field, std::str
   return protocol::Error{code, std::move(field), std::move(message)};
 }
 
-std::shared_ptr<const std::vector<uint8_t>> encode_shared(const protocol::Message& m, uint64_t request_id) {
-  auto bytes = std::make_shared<std::vector<uint8_t>>();
-  protocol::encode(m, request_id, 0, *bytes);
-  return bytes;
-}
-
 }  // namespace
 
 Session::Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config,
@@ -84,48 +78,16 @@ std::optional<protocol::Error> Session::check_frame(const protocol::Frame& frame
   return std::nullopt;
 }
 
-FrameDone Session::run(FrameJob& job) {
-  FrameDone done;
-  done.session_id = id_;
-  done.request_id = job.request_id;
-  done.frame_index = job.frame.info.frame_index;
-  std::vector<uint8_t> output;
-  const bool any_watcher = std::find(job.watcher_forms.begin(), job.watcher_forms.end(), true) != job.watcher_forms.end();
+FrameOutcome Session::run(const FrameJob& job) {
+  FrameOutcome outcome;
   try {
-    pipeline_->process(job.frame, job.owner_wants_output || any_watcher, output, done.timings);
+    pipeline_->process(job.frame, job.anyone_wants_output(), outcome.output, outcome.timings);
   } catch (const std::exception& e) {
-    done.failed = true;
-    done.owner_message = encode_shared(
-        protocol::Error{protocol::ErrorCode::DeviceError, "FRAME", std::string("device failure: ") + e.what()},
-        job.request_id);
-    return done;
+    outcome.error = e.what();
+    return outcome;
   }
-
-  const std::optional<protocol::SampleCounts> samples = pipeline_->samples();
-  const protocol::PlaneView plane{protocol::ChannelId::Output, config_.output_format,
-                                  std::span<const uint8_t>(output.data(), output.size())};
-  // One RESULT of the given form; the radiance plane is a view into the
-  // FRAME's payload, alive until this returns.
-  auto encode_form = [&](ResultForm form, bool with_output) {
-    protocol::Result result;
-    result.session_id = id_;
-    result.frame_index = job.frame.info.frame_index;
-    result.timings = done.timings;
-    if (with_output) result.planes = {plane};
-    if (form.input)
-      for (const protocol::PlaneView& p : job.frame.planes)
-        if (p.id == protocol::ChannelId::Radiance) result.planes.push_back(p);
-    if (form.samples) result.samples = samples ? *samples : protocol::SampleCounts{};  // counted false: no count
-    return encode_shared(result, job.request_id);
-  };
-  for (size_t i = 0; i < job.watcher_forms.size(); ++i)
-    if (job.watcher_forms[i]) done.watcher_messages[i] = encode_form(ResultForm{i >= 2, (i & 1) != 0}, true);
-  const ResultForm owner{false, job.owner_gets_samples};
-  if (job.owner_wants_output && done.watcher_messages[owner.index()])
-    done.owner_message = done.watcher_messages[owner.index()];  // identical bytes: share them
-  else
-    done.owner_message = encode_form(owner, job.owner_wants_output);
-  return done;
+  outcome.samples = pipeline_->samples();
+  return outcome;
 }
 
 }  // namespace dn::server

@@ -1,52 +1,18 @@
 // A session: one camera stream's configuration, its pipeline (and with it
-// the device history), and the queue of frames waiting for the device.
+// the device history), and its event-loop state.
 #pragma once
 
-#include <array>
-#include <atomic>
 #include <cstdint>
-#include <deque>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
+#include "server/session/frame.hpp"
 #include "server/pipelines/pipeline.hpp"
 
 namespace dn::server {
-
-// A validated frame on its way to the device; `frame` views into `payload`.
-// What one recipient's RESULT holds besides the output: the noisy radiance
-// (a watcher of a SHARE_INPUT session, 1.7) and the sample counts (1.9),
-// as far as its protocol knows them. index() numbers the four forms.
-struct ResultForm {
-  bool input = false;
-  bool samples = false;
-  size_t index() const { return (input ? 2 : 0) + (samples ? 1 : 0); }
-};
-
-struct FrameJob {
-  uint64_t request_id = 0;
-  bool owner_wants_output = true;
-  bool owner_gets_samples = false;          // the owner's protocol is >= 1.9
-  std::array<bool, 4> watcher_forms = {};   // by ResultForm::index(): some watcher wants that form
-  protocol::Frame frame;
-  std::vector<uint8_t> payload;
-};
-
-// What a worker hands back to the event loop for one frame.
-struct FrameDone {
-  uint64_t session_id = 0;
-  uint64_t request_id = 0;
-  uint64_t frame_index = 0;
-  std::shared_ptr<const std::vector<uint8_t>> owner_message;  // encoded RESULT or ERROR
-  // Encoded RESULTs with the output, by ResultForm::index(), where wanted.
-  std::array<std::shared_ptr<const std::vector<uint8_t>>, 4> watcher_messages;
-  std::vector<protocol::PassTiming> timings;
-  bool failed = false;
-};
 
 // Bytes of one FRAME of a session: its planes plus generous room for the
 // fixed fields (the session's message limit and the --max-message check).
@@ -73,8 +39,8 @@ class Session {
   // frame index above the last one accepted.
   std::optional<protocol::Error> check_frame(const protocol::Frame& frame) const;
 
-  // Runs the next pending frame on the device; called by one worker at a time.
-  FrameDone run(FrameJob& job);
+  // Runs a frame on the device; called by one worker at a time.
+  FrameOutcome run(const FrameJob& job);
 
   // Event-loop state (touched only by the loop thread).
   std::optional<uint64_t> last_frame_index;
@@ -84,12 +50,6 @@ class Session {
   uint64_t close_request_id = 0;
   std::vector<uint64_t> watchers;  // connection ids
   bool share_input = false;        // the owner's SHARE_INPUT: watchers at 1.7 also get the noisy radiance
-
-  // Scheduler state (guarded by mutex).
-  std::mutex mutex;
-  std::deque<FrameJob> pending;
-  bool scheduled = false;
-  std::atomic<bool> cancelled{false};
 
  private:
   uint64_t id_;
