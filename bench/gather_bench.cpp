@@ -48,7 +48,7 @@ void run(dn::gpu::Context& ctx, uint32_t w, uint32_t h, int reps) {
 
   dn::gpu::Buffer uniform(ctx, 256, dn::gpu::BufferKind::Constants, "unused");
   dn::gpu::DescriptorPool pool(ctx, 2, 4);
-  // The same kernel twice: binding 2 a storage buffer, then a texel buffer.
+  // The same kernel twice: source a storage buffer, then a texel buffer.
   auto time_kernel = [&](const char* shader, VkFormat texel, std::vector<float>& out) {
     dn::gpu::Buffer result(ctx, bytes, dn::gpu::BufferKind::StorageDownload, "result");
     dn::gpu::KernelDesc desc;

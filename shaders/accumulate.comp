@@ -23,7 +23,7 @@
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/accumulate.pass"
+#include "generated/passes/accumulate.pass"
 
 // Adds previous pixel q with bilinear weight w if it passes the tests.
 void accumulate_tap(ivec2 q, float w, vec3 n, float z, inout vec3 sum_colour, inout float sum_len,

@@ -8,7 +8,7 @@
 #include "grid2d.glsl"
 #include "bilinear.glsl"
 #include "pass.glsl"
-#include "passes/bench_bilinear_buffer.pass"
+#include "generated/passes/bench_bilinear_buffer.pass"
 
 DN_BILINEAR_FETCH_FN(fetch_source, source, dn_bilinear_any)
 

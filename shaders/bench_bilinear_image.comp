@@ -7,7 +7,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "grid2d.glsl"
 #include "pass.glsl"
-#include "passes/bench_bilinear_image.pass"
+#include "generated/passes/bench_bilinear_image.pass"
 
 layout(set = 0, binding = 2) uniform sampler2D source_image;
 

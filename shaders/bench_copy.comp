@@ -1,6 +1,6 @@
 #version 450
 // bench_copy: the copy floor of bench/pipeline_bench. Copies `words` 32-bit
-// words from binding 1 to binding 2 in a grid-stride loop: one read and one
+// words from src to dst in a grid-stride loop: one read and one
 // write per word, neighbouring invocations on neighbouring words. Not used by
 // any pipeline; it measures how fast the device moves bytes through a plain
 // compute pass, the bound a memory-bound filter can approach.
@@ -12,7 +12,7 @@
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 layout(std140, set = 0, binding = 0) readonly buffer CopyConstants { uvec4 size; } constants;
-#include "passes/bench_copy.pass"
+#include "generated/passes/bench_copy.pass"
 
 void main() {
   const uint words = constants.size.x;

@@ -5,7 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "grid2d.glsl"
 #include "pass.glsl"
-#include "passes/bench_gather_texel.pass"
+#include "generated/passes/bench_gather_texel.pass"
 
 void main() {
   const uvec2 p = dn_pixel();

@@ -13,7 +13,7 @@
 #include "grid2d.glsl"
 #include "inside.glsl"
 #include "pass.glsl"
-#include "passes/bench_stat_gather.pass"
+#include "generated/passes/bench_stat_gather.pass"
 
 // One table (alpha): the benchmark tests no pair as still.
 float dn_stat_t_squared(uint nu, bool still) { return t_squared.data[min(nu, 1024u) - 1u]; }

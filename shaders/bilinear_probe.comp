@@ -9,7 +9,7 @@
 #include "grid2d.glsl"
 #include "bilinear.glsl"
 #include "pass.glsl"
-#include "passes/bilinear_probe.pass"
+#include "generated/passes/bilinear_probe.pass"
 
 bool tap_valid(uint i) { return valid.data[i] != 0u; }
 DN_BILINEAR_FETCH_FN(fetch_source, source, tap_valid)

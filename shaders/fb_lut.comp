@@ -34,7 +34,7 @@
 #include "pass.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
-#include "passes/fb_lut.pass"
+#include "generated/passes/fb_lut.pass"
 
 const float PI = 3.14159265358979;
 

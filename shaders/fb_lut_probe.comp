@@ -1,12 +1,12 @@
 #version 450
 // Test kernel for fb_lut.glsl: evaluates dn_fb_lut at the (cos θ_o, α)
-// points of binding 1 and writes the (A, B) it returns. Not used by any
+// points of `points` and writes the (A, B) it returns. Not used by any
 // pipeline (tests/pipelines/fb_lut_test.cpp).
 //
 // Resources: binding 0 ProbeConstants (x: point count), then passes/fb_lut_probe.pass.
 #extension GL_GOOGLE_include_directive : require
 #include "pass.glsl"
-#include "passes/fb_lut_probe.pass"
+#include "generated/passes/fb_lut_probe.pass"
 #include "fb_lut.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;

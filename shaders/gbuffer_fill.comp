@@ -20,7 +20,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "pass.glsl"
-#include "passes/gbuffer_fill.pass"
+#include "generated/passes/gbuffer_fill.pass"
 
 const uint SEED = 0u, PULL = 1u, PUSH = 2u;
 

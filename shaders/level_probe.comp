@@ -11,7 +11,7 @@
 #include "levels.glsl"
 #include "plane.glsl"
 #include "pass.glsl"
-#include "passes/level_probe.pass"
+#include "generated/passes/level_probe.pass"
 
 void main() {
   const uvec2 p = dn_pixel();

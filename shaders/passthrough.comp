@@ -15,7 +15,7 @@
 #include "frame.glsl"
 #include "plane.glsl"
 #include "pass.glsl"
-#include "passes/passthrough.pass"
+#include "generated/passes/passthrough.pass"
 
 // A word of two halves with each NaN / Inf half (exponent all ones) zeroed.
 uint finite_halves(uint w) {

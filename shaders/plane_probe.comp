@@ -8,7 +8,7 @@
 #include "frame.glsl"
 #include "plane.glsl"
 #include "pass.glsl"
-#include "passes/plane_probe.pass"
+#include "generated/passes/plane_probe.pass"
 
 void main() {
   uint p = dn_invocation_index();

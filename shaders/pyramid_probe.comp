@@ -11,7 +11,7 @@
 #include "grid2d.glsl"
 #include "levels.glsl"
 #include "pass.glsl"
-#include "passes/pyramid_probe.pass"
+#include "generated/passes/pyramid_probe.pass"
 
 void main() {
   const uvec2 p = dn_pixel();

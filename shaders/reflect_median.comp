@@ -35,7 +35,7 @@
 #include "luminance.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/reflect_median.pass"
+#include "generated/passes/reflect_median.pass"
 
 #include "svgf_guards.glsl"
 #include "reflect.glsl"

@@ -19,7 +19,7 @@
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/reflect_motion.pass"
+#include "generated/passes/reflect_motion.pass"
 
 #include "reflect.glsl"
 

@@ -33,7 +33,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "pass.glsl"
-#include "passes/reflect_prepare.pass"
+#include "generated/passes/reflect_prepare.pass"
 
 #include "svgf_guards.glsl"
 #include "reflect.glsl"

@@ -11,7 +11,7 @@
 #include "frame.glsl"
 #include "pass.glsl"
 #include "sample_bins.glsl"
-#include "passes/sample_summary.pass"
+#include "generated/passes/sample_summary.pass"
 
 shared uint bins[DN_SAMPLE_BINS];
 shared uint group_max_inverse;

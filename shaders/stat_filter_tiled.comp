@@ -18,7 +18,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "pass.glsl"
-#include "passes/stat_filter_tiled.pass"
+#include "generated/passes/stat_filter_tiled.pass"
 
 #include "stat_filter_io.glsl"
 #include "stat_class.glsl"

@@ -48,7 +48,7 @@
 #include "stat.glsl"
 #include "stat_class.glsl"
 #include "pass.glsl"
-#include "passes/stat_prepare.pass"
+#include "generated/passes/stat_prepare.pass"
 
 void store3(uint p, vec3 v, bool to_modulation) {
   for (uint c = 0u; c < 3u; ++c) {

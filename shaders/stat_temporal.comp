@@ -47,7 +47,7 @@
 #include "reproject.glsl"
 #include "stat.glsl"
 #include "pass.glsl"
-#include "passes/stat_temporal.pass"
+#include "generated/passes/stat_temporal.pass"
 
 #include "svgf.glsl"
 

@@ -13,7 +13,7 @@
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/supersample_assign.pass"
+#include "generated/passes/supersample_assign.pass"
 
 #include "supersample.glsl"
 

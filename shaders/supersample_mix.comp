@@ -13,7 +13,7 @@
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/supersample_mix.pass"
+#include "generated/passes/supersample_mix.pass"
 
 #include "supersample.glsl"
 

@@ -9,7 +9,7 @@
 #include "frame.glsl"
 #include "plane.glsl"
 #include "pass.glsl"
-#include "passes/supersample_resolve.pass"
+#include "generated/passes/supersample_resolve.pass"
 
 #include "supersample.glsl"
 

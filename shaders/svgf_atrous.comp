@@ -56,7 +56,7 @@
 #include "svgf_guards.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/svgf_atrous.pass"
+#include "generated/passes/svgf_atrous.pass"
 #include "svgf_joint.glsl"
 
 // DISPLAY_FILL's sources: foreground pixels with a normal and data, of the

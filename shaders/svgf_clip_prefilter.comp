@@ -18,7 +18,7 @@
 #include "svgf_guards.glsl"
 #include "inside.glsl"
 #include "pass.glsl"
-#include "passes/svgf_clip_prefilter.pass"
+#include "generated/passes/svgf_clip_prefilter.pass"
 
 #include "svgf_signal.glsl"
 

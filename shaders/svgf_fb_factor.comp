@@ -17,7 +17,7 @@
 #include "plane.glsl"
 #include "sanitize.glsl"
 #include "pass.glsl"
-#include "passes/svgf_fb_factor.pass"
+#include "generated/passes/svgf_fb_factor.pass"
 
 #include "fb_lut.glsl"
 

@@ -18,7 +18,7 @@
 #include "luminance.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/svgf_remodulate.pass"
+#include "generated/passes/svgf_remodulate.pass"
 
 #include "svgf_guards.glsl"
 

@@ -14,7 +14,7 @@
 #include "reproject.glsl"
 #include "luminance.glsl"
 #include "pass.glsl"
-#include "passes/svgf_reproject.pass"
+#include "generated/passes/svgf_reproject.pass"
 
 #include "svgf.glsl"
 #include "svgf_signal.glsl"
@@ -179,7 +179,7 @@ vec4 update_still_mean(uint p, vec3 d, bool has_sample, bool continues) {
 // without the largest and the smallest, keeps beside p's still mean its
 // running mean and M2, its recent mean r (an exponential average of weight
 // DN_CHANGE_ALPHA) and the same average of b's variance as the box's spread
-// shows it (binding 19). From DN_CHANGE_MIN_SAMPLES on, r beyond t standard
+// shows it (still_change). From DN_CHANGE_MIN_SAMPLES on, r beyond t standard
 // deviations of itself from the running mean (plus 1e-3 of it) restarts
 // p's still mean and history; the variance is the larger of the M2's (of
 // the samples before b: a changed light's would widen the test that is to

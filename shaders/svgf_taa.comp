@@ -23,7 +23,7 @@
 #include "sanitize.glsl"
 #include "reproject.glsl"
 #include "pass.glsl"
-#include "passes/svgf_taa.pass"
+#include "generated/passes/svgf_taa.pass"
 
 // The 3x3 depths around pos (0 outside the image: not foreground).
 void depths_around(ivec2 pos, out float z[9]) {

@@ -43,7 +43,7 @@
 #include "luminance.glsl"
 #include "svgf_guards.glsl"
 #include "pass.glsl"
-#include "passes/svgf_variance.pass"
+#include "generated/passes/svgf_variance.pass"
 #include "svgf_joint.glsl"
 
 vec3 signal_colour(int s, uint i) { return s == 0 ? illum.data[i].rgb : illum2.data[i].rgb; }

@@ -8,7 +8,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "grid2d.glsl"
 #include "pass.glsl"
-#include "passes/tile_probe.pass"
+#include "generated/passes/tile_probe.pass"
 
 #define DN_TILE_APRON APRON
 #include "tile.glsl"

@@ -1,5 +1,6 @@
-// GLSL expansion of a pass declaration (shaders/passes/<pass>.pass): include
-// this, then the declaration, where the shader declares its resources.
+// GLSL expansion of a pass declaration (shaders/passes/<pass>.pass, whose rows
+// the build numbers into generated/passes/<pass>.pass: n and id below): include
+// this, then generated/passes/<pass>.pass, where the shader declares its resources.
 //   DN_BINDING(n, name, element, read | write | read_write, need)
 //     -> layout(std430, set = 0, binding = n) <access> buffer name_block { element data[]; } name;
 //        and, for read: element name_at(uint i) = name.data[i]

@@ -884,7 +884,7 @@ TEST_F(ReflectTest, AStillGlossyPixelKeepsItsMeanWhenItsRayMatchMoves) {
   EXPECT_EQ(kept.whole, kept.counted);
 }
 
-// A pass's buffer bound at `binding` (1-based, the .pass file's numbering).
+// A pass's buffer bound at `binding` (1-based: the n-th row of its .pass file).
 std::string bound(const pipelines::GraphPipeline& graph, const std::string& pass, size_t binding) {
   for (const auto& p : graph.spec().passes)
     if (p.name() == pass) return p.bindings().at(binding - 1).buffer;

@@ -3,7 +3,8 @@
 // same X-macro file becomes the shader's GLSL declarations (include/pass.glsl)
 // and, here, a table, so the host binds buffers and sets constants by name
 // and never by position. The table is generated at build time (one per
-// shader in DN_SHADER_SOURCES); numbering is checked when it compiles.
+// shader in DN_SHADER_SOURCES) from the numbered declarations
+// (shaders/tools/number_pass.cpp); numbering is checked when it compiles.
 #pragma once
 
 #include <bit>
