@@ -23,7 +23,7 @@
 #include "dn/shaders/shaders.hpp"
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
-#include "pipelines/student_t.hpp"
+#include "pipelines/stat/student_t.hpp"
 
 namespace {
 

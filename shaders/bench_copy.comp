@@ -5,7 +5,7 @@
 // any pipeline; it measures how fast the device moves bytes through a plain
 // compute pass, the bound a memory-bound filter can approach.
 //
-// Resources: binding 0 CopyConstants (x: words), then passes/bench_copy.pass.
+// Resources: binding 0 CopyConstants (x: words), then bench_copy.pass.
 #extension GL_GOOGLE_include_directive : require
 #include "pass.glsl"
 

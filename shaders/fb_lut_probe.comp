@@ -3,7 +3,7 @@
 // points of `points` and writes the (A, B) it returns. Not used by any
 // pipeline (tests/pipelines/fb_lut_test.cpp).
 //
-// Resources: binding 0 ProbeConstants (x: point count), then passes/fb_lut_probe.pass.
+// Resources: binding 0 ProbeConstants (x: point count), then fb_lut_probe.pass.
 #extension GL_GOOGLE_include_directive : require
 #include "pass.glsl"
 #include "generated/passes/fb_lut_probe.pass"

@@ -3,7 +3,7 @@
 // or fp32 through the DN_LOADn macros and writes every component as fp32.
 // Not used by any pipeline.
 //
-// Resources: passes/plane_probe.pass (binding 0 FrameConstants, size.z = pixel count).
+// Resources: plane_probe.pass (binding 0 FrameConstants, size.z = pixel count).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "plane.glsl"

@@ -6,7 +6,7 @@
 // share one, and atomics on one shared word serialise, on lavapipe as on a
 // GPU); each workgroup adds its non-empty bins to the summary once.
 //
-// Resources: passes/sample_summary.pass (binding 0 FrameConstants).
+// Resources: sample_summary.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 #include "pass.glsl"

@@ -31,8 +31,8 @@ struct PipelineDefinition {
   std::vector<SharedResourceDecl> shared_resources;
 };
 
-// One per line of pipelines.def (each in its own <id>.cpp).
-#define DN_PIPELINE(id) PipelineDefinition id##_definition();
+// One per line of pipelines.def (each defined in its family folder).
+#define DN_PIPELINE(family, id) PipelineDefinition id##_definition();
 #include "pipelines/pipelines.def"
 #undef DN_PIPELINE
 

@@ -12,7 +12,7 @@ const std::vector<ParameterDef>& parameter_table() {
   static const std::vector<ParameterDef> table = {
 #define DN_PARAM(group, name, def, lo, hi, isint, desc) \
   ParameterDef{#group, ParameterInfo{#name, def, lo, hi, (isint) != 0, desc}, &Parameters::group##_##name},
-#include "parameters.def"
+#include "generated/parameters.def"
 #undef DN_PARAM
   };
   return table;

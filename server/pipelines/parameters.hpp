@@ -1,7 +1,7 @@
-// The tunables of every pipeline, from the one table in
-// shaders/include/parameters.def (shared with the shaders, which read row
-// <group>, <name> as DN_PARAM_VALUE(group, name) from the constants block's
-// parameter struct).
+// The tunables of every pipeline, from the one table the build makes of the
+// pipeline folders' parameters.def rows (shaders/README.md, "Parameters";
+// shared with the shaders, which read row <group>, <name> as
+// DN_PARAM_VALUE(group, name) from the constants block's parameter struct).
 #pragma once
 
 #include <cstdint>
@@ -19,7 +19,7 @@ namespace dn::pipelines {
 // size std140 rounds it to. The spirv.* tests compare the offsets.
 struct alignas(16) Parameters {
 #define DN_PARAM(group, name, def, lo, hi, isint, desc) float group##_##name = 0.0f;
-#include "parameters.def"
+#include "generated/parameters.def"
 #undef DN_PARAM
 };
 

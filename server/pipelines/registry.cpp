@@ -38,7 +38,7 @@ ConfigError error(protocol::ErrorCode code, std::string field, std::string messa
 
 const std::vector<PipelineDefinition>& definitions() {
   static const std::vector<PipelineDefinition> all = {
-#define DN_PIPELINE(id) id##_definition(),
+#define DN_PIPELINE(family, id) id##_definition(),
 #include "pipelines/pipelines.def"
 #undef DN_PIPELINE
   };

@@ -4,7 +4,7 @@
 // Schlick Fresnel. Texel (i, j) (column i, row j, index j · DN_FB_LUT_SIZE + i)
 // holds cos θ_o = (i + 0.5) / DN_FB_LUT_SIZE and GGX α = (j + 0.5) / DN_FB_LUT_SIZE
 // (α, not perceptual roughness: the protocol's `roughness` channel is α).
-// Computed once per device by fb_lut.comp (server/pipelines/fb_lut.hpp).
+// Computed once per device by fb_lut.comp (server/pipelines/stages/fb_lut.hpp).
 //
 // Using the lookup: declare the table before including this file, as a
 // binding named fb_lut with element vec2 in the pass declaration

@@ -9,7 +9,7 @@
 // row order (std140 packs consecutive floats; C++: dn::pipelines::Parameters).
 struct DnParameters {
 #define DN_PARAM(group, name, def, lo, hi, isint, desc) float group##_##name;
-#include "parameters.def"
+#include "generated/parameters.def"
 #undef DN_PARAM
 };
 

@@ -1,5 +1,5 @@
 // The reads stat_filter and stat_filter_tiled share over their bindings
-// (passes/stat_filter.pass): the critical-value table, the value a tap
+// (stat_filter.pass): the critical-value table, the value a tap
 // contributes and the remodulation of the result (docs/pipelines.md,
 // "stat"). Include after the pass file and sanitize.glsl, before stat_gather.glsl.
 #ifndef DN_STAT_FILTER_IO_GLSL

@@ -1,4 +1,4 @@
-// The F_beta table (server/pipelines/fb_lut.hpp, shaders/fb_lut.comp) against
+// The F_beta table (server/pipelines/stages/fb_lut.hpp, server/pipelines/stages/fb_lut.comp) against
 // the independent double-precision CPU reference (fb_lut_reference.cpp), its
 // properties, the bilinear lookup of fb_lut.glsl (through the fb_lut_probe
 // kernel) and the per-context cache (gpu::Context::shared).
@@ -24,7 +24,7 @@
 #include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
 #include "gpu_test_env.hpp"
-#include "pipelines/fb_lut.hpp"
+#include "pipelines/stages/fb_lut.hpp"
 #include "pipelines/pass.hpp"
 
 namespace dn {

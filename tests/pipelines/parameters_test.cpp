@@ -1,4 +1,4 @@
-// The parameter table (shaders/include/parameters.def) without slot numbers:
+// The parameter table (server/pipelines/<folder>/parameters.def) without slot numbers:
 // groups, the constants block's parameter struct, and the checks on groups.
 #include <gtest/gtest.h>
 

@@ -44,7 +44,7 @@ pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::
 }
 
 // The reference with the progressive pipeline's own defaults
-// (server/pipelines/progressive.cpp), then the session's parameters; with
+// (server/pipelines/progressive/progressive.cpp), then the session's parameters; with
 // `sparse` (a sample_count plane) paper 004's regime, without it SVGF's
 // young-pixel estimate and step order (the age gate and the display lag do
 // not apply).

@@ -14,7 +14,7 @@
 #include "online_stats.hpp"
 #include "pipelines/graph.hpp"
 #include "pipelines/pipeline.hpp"
-#include "pipelines/student_t.hpp"
+#include "pipelines/stat/student_t.hpp"
 #include "stat_reference.hpp"
 #include "stat_samples.hpp"
 #include "svgf_inputs.hpp"

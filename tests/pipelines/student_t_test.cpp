@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "pipelines/student_t.hpp"
+#include "pipelines/stat/student_t.hpp"
 
 namespace dn::pipelines {
 namespace {

@@ -80,7 +80,7 @@ struct SsFrame {
   }
 };
 
-// The documented assignment (shaders/supersample_assign.comp) in double precision:
+// The documented assignment (server/pipelines/stages/supersample_assign.comp) in double precision:
 // the guide offset code of sample s of pixel p, and the margin between the
 // best and the second-best score (decisions closer than that may round
 // either way on the device).

@@ -13,7 +13,7 @@
 
 #include "camera.hpp"
 #include "gpu_test_env.hpp"
-#include "pipelines/fb_lut.hpp"
+#include "pipelines/stages/fb_lut.hpp"
 #include "pipelines/graph.hpp"
 #include "pipelines/sample_summary.hpp"
 #include "render.hpp"

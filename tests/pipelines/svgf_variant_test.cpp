@@ -1,4 +1,4 @@
-// The SVGF chain builder (pipelines/svgf_chain.hpp): variants are data; what
+// The SVGF chain builder (pipelines/stages/svgf_chain.hpp): variants are data; what
 // the shaders do not implement yet is rejected by name; shared resources are
 // declared by the pipelines that bind them.
 #include <gtest/gtest.h>
@@ -10,9 +10,9 @@
 
 #include "gpu_test_env.hpp"
 #include "pipelines/definitions.hpp"
-#include "pipelines/fb_lut.hpp"
+#include "pipelines/stages/fb_lut.hpp"
 #include "pipelines/registry.hpp"
-#include "pipelines/svgf_chain.hpp"
+#include "pipelines/stages/svgf_chain.hpp"
 #include "svgf_inputs.hpp"
 
 namespace dn {
