@@ -10,6 +10,7 @@
 // variant descriptions (svgf.cpp, svgf_fb.cpp); builders never compare
 // pipeline names. Fields the shaders do not support yet are part of the
 // description and rejected by check_supported() with a message naming them.
+// Each stage is its own file (svgf_stages.hpp); this builder composes them.
 #pragma once
 
 #include <cstdint>

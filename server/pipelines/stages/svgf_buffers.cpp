@@ -1,0 +1,41 @@
+#include "pipelines/stages/svgf_buffers.hpp"
+
+#include "pipelines/stages/supersample.hpp"
+
+namespace dn::pipelines::svgf {
+
+using protocol::ChannelId;
+
+uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
+  return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
+}
+
+std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s) {
+  return v.extra_samples ? mixed_signal(s.input) : s.input;
+}
+uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s) {
+  return v.extra_samples ? 0u : is_half(channel_format(config, s.channel));
+}
+
+void bind_validity_mask(const SessionConfig& config, ChannelId mask, PassSpec& pass) {
+  pass.bind("sample_count", "sample_count").set("MASKED", 1u).set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
+}
+
+SignalBuffers signal_buffers(const SvgfVariant& v, size_t index) {
+  if (index == 0) return {kGuide, kTemporal, kIllumA, kIllumB};
+  const SvgfSignal& s = v.signals[index];
+  return {s.features ? kGuide + s.suffix : kGuide, kTemporal + s.suffix, kIllumC, kIllumD};
+}
+
+void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const SignalBuffers& second) {
+  pass.bind("temporal2", second.temporal);
+  if (second.guide != first.guide) pass.bind("guide2", second.guide).set("SECOND_GUIDE", 1u);
+}
+
+bool keeps_still_mean(const SvgfVariant& v) { return v.converge_still && v.harm_guard && v.iterations > 0; }
+bool keeps_still_emission(const SvgfVariant& v) { return v.emission && keeps_still_mean(v); }
+std::string still_mean_of(const std::string& history) { return history + "_still"; }
+std::string still_m2_of(const std::string& history) { return history + "_still_m2"; }
+std::string still_change_of(const std::string& history) { return history + "_still_change"; }
+
+}  // namespace dn::pipelines::svgf

@@ -1,0 +1,113 @@
+// The SVGF chain's buffers, shared by its stage files (svgf_reproject.cpp,
+// svgf_variance.cpp, svgf_atrous.cpp, svgf_remodulate.cpp, gbuffer_fill.cpp,
+// svgf_chain.cpp): their names and per-pixel sizes, the scratch each signal
+// uses, and the binding helpers the stages share.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "pipelines/graph.hpp"
+#include "pipelines/stages/svgf_chain.hpp"
+
+namespace dn::pipelines::svgf {
+
+// Per pixel, a single persistent copy (svgf_reproject reads it; svgf_variance
+// and the feedback a-trous iteration rewrite it after that pass):
+// vec4(demodulated rgb, length) fp32 and uvec4(m1, m2, depth as fp32 bits,
+// octahedral snorm16x2 normal).
+inline constexpr uint64_t kColourHistoryBytes = 16;
+inline constexpr uint64_t kAuxHistoryBytes = 16;
+// converge_still: a still pixel's running mean of its own samples,
+// vec4(demodulated rgb, samples), the M2 of their luminance, and its change
+// test's vec4(running mean, M2, recent mean, recent spread variance) of the
+// 3x3 box luminance, fp32, read and rewritten at p by svgf_reproject.
+inline constexpr uint64_t kStillMeanBytes = 16;
+inline constexpr uint64_t kStillM2Bytes = 4;
+inline constexpr uint64_t kStillChangeBytes = 16;
+// With emission: a still pixel's running mean of its emission, vec4(rgb,
+// samples), and its change test's (M2 of the luminance, suspect), fp32, one
+// copy each, read and rewritten at p by svgf_remodulate.
+inline constexpr const char* kEmissionStill = "emission_still";
+inline constexpr const char* kEmissionTest = "emission_test";
+inline constexpr uint64_t kEmissionStillBytes = 16;
+inline constexpr uint64_t kEmissionTestBytes = 8;
+// TAA: the previous final output and, with SvgfVariant::display_lag, the
+// lag state: vec4(rgb, lag) fp32, one persistent copy (read as texels by
+// svgf_remodulate, rewritten by svgf_taa after it).
+inline constexpr uint64_t kTaaHistoryBytes = 16;
+// SvgfVariant::display: the displayed frame, vec4(rgb, 0) fp32 (a texel
+// for the caller's neighbourhood reads: reflect_median).
+inline constexpr uint64_t kDisplayBytes = 16;
+// Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
+inline constexpr uint64_t kIlluminationBytes = 16;
+// Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
+// temporal vec4(m1, m2, length, luminance), written by svgf_reproject.
+inline constexpr uint64_t kGuideBytes = 16;
+inline constexpr uint64_t kTemporalBytes = 16;
+// a-trous register block: one invocation filters kAtrousBlock^2 pixels.
+inline constexpr uint32_t kAtrousBlock = 4;
+
+// Illumination ping-pong of the first signal (a, b) and of the second (c, d).
+inline constexpr const char* kIllumA = "svgf_illum_a";
+inline constexpr const char* kIllumB = "svgf_illum_b";
+inline constexpr const char* kIllumC = "svgf_illum_c";
+inline constexpr const char* kIllumD = "svgf_illum_d";
+// With the harm guard, the a-trous iterations after the first ping-pong
+// between b and e (d and f), so a (c) keeps the variance pass's output.
+inline constexpr const char* kIllumE = "svgf_illum_e";
+inline constexpr const char* kIllumF = "svgf_illum_f";
+// The first signal's guide and temporal; the second's temporal, and its
+// guide when it has its own features, are these names + its suffix (both
+// signals' are read by the joint a-trous passes).
+inline constexpr const char* kGuide = "svgf_guide";
+inline constexpr const char* kTemporal = "svgf_temporal";
+inline constexpr const char* kTaaHistory = "svgf_taa";
+// History clipping scratch, per pixel, shared by the clipped signals (each
+// signal's reprojection reads it before the next signal's prefilter
+// rewrites it): the demodulated current signal vec4(rgb, foreground), the
+// horizontal pass's vec4(sum w c, sum w) and the box source
+// vec4(prefiltered rgb, foreground), fp32.
+inline constexpr const char* kClipCurrent = "svgf_clip_current";
+inline constexpr const char* kClipPartial = "svgf_clip_partial";
+inline constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
+inline constexpr uint64_t kClipBytes = 16;
+// sparse_gbuffer: the packed 3x3 pyramid (gbuffer_fill.comp) of vec4(normal,
+// depth) fp32 and its validity (uint), and the filled planes the chain reads
+// instead of depth and normal, fp32 (1 and 3 per pixel).
+inline constexpr const char* kGbufferPyramid = "gbuffer_pyramid";
+inline constexpr const char* kGbufferValid = "gbuffer_valid";
+inline constexpr const char* kFilledDepth = "gbuffer_depth";
+inline constexpr const char* kFilledNormal = "gbuffer_normal";
+inline constexpr uint32_t kGbufferFactor = 3;
+
+// The half flag of a modulator plane (0 for a buffer the server computes).
+uint32_t modulator_half(const SessionConfig& config, const Modulator& m);
+// The buffer a chain reads its signal from: the plane, or with extra samples
+// supersample_mix's fp32 result; and its half flag.
+std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s);
+uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s);
+// The sample_count plane as a pass's validity mask (MASKED).
+void bind_validity_mask(const SessionConfig& config, protocol::ChannelId mask, PassSpec& pass);
+
+// The scratch buffers of signal `index`.
+struct SignalBuffers {
+  std::string guide, temporal;
+  std::string illum, other;  // the a-trous ping-pong: illum holds the reprojected signal
+};
+SignalBuffers signal_buffers(const SvgfVariant& v, size_t index);
+// The joint passes' second-signal geometry (svgf_joint.glsl): its temporal
+// scratch and, when it is not the first's, its own guide (SECOND_GUIDE).
+void bind_second_geometry(PassSpec& pass, const SignalBuffers& first, const SignalBuffers& second);
+
+// The still pixels' running means are kept where the harm guard reads them.
+bool keeps_still_mean(const SvgfVariant& v);
+// And of the emission, which is added back unfiltered.
+bool keeps_still_emission(const SvgfVariant& v);
+// A signal's still running mean (vec4(mean, n)), the M2 of its samples'
+// luminance and its change test's state.
+std::string still_mean_of(const std::string& history);
+std::string still_m2_of(const std::string& history);
+std::string still_change_of(const std::string& history);
+
+}  // namespace dn::pipelines::svgf
