@@ -1,7 +1,7 @@
 #version 450
 // Test kernel for fb_lut.glsl: evaluates dn_fb_lut at the (cos θ_o, α)
 // points of `points` and writes the (A, B) it returns. Not used by any
-// pipeline (tests/pipelines/fb_lut_test.cpp).
+// pipeline (tests/pipelines/stages/fb_lut_test.cpp).
 //
 // Resources: binding 0 ProbeConstants (x: point count), then fb_lut_probe.pass.
 #extension GL_GOOGLE_include_directive : require

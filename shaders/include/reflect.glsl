@@ -1,6 +1,6 @@
 // Reflection classes and the feature distances the reflection motion search
 // minimises (paper 001 §4.1-4.2, Eq. 1 and 4-5; docs/pipelines.md "reflect";
-// the CPU reference is tests/pipelines/reflection_motion_reference.cpp).
+// the CPU reference is tests/pipelines/reflect/reflection_motion_reference.cpp).
 // Features, two vec4 per pixel (reflect_prepare writes them, the search
 // reads this frame's and the previous frame's copy):
 //   [2p]     xyz: mirror: the first non-mirror hit W_p; glossy: the

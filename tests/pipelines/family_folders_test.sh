@@ -16,7 +16,8 @@ for family in $families; do
     fail=1
     continue
   fi
-  outside=$(grep -rlE "pipelines/$family/" CMakeLists.txt server shaders protocol client python examples scripts \
+  # server/pipelines/<family>/ or an include path pipelines/<family>/; tests/pipelines/<family>/ is the tests'.
+  outside=$(grep -rlP "(?<!tests/)pipelines/$family/" CMakeLists.txt server shaders protocol client python examples scripts \
               2>/dev/null | grep -v "^server/pipelines/$family/" || true)
   if [ -n "$outside" ]; then
     echo "family $family's folder is named outside it:"

@@ -9,7 +9,7 @@
 // improves; one small diamond; then Eq. 2-3 sub-pixel refinement over the
 // best 2x2 block. Candidates off-screen, of another class, or (glossy)
 // without a ray do not match. Mirrors the CPU reference
-// tests/pipelines/reflection_motion_reference.cpp step by step.
+// tests/pipelines/reflect/reflection_motion_reference.cpp step by step.
 // One invocation per pixel.
 //
 // Resources: reflect_motion.pass (binding 0 FrameConstants).

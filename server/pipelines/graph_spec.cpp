@@ -1,0 +1,159 @@
+// GraphSpec: the pure-data half of graph.hpp (buffers, passes, their sizes
+// and the build-time check), and the channel helpers definitions use.
+#include "pipelines/graph.hpp"
+
+#include <stdexcept>
+
+namespace dn::pipelines {
+
+uint64_t round_up4(uint64_t bytes) { return (bytes + 3) & ~uint64_t{3}; }
+
+protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel) {
+  for (const auto& c : config.channels)
+    if (c.id == channel) return c.format;
+  return protocol::Format::F32;
+}
+
+bool has_channel(const SessionConfig& config, protocol::ChannelId channel) {
+  for (const auto& c : config.channels)
+    if (c.id == channel) return true;
+  return false;
+}
+
+uint32_t is_half(protocol::Format format) { return format == protocol::Format::F16 ? 1u : 0u; }
+
+uint64_t GraphSpec::device_bytes() const {
+  uint64_t total = kConstantBytes;
+  for (const auto& b : buffers) total += b.role == BufferRole::History ? 2 * b.bytes : b.bytes;
+  return total;
+}
+
+uint64_t GraphSpec::transient_bytes() const {
+  uint64_t total = 0;
+  for (const auto& b : buffers)
+    if (b.role == BufferRole::Scratch) total += b.bytes;
+  return total;
+}
+
+const BufferSpec* GraphSpec::largest_binding() const {
+  const BufferSpec* best = nullptr;
+  for (const auto& b : buffers)
+    if (!best || b.bytes > best->bytes) best = &b;
+  return best;
+}
+
+const BufferSpec* GraphSpec::find(const std::string& name) const {
+  for (const auto& b : buffers)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
+void GraphSpec::add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name) {
+  const auto* info = protocol::find_channel(channel);
+  const auto format = channel_format(config, channel);
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Input;
+  b.channel = channel;
+  b.format = format;
+  b.plane_bytes = protocol::plane_bytes(*info, format, config.width, config.height);
+  b.bytes = round_up4(b.plane_bytes);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_output(const SessionConfig& config) {
+  const auto* info = protocol::find_channel(protocol::ChannelId::Output);
+  BufferSpec b;
+  b.name = "output";
+  b.role = BufferRole::Output;
+  b.channel = protocol::ChannelId::Output;
+  b.format = config.output_format;
+  b.plane_bytes = protocol::plane_bytes(*info, config.output_format, config.width, config.height);
+  b.bytes = round_up4(b.plane_bytes);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_sized(std::string name, BufferRole role, uint64_t bytes) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = role;
+  b.bytes = round_up4(bytes);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
+  add_sized(std::move(name), BufferRole::History, uint64_t{width} * height * bytes_per_pixel);
+}
+
+void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
+  add_sized(std::move(name), BufferRole::Persistent, uint64_t{width} * height * bytes_per_pixel);
+}
+
+void GraphSpec::add_scratch(std::string name, uint64_t bytes_per_pixel) {
+  add_sized(std::move(name), BufferRole::Scratch, uint64_t{width} * height * bytes_per_pixel);
+}
+
+void GraphSpec::add_scratch_elements(std::string name, uint64_t elements, uint64_t bytes_per_element) {
+  add_sized(std::move(name), BufferRole::Scratch, elements * bytes_per_element);
+}
+
+gpu::Extent GraphSpec::level(uint32_t factor, uint32_t level) const {
+  return gpu::level_size(width, height, factor, level);
+}
+
+void GraphSpec::add_shared(std::string name, SharedResource resource) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Shared;  // bytes 0: the context holds it for every session
+  b.shared = resource;
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_constant(std::string name, std::vector<uint8_t> data) {
+  BufferSpec b;
+  b.name = std::move(name);
+  b.role = BufferRole::Constant;
+  b.bytes = round_up4(data.size());
+  b.data = std::move(data);
+  buffers.push_back(std::move(b));
+}
+
+void GraphSpec::add_readback(std::string name, uint64_t bytes) { add_sized(std::move(name), BufferRole::Readback, bytes); }
+
+PassSpec& GraphSpec::add_pass(std::string name, std::string_view shader) {
+  return passes.emplace_back(std::move(name), shader);
+}
+
+void GraphSpec::check() const {
+  for (size_t i = 0; i < buffers.size(); ++i) {
+    for (size_t j = 0; j < i; ++j)
+      if (buffers[j].name == buffers[i].name)
+        throw std::logic_error("pipeline graph: buffer " + buffers[i].name + " defined twice");
+    if (buffers[i].role == BufferRole::Shared && !buffers[i].shared)
+      throw std::logic_error("pipeline graph: shared buffer " + buffers[i].name + " has no resource");
+  }
+  for (const PassSpec& pass : passes) {
+    for (std::string_view missing : pass.unbound_required())
+      throw std::logic_error("pipeline graph: pass " + pass.name() + " leaves required binding " +
+                             std::string(missing) + " unbound");
+    for (size_t i = 0; i < pass.bindings().size(); ++i) {
+      const BindingRef& ref = pass.bindings()[i];
+      if (!ref.bound()) continue;
+      const std::string binding(pass.declaration().bindings[i].name);
+      const BufferSpec* b = find(ref.buffer);
+      if (!b)
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " to undefined buffer " + ref.buffer);
+      if (ref.slot == Slot::Previous && b->role != BufferRole::History)
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " to the previous copy of " + ref.buffer + ", which is not History");
+      const shaders::Access access = pass.declaration().bindings[i].access;
+      const bool writes = access == shaders::Access::write || access == shaders::Access::read_write;
+      if (writes && (b->role == BufferRole::Input || b->role == BufferRole::Shared || b->role == BufferRole::Constant))
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + binding +
+                               " (written) to read-only buffer " + ref.buffer);
+    }
+  }
+}
+
+}  // namespace dn::pipelines
