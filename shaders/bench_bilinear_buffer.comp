@@ -15,7 +15,7 @@ DN_BILINEAR_FETCH_FN(fetch_source, source, dn_bilinear_any)
 void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
-  const vec2 pos = vec2(p) + 0.5 + uintBitsToFloat(dn_grid.args.xy);
+  const vec2 pos = vec2(p) + 0.5 + vec2(dn_arg_offset_x(), dn_arg_offset_y());
   float total;
   result.data[dn_grid_index(p, dn_grid.size)] = fetch_source(pos, dn_grid.source, total);
 }

@@ -14,6 +14,6 @@ layout(set = 0, binding = 2) uniform sampler2D source_image;
 void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
-  const vec2 pos = vec2(p) + 0.5 + uintBitsToFloat(dn_grid.args.xy);
+  const vec2 pos = vec2(p) + 0.5 + vec2(dn_arg_offset_x(), dn_arg_offset_y());
   result.data[dn_grid_index(p, dn_grid.size)] = textureLod(source_image, pos / vec2(dn_grid.source), 0.0);
 }

@@ -36,9 +36,8 @@ void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
   const uint pi = dn_grid_index(p, dn_grid.size);
-  const int r = TILED ? min(int(dn_grid.args.x), int(APRON)) : int(dn_grid.args.x);
-  DnStatKernel k = DnStatKernel(uintBitsToFloat(dn_grid.args.y), uintBitsToFloat(dn_grid.args.z),
-                                uintBitsToFloat(dn_grid.args.w), true, false, 0.0);
+  const int r = TILED ? min(int(dn_arg_radius()), int(APRON)) : int(dn_arg_radius());
+  DnStatKernel k = DnStatKernel(dn_arg_ks(), dn_arg_ka(), dn_arg_kn(), true, false, 0.0);
   vec4 theta_p = theta.data[pi];
   vec3 var_p = variance.data[pi].rgb, raw_p = raw.data[pi].rgb;
   vec3 albedo_p = albedo.data[pi].rgb, normal_p = normal.data[pi].rgb;

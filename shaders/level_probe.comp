@@ -23,8 +23,8 @@ void main() {
     valid.data[i] = c.r >= 0.0 ? 1u : 0u;
     return;
   }
-  const uint level = dn_grid.args.x, factor = dn_grid.args.y;
-  const uvec2 size0 = dn_grid.args.zw;
+  const uint level = dn_arg_level(), factor = dn_arg_factor();
+  const uvec2 size0 = uvec2(dn_arg_width0(), dn_arg_height0());
   uvec2 q = p;
   for (uint l = 0u; l < level; ++l) q /= factor;
   const uint a = dn_level_offset(size0, factor, level) + dn_grid_index(q, dn_level_size(size0, factor, level));

@@ -16,9 +16,9 @@
 void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
-  const uint level = dn_grid.args.x;
-  const uint factor = dn_grid.args.y;
-  const uvec2 size0 = dn_grid.args.zw;
+  const uint level = dn_arg_level();
+  const uint factor = dn_arg_factor();
+  const uvec2 size0 = uvec2(dn_arg_width0(), dn_arg_height0());
   const uint fine = dn_level_offset(size0, factor, level - 1u);
   const uint coarse = dn_level_offset(size0, factor, level);
   const uvec2 first = dn_level_first_child(p, factor);

@@ -19,8 +19,8 @@ void main() {
   dn_tile_load(dn_grid.size);
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
-  const int r = int(min(dn_grid.args.x, APRON));
-  const float sigma = uintBitsToFloat(dn_grid.args.y);
+  const int r = int(min(dn_arg_radius(), APRON));
+  const float sigma = dn_arg_sigma();
   vec4 gauss = vec4(0.0), box = vec4(0.0);
   float gauss_w = 0.0, box_n = 0.0;
   for (int dy = -r; dy <= r; ++dy) {

@@ -1,5 +1,6 @@
 #include "pipelines/pass.hpp"
 
+#include <bit>
 #include <stdexcept>
 
 #include "dn/shaders/shaders.hpp"
@@ -98,15 +99,33 @@ gpu::KernelDesc kernel_desc(const shaders::Declaration& decl, std::vector<gpu::S
   return desc;
 }
 
-PassSpec& PassSpec::over_grid(gpu::Extent size, gpu::Extent source, std::array<uint32_t, 4> args, uint32_t block) {
+PassSpec& PassSpec::over_grid(gpu::Extent size, gpu::Extent source, uint32_t block) {
   Grid g;
   g.block = block;
   g.push.size[0] = size.width;
   g.push.size[1] = size.height;
   g.push.source[0] = source.width;
   g.push.source[1] = source.height;
-  for (int i = 0; i < 4; ++i) g.push.args[i] = args[i];
   grid = g;
+  return *this;
+}
+
+PassSpec& PassSpec::arg(std::string_view name, uint32_t value) { return set_arg(name, shaders::SpecType::t_uint, value); }
+
+PassSpec& PassSpec::arg(std::string_view name, float value) {
+  return set_arg(name, shaders::SpecType::t_float, std::bit_cast<uint32_t>(value));
+}
+
+PassSpec& PassSpec::set_arg(std::string_view name, shaders::SpecType type, uint32_t bits) {
+  const shaders::GridArgDecl* a = decl_->grid_arg(name);
+  if (!a)
+    throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) + " declares no grid argument " +
+                           std::string(name));
+  if (a->type != type)
+    throw std::logic_error("pass " + name_ + ": grid argument " + std::string(name) + " is a " +
+                           (a->type == shaders::SpecType::t_float ? "float" : "uint"));
+  if (!grid) throw std::logic_error("pass " + name_ + ": grid argument " + std::string(name) + " before over_grid");
+  grid->push.args[a->slot] = bits;
   return *this;
 }
 

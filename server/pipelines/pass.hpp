@@ -66,13 +66,19 @@ class PassSpec {
     gpu::GridPush push;
   };
   std::optional<Grid> grid;
-  PassSpec& over_grid(gpu::Extent size, gpu::Extent source, std::array<uint32_t, 4> args = {}, uint32_t block = 8);
+  PassSpec& over_grid(gpu::Extent size, gpu::Extent source, uint32_t block = 8);
+  // Sets the declared grid argument `name` (DN_GRID_ARG, read by the shader
+  // as dn_arg_<name>()) of a pass over a grid; unset ones are 0. Throws
+  // std::logic_error for an unknown name, the other type or no grid.
+  PassSpec& arg(std::string_view name, uint32_t value);
+  PassSpec& arg(std::string_view name, float value);
 
  private:
   std::string name_;
   const shaders::Declaration* decl_ = nullptr;
   std::vector<BindingRef> bindings_;
   std::vector<std::optional<uint32_t>> values_;  // per declared constant
+  PassSpec& set_arg(std::string_view name, shaders::SpecType type, uint32_t bits);
 };
 
 // The kernel description of a declared shader with these constants.

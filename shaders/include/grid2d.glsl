@@ -16,7 +16,7 @@ layout(local_size_x_id = 0, local_size_y_id = 0, local_size_z = 1) in;
 layout(push_constant) uniform DnGrid {
   uvec2 size;    // the grid written: width, height
   uvec2 source;  // the grid read (a pyramid's finer level); = size when the same
-  uvec4 args;    // per-dispatch values, the kernel's own (floats as bits)
+  uvec4 args;    // per-dispatch values: the pass's DN_GRID_ARG rows, read as dn_arg_<name>()
 } dn_grid;
 
 // Side of the square workgroup (a specialization-constant expression).

@@ -11,6 +11,8 @@
 // binding switches between read and texel in its .pass alone.
 //   DN_SPEC(id, name, type, default)
 //     -> layout(constant_id = id) const type name = default;
+//   DN_GRID_ARG(slot, name, uint | float)
+//     -> type dn_arg_name(): word `slot` of the grid's args (the host's PassSpec::arg)
 // A texel binding reads the same buffer through a uniform texel buffer view
 // (the host makes one of the element's format): lavapipe gathers a texel in
 // one fetch, where it loads a storage buffer word by word, lane by lane
@@ -53,5 +55,10 @@
 
 #define DN_BINDING(n, name, element, access, need) DN_BINDING_##access(n, name, element)
 #define DN_SPEC(id, name, type, value) layout(constant_id = id) const type name = value;
+// A named grid argument: word `slot` of the grid's push constants (grid2d.glsl,
+// included before), read as dn_arg_<name>() of its type (uint or float).
+#define DN_GRID_ARG_uint(slot) dn_grid.args[slot]
+#define DN_GRID_ARG_float(slot) uintBitsToFloat(dn_grid.args[slot])
+#define DN_GRID_ARG(slot, name, type) type dn_arg_##name() { return DN_GRID_ARG_##type(slot); }
 
 #endif

@@ -1,6 +1,8 @@
-// number_pass IN OUT: a pass declaration (shaders/passes/<name>.pass) with its
-// binding and specialization-constant numbers assigned: the n-th DN_BINDING row
-// becomes DN_BINDING(n, ...), the n-th DN_SPEC row DN_SPEC(n, ...). A row
+// number_pass IN OUT: a pass declaration (<name>.pass) with its binding,
+// specialization-constant and grid-argument numbers assigned: the n-th
+// DN_BINDING row becomes DN_BINDING(n, ...), the n-th DN_SPEC row
+// DN_SPEC(n, ...), the n-th DN_GRID_ARG row DN_GRID_ARG(n - 1, ...) (its
+// slot in the grid's four push-constant words). A row
 // `#include "<other>.pass"` is replaced by that file's rows, numbered on. OUT
 // is rewritten only when it changes, so shaders rebuild only when it does.
 #include <fstream>
@@ -13,7 +15,10 @@ namespace {
 struct Counters {
   int bindings = 0;
   int constants = 0;
+  int grid_args = 0;
 };
+
+constexpr int kGridArgSlots = 4;  // dn::gpu::GridPush::args
 
 bool starts_with(const std::string& s, const std::string& prefix) { return s.compare(0, prefix.size(), prefix) == 0; }
 
@@ -28,6 +33,9 @@ void number(const std::string& path, Counters& n, std::ostream& out) {
       out << "DN_BINDING(" << ++n.bindings << ", " << line.substr(11) << '\n';
     } else if (starts_with(line, "DN_SPEC(")) {
       out << "DN_SPEC(" << ++n.constants << ", " << line.substr(8) << '\n';
+    } else if (starts_with(line, "DN_GRID_ARG(")) {
+      if (n.grid_args == kGridArgSlots) throw std::runtime_error(path + ": more than 4 DN_GRID_ARG rows");
+      out << "DN_GRID_ARG(" << n.grid_args++ << ", " << line.substr(12) << '\n';
     } else if (starts_with(line, include) && line.find(".pass\"") != std::string::npos) {
       const size_t end = line.find('"', include.size());
       number(dir + line.substr(include.size(), end - include.size()), n, out);

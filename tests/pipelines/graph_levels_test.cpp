@@ -85,18 +85,19 @@ TEST_F(GraphLevelsTest, PyramidAtReducedResolutionsMatchesCpuReference) {
     g->add_scratch_elements("values", elements, 16);
     g->add_scratch_elements("valid", elements, 4);
     const gpu::Extent full = g->level(c.factor, 0);
-    const std::array<uint32_t, 4> unused{};
     g->add_pass("fill", "level_probe")
         .bind("radiance", "radiance").bind("values", "values").bind("valid", "valid").bind("result", "output")
-        .over_grid(full, full, unused);
+        .over_grid(full, full);
     for (uint32_t l = 1; l <= c.level; ++l)
       g->add_pass("pull_" + std::to_string(l), "pyramid_probe")
           .bind("values", "values").bind("valid", "valid")
-          .over_grid(g->level(c.factor, l), g->level(c.factor, l - 1), {l, c.factor, c.width, c.height});
+          .over_grid(g->level(c.factor, l), g->level(c.factor, l - 1))
+          .arg("level", l).arg("factor", c.factor).arg("width0", c.width).arg("height0", c.height);
     g->add_pass("read", "level_probe")
         .bind("radiance", "radiance").bind("values", "values").bind("valid", "valid").bind("result", "output")
         .set("MODE", 1)
-        .over_grid(full, full, {c.level, c.factor, c.width, c.height});
+        .over_grid(full, full)
+        .arg("level", c.level).arg("factor", c.factor).arg("width0", c.width).arg("height0", c.height);
     g->check();
     // The coarsest level is smaller than the session: a reduced-resolution grid.
     EXPECT_LT(g->level(c.factor, c.level).pixels(), full.pixels());

@@ -3,6 +3,7 @@
 // binding must be bound, and specializations are canonical. No device.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <stdexcept>
 
 #include "frames.hpp"
@@ -36,6 +37,27 @@ TEST(GraphSpec, UnknownShaderBindingOrConstantNameIsRejected) {
   EXPECT_THROW(pass.set("OUTPUT_HALF", 2), std::logic_error);          // bool
   pass.set("OUTPUT_HALF", 1);
   EXPECT_THROW(pass.set("OUTPUT_HALF", 0), std::logic_error);          // twice
+}
+
+// Grid arguments by name: each lands in the push-constant word its row in
+// the .pass file numbers (gbuffer_fill: level, factor, width0, height0), of
+// its declared type; an unknown name, the other type or no grid is refused.
+TEST(GraphSpec, GridArgumentsAreSetByNameInTheirDeclaredSlot) {
+  pipelines::GraphSpec g = passthrough_graph();
+  auto& pass = g.add_pass("fill", "gbuffer_fill");
+  EXPECT_THROW(pass.arg("level", 1u), std::logic_error);  // before over_grid
+  pass.over_grid({9, 3}, {9, 3});
+  pass.arg("height0", 7u).arg("level", 2u).arg("width0", 5u);
+  EXPECT_EQ(pass.grid->push.args[0], 2u);
+  EXPECT_EQ(pass.grid->push.args[1], 0u);  // factor: unset
+  EXPECT_EQ(pass.grid->push.args[2], 5u);
+  EXPECT_EQ(pass.grid->push.args[3], 7u);
+  EXPECT_THROW(pass.arg("levels", 1u), std::logic_error);  // no such argument
+  EXPECT_THROW(pass.arg("factor", 3.0f), std::logic_error);  // a uint
+  auto& tile = g.add_pass("tile", "tile_probe");
+  tile.over_grid({9, 3}, {9, 3}).arg("sigma", 1.5f);
+  EXPECT_EQ(tile.grid->push.args[1], std::bit_cast<uint32_t>(1.5f));
+  EXPECT_THROW(tile.arg("sigma", 1u), std::logic_error);  // a float
 }
 
 TEST(GraphSpec, CheckRequiresEveryRequiredBindingAndDefinedBuffers) {

@@ -27,8 +27,8 @@ const uint SEED = 0u, PULL = 1u, PUSH = 2u;
 void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
-  const uint level = dn_grid.args.x, factor = dn_grid.args.y;
-  const uvec2 size0 = dn_grid.args.zw;
+  const uint level = dn_arg_level(), factor = dn_arg_factor();
+  const uvec2 size0 = uvec2(dn_arg_width0(), dn_arg_height0());
   const uint here = dn_level_offset(size0, factor, level) + dn_grid_index(p, dn_grid.size);
   if (MODE == SEED) {
     const float z = DN_LOAD1(depth, DEPTH_HALF, here);

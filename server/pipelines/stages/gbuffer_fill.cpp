@@ -1,7 +1,6 @@
 #include "pipelines/stages/svgf_stages.hpp"
 
 #include <algorithm>
-#include <array>
 #include <string>
 
 #include "pipelines/stages/svgf_buffers.hpp"
@@ -26,12 +25,17 @@ uint32_t gbuffer_levels(const SessionConfig& config) {
 // push back down; the push at level 0 writes the filled planes.
 void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask) {
   const uint32_t levels = gbuffer_levels(config);
-  auto args = [&](uint32_t level) {
-    return std::array<uint32_t, 4>{level, kGbufferFactor, config.width, config.height};
+  // The grid arguments of every gbuffer_fill pass: its level of the pyramid over the full size.
+  auto over = [&](PassSpec& pass, gpu::Extent size, gpu::Extent source, uint32_t level) -> PassSpec& {
+    return pass.over_grid(size, source)
+        .arg("level", level)
+        .arg("factor", kGbufferFactor)
+        .arg("width0", config.width)
+        .arg("height0", config.height);
   };
   const gpu::Extent full = g.level(kGbufferFactor, 0);
-  g.add_pass("gbuffer_seed", "gbuffer_fill")
-      .bind("depth", "depth")
+  PassSpec& seed = g.add_pass("gbuffer_seed", "gbuffer_fill");
+  seed.bind("depth", "depth")
       .bind("normal", "normal")
       .bind("sample_count", "sample_count")
       .bind("pyramid", kGbufferPyramid)
@@ -39,20 +43,17 @@ void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask)
       .set("MODE", 0u)
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)))
-      .over_grid(full, full, args(0));
-  for (uint32_t l = 1; l <= levels; ++l)
-    g.add_pass("gbuffer_pull_" + std::to_string(l), "gbuffer_fill")
-        .bind("pyramid", kGbufferPyramid)
-        .bind("valid", kGbufferValid)
-        .set("MODE", 1u)
-        .over_grid(g.level(kGbufferFactor, l), g.level(kGbufferFactor, l - 1), args(l));
+      .set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
+  over(seed, full, full, 0);
+  for (uint32_t l = 1; l <= levels; ++l) {
+    PassSpec& pull = g.add_pass("gbuffer_pull_" + std::to_string(l), "gbuffer_fill");
+    pull.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).set("MODE", 1u);
+    over(pull, g.level(kGbufferFactor, l), g.level(kGbufferFactor, l - 1), l);
+  }
   for (uint32_t l = levels; l-- > 0;) {
     PassSpec& push = g.add_pass("gbuffer_push_" + std::to_string(l), "gbuffer_fill");
-    push.bind("pyramid", kGbufferPyramid)
-        .bind("valid", kGbufferValid)
-        .set("MODE", 2u)
-        .over_grid(g.level(kGbufferFactor, l), g.level(kGbufferFactor, l + 1), args(l));
+    push.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).set("MODE", 2u);
+    over(push, g.level(kGbufferFactor, l), g.level(kGbufferFactor, l + 1), l);
     if (l == 0) push.bind("filled_depth", kFilledDepth).bind("filled_normal", kFilledNormal);
   }
 }

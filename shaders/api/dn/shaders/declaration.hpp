@@ -1,5 +1,5 @@
-// The resource declaration of every shader (shaders/passes/<name>.pass): the
-// buffers it binds and the specialization constants it reads. The
+// The resource declaration of every shader (its <name>.pass): the buffers
+// it binds, the specialization constants and the grid arguments it reads. The
 // same X-macro file becomes the shader's GLSL declarations (include/pass.glsl)
 // and, here, a table, so the host binds buffers and sets constants by name
 // and never by position. The table is generated at build time (one per
@@ -39,10 +39,20 @@ struct SpecDecl {
   constexpr uint32_t number() const { return id; }
 };
 
+// A named word of the grid's push constants (dn::gpu::GridPush::args): the
+// shader reads it as dn_arg_<name>(), the host sets it with PassSpec::arg.
+struct GridArgDecl {
+  uint32_t slot = 0;  // 0..3 in declaration order
+  std::string_view name;
+  SpecType type = SpecType::t_uint;  // t_uint or t_float
+  constexpr uint32_t number() const { return slot; }
+};
+
 struct Declaration {
   std::string_view shader;
   std::span<const BindingDecl> bindings;  // bindings[i].binding == i + 1
   std::span<const SpecDecl> constants;    // constants[i].id == i + 1
+  std::span<const GridArgDecl> grid_args;  // grid_args[i].slot == i
 
   constexpr const BindingDecl* binding(std::string_view name) const {
     for (const auto& b : bindings)
@@ -52,6 +62,11 @@ struct Declaration {
   constexpr const SpecDecl* constant(std::string_view name) const {
     for (const auto& c : constants)
       if (c.name == name) return &c;
+    return nullptr;
+  }
+  constexpr const GridArgDecl* grid_arg(std::string_view name) const {
+    for (const auto& a : grid_args)
+      if (a.name == name) return &a;
     return nullptr;
   }
 };
