@@ -58,8 +58,9 @@ const gpu::Buffer& unbound_binding_buffer(gpu::Context& context) {
 }
 
 GraphPipeline::Node& GraphPipeline::node(const std::string& name) {
+  const BufferSpec* b = spec_->find(name);  // an alias's name reaches its buffer
   for (auto& n : nodes_)
-    if (n.spec->name == name) return n;
+    if (n.spec == b) return n;
   throw std::logic_error("pipeline graph: pass binds unknown buffer " + name);
 }
 

@@ -70,9 +70,17 @@ struct BufferSpec {
   std::vector<uint8_t> data;                             // Constant: its contents
 };
 
+// A second name for a buffer whose contents are dead by the time the name is
+// first bound (GraphSpec::add_alias): the name says what it holds then.
+struct BufferAlias {
+  std::string name;
+  std::string of;
+};
+
 struct GraphSpec {
   uint32_t width = 0, height = 0;
   std::vector<BufferSpec> buffers;
+  std::vector<BufferAlias> aliases;
   std::vector<PassSpec> passes;
   Parameters parameters;
 
@@ -84,6 +92,7 @@ struct GraphSpec {
   uint64_t transient_bytes() const;
   // The largest single binding (what maxStorageBufferRange limits).
   const BufferSpec* largest_binding() const;
+  // The buffer `name` names, through an alias too.
   const BufferSpec* find(const std::string& name) const;
 
   // Builders used by pipeline definitions.
@@ -101,6 +110,10 @@ struct GraphSpec {
   void add_shared(std::string name, SharedResource resource);
   void add_constant(std::string name, std::vector<uint8_t> data);
   void add_readback(std::string name, uint64_t bytes);
+  // Binds of `name` reach buffer `of` (no memory of its own): for reusing
+  // scratch whose contents are dead. check() refuses a pass that binds `of`
+  // by its own name at or after the first pass that binds `name`.
+  void add_alias(std::string name, std::string of);
 
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).
@@ -108,7 +121,8 @@ struct GraphSpec {
 
   // The build-time check of the whole graph: buffer names unique, every
   // required binding bound, every bound buffer defined, Previous slots only
-  // on History buffers. Throws std::logic_error naming the pass and binding.
+  // on History buffers, aliases only over dead contents. Throws
+  // std::logic_error naming the pass and binding.
   void check() const;
 
  private:

@@ -2,6 +2,7 @@
 // and the build-time check), and the channel helpers definitions use.
 #include "pipelines/graph.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace dn::pipelines {
@@ -43,10 +44,14 @@ const BufferSpec* GraphSpec::largest_binding() const {
 }
 
 const BufferSpec* GraphSpec::find(const std::string& name) const {
+  for (const auto& a : aliases)
+    if (a.name == name) return find(a.of);
   for (const auto& b : buffers)
     if (b.name == name) return &b;
   return nullptr;
 }
+
+void GraphSpec::add_alias(std::string name, std::string of) { aliases.push_back({std::move(name), std::move(of)}); }
 
 void GraphSpec::add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name) {
   const auto* info = protocol::find_channel(channel);
@@ -131,6 +136,20 @@ void GraphSpec::check() const {
         throw std::logic_error("pipeline graph: buffer " + buffers[i].name + " defined twice");
     if (buffers[i].role == BufferRole::Shared && !buffers[i].shared)
       throw std::logic_error("pipeline graph: shared buffer " + buffers[i].name + " has no resource");
+  }
+  for (const BufferAlias& a : aliases) {
+    if (!find(a.of) || std::any_of(aliases.begin(), aliases.end(), [&](const BufferAlias& o) { return o.name == a.of; }))
+      throw std::logic_error("pipeline graph: alias " + a.name + " of " + a.of + ", which is no buffer");
+    for (const auto& b : buffers)
+      if (b.name == a.name) throw std::logic_error("pipeline graph: alias " + a.name + " is a buffer's name too");
+    // From the first pass that binds the alias on, the buffer's earlier contents are dead.
+    bool aliased = false;
+    for (const PassSpec& pass : passes) {
+      const auto& refs = pass.bindings();
+      aliased = aliased || std::any_of(refs.begin(), refs.end(), [&](const BindingRef& r) { return r.buffer == a.name; });
+      if (aliased && std::any_of(refs.begin(), refs.end(), [&](const BindingRef& r) { return r.buffer == a.of; }))
+        throw std::logic_error("pipeline graph: pass " + pass.name() + " binds " + a.of + " while it holds " + a.name);
+    }
   }
   for (const PassSpec& pass : passes) {
     for (std::string_view missing : pass.unbound_required())

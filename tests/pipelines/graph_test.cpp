@@ -60,6 +60,32 @@ TEST(GraphSpec, GridArgumentsAreSetByNameInTheirDeclaredSlot) {
   EXPECT_THROW(tile.arg("sigma", 1u), std::logic_error);  // a float
 }
 
+// An alias reaches its buffer and costs no memory; from the first pass that
+// binds it, no pass binds the buffer by its own name (its contents are dead).
+TEST(GraphSpec, AnAliasReachesItsBufferAndEndsItsOldContents) {
+  pipelines::GraphSpec g = passthrough_graph();
+  g.add_scratch("frame", 12);
+  const uint64_t bytes = g.device_bytes();
+  g.add_alias("second_frame", "frame");
+  EXPECT_EQ(g.device_bytes(), bytes);
+  EXPECT_EQ(g.find("second_frame"), g.find("frame"));
+  g.add_pass("first", "passthrough").bind("radiance", "radiance").bind("result", "frame");
+  g.add_pass("second", "passthrough").bind("radiance", "radiance").bind("result", "second_frame");
+  EXPECT_NO_THROW(g.check());
+  g.add_pass("third", "passthrough").bind("radiance", "radiance").bind("result", "frame");
+  EXPECT_THROW(g.check(), std::logic_error);
+}
+
+TEST(GraphSpec, AnAliasOfNoBufferOrWithABuffersNameIsRefused) {
+  pipelines::GraphSpec g = passthrough_graph();
+  g.add_alias("nothing_alias", "nothing");
+  EXPECT_THROW(g.check(), std::logic_error);
+  pipelines::GraphSpec h = passthrough_graph();
+  h.add_scratch("frame", 12);
+  h.add_alias("output", "frame");  // the Output buffer's name
+  EXPECT_THROW(h.check(), std::logic_error);
+}
+
 TEST(GraphSpec, CheckRequiresEveryRequiredBindingAndDefinedBuffers) {
   pipelines::GraphSpec g = passthrough_graph();
   g.add_pass("p", "passthrough").bind("radiance", "radiance");

@@ -63,6 +63,10 @@ inline constexpr const char* kIllumF = "svgf_illum_f";
 inline constexpr const char* kGuide = "svgf_guide";
 inline constexpr const char* kTemporal = "svgf_temporal";
 inline constexpr const char* kTaaHistory = "svgf_taa";
+// TAA: svgf_remodulate's vec4(current rgb, blend weight) and vec4(reprojected
+// previous output, lag state), for svgf_taa: aliases of kTemporal and kGuide.
+inline constexpr const char* kTaaCurrent = "svgf_taa_current";
+inline constexpr const char* kTaaPrevious = "svgf_taa_previous";
 // History clipping scratch, per pixel, shared by the clipped signals (each
 // signal's reprojection reads it before the next signal's prefilter
 // rewrites it): the demodulated current signal vec4(rgb, foreground), the

@@ -9,10 +9,14 @@ using protocol::ChannelId;
 
 void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v,
                     const std::vector<std::string>& results) {
-  // With TAA, svgf_remodulate writes the current colour to the temporal
-  // scratch and the reprojected TAA history to the guide scratch (both free
-  // once the a-trous chains are done) instead of Output; svgf_taa blends them.
-  // Without it, the TAA bindings stay unbound.
+  // With TAA, svgf_remodulate writes the current colour and the reprojected
+  // TAA history instead of Output, and svgf_taa blends them: into the
+  // temporal and the guide scratch, whose contents are dead once the a-trous
+  // chains are done. Without it, the TAA bindings stay unbound.
+  if (v.taa) {
+    g.add_alias(kTaaCurrent, kTemporal);
+    g.add_alias(kTaaPrevious, kGuide);
+  }
   const Modulator& first = v.signals[0].modulator;
   // Output, or a scratch frame for the caller's pass or the resolve.
   const bool direct = v.display.empty() && !v.extra_samples;
@@ -54,7 +58,7 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
   if (v.taa || keeps_still_emission(v))
     remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
-  if (v.taa) remodulate.bind("taa_history", kTaaHistory).bind("taa_current", kTemporal).bind("taa_previous", kGuide);
+  if (v.taa) remodulate.bind("taa_history", kTaaHistory).bind("taa_current", kTaaCurrent).bind("taa_previous", kTaaPrevious);
   const bool guard = v.harm_guard && v.iterations > 0;
   // The first chain's history (its length): read by the display lag and the harm guard.
   if (v.display_lag || guard) remodulate.bind("colour_history", v.signals[0].history + "_colour");
@@ -87,7 +91,7 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
 
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
-    taa.bind("current", kTemporal).bind("previous", kGuide).bind("history", kTaaHistory)
+    taa.bind("current", kTaaCurrent).bind("previous", kTaaPrevious).bind("history", kTaaHistory)
         .bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
         .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
     bind_result(taa);

@@ -103,7 +103,7 @@ void compare_every_pass(gpu::Context& ctx, const char* name, int w, int h, const
     // writes its colour to the temporal scratch and svgf_taa the Output.
     const bool taa = params.taa_alpha > 0.0 || params.taa_static_alpha > 0.0;
     if (taa)
-      cmp.check("remodulate", components(as_floats(graph->captured("svgf_remodulate", "svgf_temporal")), n, 4, 0, 3),
+      cmp.check("remodulate", components(as_floats(graph->captured("svgf_remodulate", "svgf_taa_current")), n, 4, 0, 3),
                 ref.remodulated());
     else
       cmp.check("remodulate", as_floats(graph->captured("svgf_remodulate", "output")), ref.remodulated());
