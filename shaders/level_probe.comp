@@ -1,8 +1,8 @@
 #version 450
 // Test kernel for buffers at reduced resolution in a pass graph
 // (tests/pipelines/graph_levels_test.cpp), with pyramid_probe between its two
-// modes. MODE 0 (grid = the full resolution): level 0 of the pyramid from the
-// radiance plane; a pixel whose red is negative is no-data. MODE 1 (grid =
+// modes. fill (grid = the full resolution): level 0 of the pyramid from the
+// radiance plane; a pixel whose red is negative is no-data. read (grid =
 // the full resolution, args = (level, factor, width, height)): each output
 // pixel takes the value of its ancestor at `level` (nearest), 0 where that
 // ancestor has no data. Not used by any pipeline.
@@ -17,7 +17,7 @@ void main() {
   const uvec2 p = dn_pixel();
   if (!dn_in_grid(p)) return;
   const uint i = dn_grid_index(p, dn_grid.size);
-  if (MODE == 0u) {
+  if (MODE == DN_MODE_fill) {
     const vec3 c = DN_LOAD3(radiance, false, i);
     values.data[i] = vec4(c, 0.0);
     valid.data[i] = c.r >= 0.0 ? 1u : 0u;

@@ -152,6 +152,9 @@ void GraphSpec::check() const {
     }
   }
   for (const PassSpec& pass : passes) {
+    if (!pass.declaration().modes.empty() && !pass.selected_mode())
+      throw std::logic_error("pipeline graph: pass " + pass.name() + " selects no mode of shader " +
+                             std::string(pass.shader()));
     for (std::string_view missing : pass.unbound_required())
       throw std::logic_error("pipeline graph: pass " + pass.name() + " leaves required binding " +
                              std::string(missing) + " unbound");

@@ -1,5 +1,6 @@
 #include "pipelines/pass.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <stdexcept>
 
@@ -27,6 +28,22 @@ PassSpec& PassSpec::bind(std::string_view binding, std::string buffer, Slot slot
 }
 
 PassSpec& PassSpec::set(std::string_view constant, uint32_t value) {
+  if (!decl_->modes.empty() && constant == "MODE")
+    throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) +
+                           " names its modes: select one with mode(), not MODE");
+  return set_constant(constant, value);
+}
+
+PassSpec& PassSpec::mode(std::string_view name) {
+  const shaders::ModeDecl* m = decl_->mode(name);
+  if (!m)
+    throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) + " has no mode " +
+                           std::string(name));
+  mode_ = m;
+  return set_constant("MODE", m->value);
+}
+
+PassSpec& PassSpec::set_constant(std::string_view constant, uint32_t value) {
   const shaders::SpecDecl* c = decl_->constant(constant);
   if (!c)
     throw std::logic_error("pass " + name_ + ": shader " + std::string(decl_->shader) +
@@ -42,9 +59,15 @@ PassSpec& PassSpec::set(std::string_view constant, uint32_t value) {
 
 std::vector<std::string_view> PassSpec::unbound_required() const {
   std::vector<std::string_view> out;
-  for (size_t i = 0; i < bindings_.size(); ++i)
-    if (!bindings_[i].bound() && decl_->bindings[i].need == shaders::Need::required)
-      out.push_back(decl_->bindings[i].name);
+  for (size_t i = 0; i < bindings_.size(); ++i) {
+    const std::string_view binding = decl_->bindings[i].name;
+    const bool needed_by_mode =
+        mode_ && std::any_of(decl_->mode_needs.begin(), decl_->mode_needs.end(), [&](const shaders::ModeNeed& n) {
+          return n.mode == mode_->name && n.binding == binding;
+        });
+    if (!bindings_[i].bound() && (decl_->bindings[i].need == shaders::Need::required || needed_by_mode))
+      out.push_back(binding);
+  }
   return out;
 }
 

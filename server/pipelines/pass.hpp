@@ -44,11 +44,17 @@ class PassSpec {
   // Throws std::logic_error for an unknown name, a second set or a bool
   // outside 0/1.
   PassSpec& set(std::string_view constant, uint32_t value);
+  // Selects the declared mode `name` (DN_MODE: a value of the uint constant
+  // MODE, which set() then refuses); its needs (DN_MODE_NEEDS) become
+  // required bindings. Throws std::logic_error for an unknown mode.
+  PassSpec& mode(std::string_view name);
+  // The selected mode, or nullptr (a shader with modes must have one: GraphSpec::check).
+  const shaders::ModeDecl* selected_mode() const { return mode_; }
 
   // One entry per declared binding, in binding order (bindings()[i] is
   // binding i + 1); unbound ones have an empty buffer.
   const std::vector<BindingRef>& bindings() const { return bindings_; }
-  // Names of required bindings nothing is bound to.
+  // Names of required bindings (and the selected mode's needs) nothing is bound to.
   std::vector<std::string_view> unbound_required() const;
   // Constant 0 (the workgroup size) followed by every declared constant, set
   // or default, by id: equal specializations give equal kernel-cache keys.
@@ -79,6 +85,8 @@ class PassSpec {
   std::vector<BindingRef> bindings_;
   std::vector<std::optional<uint32_t>> values_;  // per declared constant
   PassSpec& set_arg(std::string_view name, shaders::SpecType type, uint32_t bits);
+  PassSpec& set_constant(std::string_view constant, uint32_t value);
+  const shaders::ModeDecl* mode_ = nullptr;
 };
 
 // The kernel description of a declared shader with these constants.

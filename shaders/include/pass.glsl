@@ -13,6 +13,8 @@
 //     -> layout(constant_id = id) const type name = default;
 //   DN_GRID_ARG(slot, name, uint | float)
 //     -> type dn_arg_name(): word `slot` of the grid's args (the host's PassSpec::arg)
+//   DN_MODE(value, name) -> const uint DN_MODE_name = value (PassSpec::mode)
+//   DN_MODE_NEEDS(mode, binding) -> nothing (GraphSpec::check)
 // A texel binding reads the same buffer through a uniform texel buffer view
 // (the host makes one of the element's format): lavapipe gathers a texel in
 // one fetch, where it loads a storage buffer word by word, lane by lane
@@ -60,5 +62,9 @@
 #define DN_GRID_ARG_uint(slot) dn_grid.args[slot]
 #define DN_GRID_ARG_float(slot) uintBitsToFloat(dn_grid.args[slot])
 #define DN_GRID_ARG(slot, name, type) type dn_arg_##name() { return DN_GRID_ARG_##type(slot); }
+// A named value of the uint constant MODE, compared as MODE == DN_MODE_<name>;
+// the bindings a mode needs are the host's check alone.
+#define DN_MODE(value, name) const uint DN_MODE_##name = value;
+#define DN_MODE_NEEDS(mode, binding)
 
 #endif

@@ -2,7 +2,8 @@
 // specialization-constant and grid-argument numbers assigned: the n-th
 // DN_BINDING row becomes DN_BINDING(n, ...), the n-th DN_SPEC row
 // DN_SPEC(n, ...), the n-th DN_GRID_ARG row DN_GRID_ARG(n - 1, ...) (its
-// slot in the grid's four push-constant words). A row
+// slot in the grid's four push-constant words), the n-th DN_MODE row
+// DN_MODE(n - 1, ...) (its value of the constant MODE). A row
 // `#include "<other>.pass"` is replaced by that file's rows, numbered on. OUT
 // is rewritten only when it changes, so shaders rebuild only when it does.
 #include <fstream>
@@ -16,6 +17,7 @@ struct Counters {
   int bindings = 0;
   int constants = 0;
   int grid_args = 0;
+  int modes = 0;
 };
 
 constexpr int kGridArgSlots = 4;  // dn::gpu::GridPush::args
@@ -33,6 +35,8 @@ void number(const std::string& path, Counters& n, std::ostream& out) {
       out << "DN_BINDING(" << ++n.bindings << ", " << line.substr(11) << '\n';
     } else if (starts_with(line, "DN_SPEC(")) {
       out << "DN_SPEC(" << ++n.constants << ", " << line.substr(8) << '\n';
+    } else if (starts_with(line, "DN_MODE(")) {
+      out << "DN_MODE(" << n.modes++ << ", " << line.substr(8) << '\n';
     } else if (starts_with(line, "DN_GRID_ARG(")) {
       if (n.grid_args == kGridArgSlots) throw std::runtime_error(path + ": more than 4 DN_GRID_ARG rows");
       out << "DN_GRID_ARG(" << n.grid_args++ << ", " << line.substr(12) << '\n';

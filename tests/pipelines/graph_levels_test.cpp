@@ -87,6 +87,7 @@ TEST_F(GraphLevelsTest, PyramidAtReducedResolutionsMatchesCpuReference) {
     const gpu::Extent full = g->level(c.factor, 0);
     g->add_pass("fill", "level_probe")
         .bind("radiance", "radiance").bind("values", "values").bind("valid", "valid").bind("result", "output")
+        .mode("fill")
         .over_grid(full, full);
     for (uint32_t l = 1; l <= c.level; ++l)
       g->add_pass("pull_" + std::to_string(l), "pyramid_probe")
@@ -95,7 +96,7 @@ TEST_F(GraphLevelsTest, PyramidAtReducedResolutionsMatchesCpuReference) {
           .arg("level", l).arg("factor", c.factor).arg("width0", c.width).arg("height0", c.height);
     g->add_pass("read", "level_probe")
         .bind("radiance", "radiance").bind("values", "values").bind("valid", "valid").bind("result", "output")
-        .set("MODE", 1)
+        .mode("read")
         .over_grid(full, full)
         .arg("level", c.level).arg("factor", c.factor).arg("width0", c.width).arg("height0", c.height);
     g->check();

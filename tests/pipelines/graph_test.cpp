@@ -60,6 +60,30 @@ TEST(GraphSpec, GridArgumentsAreSetByNameInTheirDeclaredSlot) {
   EXPECT_THROW(tile.arg("sigma", 1u), std::logic_error);  // a float
 }
 
+// Modes by name (gbuffer_fill: seed, pull, push): mode() sets MODE to the
+// mode's value and makes its needs required; MODE itself cannot be set, and
+// a pass of a shader with modes must select one.
+TEST(GraphSpec, ModesAreSelectedByNameAndRequireTheirBindings) {
+  pipelines::GraphSpec g = passthrough_graph();
+  for (const char* name : {"pyramid", "valid", "depth", "normal", "sample_count"}) g.add_scratch(name, 16);
+  auto& seed = g.add_pass("seed", "gbuffer_fill");
+  seed.bind("pyramid", "pyramid").bind("valid", "valid");
+  EXPECT_THROW(seed.set("MODE", 0u), std::logic_error);
+  EXPECT_THROW(seed.mode("sow"), std::logic_error);
+  EXPECT_THROW(g.check(), std::logic_error);  // no mode selected
+  seed.mode("seed");
+  EXPECT_EQ(seed.unbound_required(), (std::vector<std::string_view>{"depth", "normal", "sample_count"}));
+  EXPECT_THROW(g.check(), std::logic_error);
+  seed.bind("depth", "depth").bind("normal", "normal").bind("sample_count", "sample_count");
+  auto& pull = g.add_pass("pull", "gbuffer_fill");
+  pull.bind("pyramid", "pyramid").bind("valid", "valid").mode("pull");
+  EXPECT_TRUE(pull.unbound_required().empty());  // pull needs no plane
+  EXPECT_NO_THROW(g.check());
+  const uint32_t mode_id = pull.declaration().constant("MODE")->id;
+  for (const auto& c : pull.specialization(8))
+    if (c.id == mode_id) EXPECT_EQ(c.value, 1u);  // the second mode
+}
+
 // An alias reaches its buffer and costs no memory; from the first pass that
 // binds it, no pass binds the buffer by its own name (its contents are dead).
 TEST(GraphSpec, AnAliasReachesItsBufferAndEndsItsOldContents) {

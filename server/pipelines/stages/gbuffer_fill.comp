@@ -22,7 +22,6 @@
 #include "pass.glsl"
 #include "generated/passes/gbuffer_fill.pass"
 
-const uint SEED = 0u, PULL = 1u, PUSH = 2u;
 
 void main() {
   const uvec2 p = dn_pixel();
@@ -30,7 +29,7 @@ void main() {
   const uint level = dn_arg_level(), factor = dn_arg_factor();
   const uvec2 size0 = uvec2(dn_arg_width0(), dn_arg_height0());
   const uint here = dn_level_offset(size0, factor, level) + dn_grid_index(p, dn_grid.size);
-  if (MODE == SEED) {
+  if (MODE == DN_MODE_seed) {
     const float z = DN_LOAD1(depth, DEPTH_HALF, here);
     const bool fg = dn_is_foreground(z);
     const vec3 n = fg ? dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, here)) : vec3(0.0);
@@ -38,7 +37,7 @@ void main() {
     valid.data[here] = dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, here)) ? 1u : 0u;
     return;
   }
-  if (MODE == PULL) {
+  if (MODE == DN_MODE_pull) {
     const uint fine = dn_level_offset(size0, factor, level - 1u);
     const uvec2 first = dn_level_first_child(p, factor);
     const uvec2 end = min(first + factor, dn_grid.source);

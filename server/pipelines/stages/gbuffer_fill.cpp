@@ -40,19 +40,19 @@ void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask)
       .bind("sample_count", "sample_count")
       .bind("pyramid", kGbufferPyramid)
       .bind("valid", kGbufferValid)
-      .set("MODE", 0u)
+      .mode("seed")
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
       .set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
   over(seed, full, full, 0);
   for (uint32_t l = 1; l <= levels; ++l) {
     PassSpec& pull = g.add_pass("gbuffer_pull_" + std::to_string(l), "gbuffer_fill");
-    pull.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).set("MODE", 1u);
+    pull.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).mode("pull");
     over(pull, g.level(kGbufferFactor, l), g.level(kGbufferFactor, l - 1), l);
   }
   for (uint32_t l = levels; l-- > 0;) {
     PassSpec& push = g.add_pass("gbuffer_push_" + std::to_string(l), "gbuffer_fill");
-    push.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).set("MODE", 2u);
+    push.bind("pyramid", kGbufferPyramid).bind("valid", kGbufferValid).mode("push");
     over(push, g.level(kGbufferFactor, l), g.level(kGbufferFactor, l + 1), l);
     if (l == 0) push.bind("filled_depth", kFilledDepth).bind("filled_normal", kFilledNormal);
   }

@@ -27,11 +27,11 @@ const float kBinomial[7] = float[7](1.0, 6.0, 15.0, 20.0, 15.0, 6.0, 1.0);
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
-  if (MODE == 0u) {
+  if (MODE == DN_MODE_current) {
     dst.data[p] = vec4(dn_svgf_current(p), dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) ? 1.0 : 0.0);
     return;
   }
-  bool vertical = MODE == 2u;
+  bool vertical = MODE == DN_MODE_vertical;
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(int(p % frame.size.x), int(p / frame.size.x));
   vec4 sum = vec4(0.0);

@@ -16,7 +16,7 @@ void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVar
   current.bind("signal", signal_buffer(v, s))
       .bind("depth", "depth")
       .bind("dst", kClipCurrent)
-      .set("MODE", 0u)
+      .mode("current")
       .set("SIGNAL_HALF", signal_half(config, v, s))
       .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("DEMODULATE", demodulate)
@@ -29,12 +29,12 @@ void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVar
   g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter")
       .bind("src", kClipCurrent)
       .bind("dst", kClipPartial)
-      .set("MODE", 1u)
+      .mode("horizontal")
       .pixels_per_invocation = 1;
   g.add_pass("svgf_clip_prefilter_y" + s.suffix, "svgf_clip_prefilter")
       .bind("src", kClipPartial)
       .bind("dst", kClipNeighbourhood)
-      .set("MODE", 2u)
+      .mode("vertical")
       .pixels_per_invocation = 1;
 }
 

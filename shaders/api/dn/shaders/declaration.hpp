@@ -1,5 +1,5 @@
 // The resource declaration of every shader (its <name>.pass): the buffers
-// it binds, the specialization constants and the grid arguments it reads. The
+// it binds, the specialization constants, grid arguments and modes it reads. The
 // same X-macro file becomes the shader's GLSL declarations (include/pass.glsl)
 // and, here, a table, so the host binds buffers and sets constants by name
 // and never by position. The table is generated at build time (one per
@@ -48,11 +48,28 @@ struct GridArgDecl {
   constexpr uint32_t number() const { return slot; }
 };
 
+// A named value of the pass's uint constant MODE (0, 1, ... in declaration
+// order): the shader compares MODE with DN_MODE_<name>, the host selects it
+// with PassSpec::mode(name).
+struct ModeDecl {
+  uint32_t value = 0;
+  std::string_view name;
+  constexpr uint32_t number() const { return value; }
+};
+
+// A binding a mode cannot run without (GraphSpec::check refuses it unbound).
+struct ModeNeed {
+  std::string_view mode;
+  std::string_view binding;
+};
+
 struct Declaration {
   std::string_view shader;
   std::span<const BindingDecl> bindings;  // bindings[i].binding == i + 1
   std::span<const SpecDecl> constants;    // constants[i].id == i + 1
   std::span<const GridArgDecl> grid_args;  // grid_args[i].slot == i
+  std::span<const ModeDecl> modes;          // modes[i].value == i
+  std::span<const ModeNeed> mode_needs;
 
   constexpr const BindingDecl* binding(std::string_view name) const {
     for (const auto& b : bindings)
@@ -62,6 +79,11 @@ struct Declaration {
   constexpr const SpecDecl* constant(std::string_view name) const {
     for (const auto& c : constants)
       if (c.name == name) return &c;
+    return nullptr;
+  }
+  constexpr const ModeDecl* mode(std::string_view name) const {
+    for (const auto& m : modes)
+      if (m.name == name) return &m;
     return nullptr;
   }
   constexpr const GridArgDecl* grid_arg(std::string_view name) const {
