@@ -9,7 +9,7 @@ using protocol::SampleField;
 using protocol::sample_channel;
 
 constexpr const char* kAssignment = "supersample_assignment";
-constexpr uint64_t kAssignmentBytes = 4;  // 4 bits per extra sample (shaders/include/supersample.glsl)
+constexpr uint64_t kAssignmentBytes = 4;  // 4 bits per extra sample (server/pipelines/stages/supersample.glsl)
 constexpr uint64_t kMixedBytes = 12;      // rgb fp32
 
 std::string name(ChannelId id) { return std::string(protocol::find_channel(id)->name); }

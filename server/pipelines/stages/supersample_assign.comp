@@ -1,7 +1,7 @@
 #version 450
 // supersample_assign: each extra sample of a pixel finds the most similar of
 // the four guide pixels whose centres surround it (paper 001 §5: "by depth
-// and normal"; the metric is ours, include/supersample.glsl: depth and normal
+// and normal"; the metric is ours, server/pipelines/stages/supersample.glsl: depth and normal
 // weights times the sample's bilinear weight for the guide). A background
 // sample matches background guides; a sample no guide matches (score 0)
 // stays with its own pixel's guide. One invocation per pixel.
