@@ -1,5 +1,6 @@
 #include "server/net/connection_layer.hpp"
 
+#include <fcntl.h>
 #include <sys/epoll.h>
 #include <unistd.h>
 
@@ -132,6 +133,8 @@ void ConnectionLayer::accept_from(net::Listener& listener) {
 }
 
 uint64_t ConnectionLayer::adopt(int fd) {
+  // The loop never blocks on a socket: as accept4 gives them, non-blocking.
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
   sockaddr_storage addr{};
   addr.ss_family = AF_UNIX;
   const uint64_t id = next_id_;

@@ -50,7 +50,8 @@ class ConnectionLayer {
 
   // Actual listening addresses (a port of 0 resolved).
   std::vector<std::string> listening_urls() const;
-  // Serves a connected stream socket as if a Unix listener had accepted it; returns its id.
+  // Serves a connected stream socket (made non-blocking) as if a Unix listener
+  // had accepted it; returns its id.
   uint64_t adopt(int fd);
   // Shutdown: the listeners close and HELLO is refused from now on.
   void begin_shutdown();
