@@ -1,6 +1,5 @@
 #!/usr/bin/env bash
-# Per-pass cost (issue 12's evidence: what reflect adds over svgf-fb, per
-# pass). Streams the speed-error bench's moving-camera frames of one dnrender
+# Per-pass cost (what reflect adds over svgf-fb, per pass). Streams the speed-error bench's moving-camera frames of one dnrender
 # scene (--input, default out/bench/scene<N>/input, rendered by
 # bench/speed_error.sh; rendered here with dnrender when missing) through each pipeline with `dn denoise`,
 # and prints one markdown table: the median device time of every pass over

@@ -1,6 +1,5 @@
 #!/usr/bin/env bash
-# progressive's convergence below one sample per pixel (issue 14's evidence;
-# paper 004, progressive SVGF). For each dnrender scene, a still camera
+# progressive's convergence below one sample per pixel (paper 004, progressive SVGF). For each dnrender scene, a still camera
 # (--hold-camera 0: the frames differ only in noise, one reference) and a
 # moving one (the scene's camera path, a reference per frame), F frames each
 # rendered at 1, 1/4 and 1/16 spp per frame (dnrender --spp, stratified

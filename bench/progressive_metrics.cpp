@@ -1,5 +1,5 @@
 // progressive_metrics: per-frame error of a denoised sequence for
-// bench/progressive_convergence.sh (issue 14, paper 004): the RMSE and the
+// bench/progressive_convergence.sh (paper 004): the RMSE and the
 // noise-corrected MSE against one or two references, the temporal error
 // against the previous output frame, and the holes a progressive output has
 // below one sample per pixel.

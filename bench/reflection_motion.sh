@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reflection motion accuracy (issue 12's evidence; paper 001 §7.4, Figs. 12-13):
+# Reflection motion accuracy (paper 001 §7.4, Figs. 12-13):
 # per frame of a moving camera over dnrender scenes 6 and 1, the share of the
 # reflect pipeline's mirror and glossy motion vectors within 1 px of the
 # brute-force optimum, and their mean error. The measurement is the test

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# stat's convergence (issue 13's evidence; paper 003 Fig. 5 and property (d)):
+# stat's convergence (paper 003 Fig. 5 and property (d)):
 # one still frame of a dnrender scene rendered with its sample statistics at
 # 4, 8, ... spp (doubling, dnrender --stats, seed 3), denoised by `stat`
 # (defaults) and by its base filter alone (membership 0) through `dn denoise`

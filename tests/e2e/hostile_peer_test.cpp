@@ -1,4 +1,4 @@
-// Hostile peers and faults against a real dnserver process (issue 15): what a
+// Hostile peers and faults against a real dnserver process: what a
 // header alone may cost, messages that never finish, peers that never read,
 // a second server on a live Unix socket, log lines a client could forge, and
 // peers that vanish without closing.

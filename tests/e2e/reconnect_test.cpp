@@ -1,4 +1,4 @@
-// The chaos case (issue 15 point 12): a real dnserver killed with SIGKILL
+// The chaos case: a real dnserver killed with SIGKILL
 // mid-stream and started again on the same address. A plain Session gets a
 // transport error that says the connection was lost; a ReconnectingSession
 // reports each frame in flight as lost, reconnects, and the frames after it

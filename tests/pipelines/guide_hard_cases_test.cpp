@@ -1,4 +1,4 @@
-// Hard cases on the guides (issue 15, point 6; docs/pipelines.md "Sanitize
+// Hard cases on the guides (docs/pipelines.md "Sanitize
 // rule"): for every pipeline, every non-radiance channel it takes and each
 // of NaN, +-Inf, +-1e30, 3.4e38, -1 and a denormal, one frame whose plane
 // holds that value in a patch (next to good pixels) among clean frames of a

@@ -1,4 +1,4 @@
-// Highlights survive temporal filtering (issue 11; docs/pipelines.md, "svgf
+// Highlights survive temporal filtering (docs/pipelines.md, "svgf
 // in detail", HDR step rule and history clipping): a mirror reflecting a
 // small light, 100 on a noisy 0.4 background (roughness 0), through svgf in radiance and in
 // split mode, still and under a camera pan that moves the surface 2 px per

@@ -159,7 +159,7 @@ TEST(MessageReader, PayloadBufferIsExactlyPayloadLength) {
   EXPECT_EQ(payload.capacity(), payload_length);
 }
 
-// A header alone must not make the server's memory resident (issue 15): the
+// A header alone must not make the server's memory resident: the
 // payload is reserved (untouched pages cost no RSS) and made writable, and
 // zero-filled, one step (4 MiB) at a time as bytes arrive.
 TEST(MessageReader, LargePayloadBecomesWritableStepByStep) {

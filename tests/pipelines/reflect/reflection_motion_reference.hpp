@@ -5,9 +5,8 @@
 // ray (glossy, Eq. 4-5) is closest to p's, found by a diamond search from
 // two starts (p itself and p + the primary motion; a third, the virtual
 // point's motion, as an option), then refined to
-// sub-pixel precision. Double precision;
-// the groundwork of issue 12's `reflect` pipeline (its pass will be compared
-// with this).
+// sub-pixel precision. Double precision; reflect_motion's pass is compared
+// with it.
 #pragma once
 
 #include <array>

@@ -1,6 +1,6 @@
 // svgf-fb on the device: the F_beta factor pass and the whole pipeline
 // against the CPU reference (svgf_reference.cpp with the specular divided by
-// F_beta), the L_W input path, and the hard cases of issue 5.
+// F_beta), the L_W input path, and its hard cases.
 #include <gtest/gtest.h>
 
 #include <cmath>
