@@ -3,7 +3,8 @@
 // DN_BINDING row becomes DN_BINDING(n, ...), the n-th DN_SPEC row
 // DN_SPEC(n, ...), the n-th DN_GRID_ARG row DN_GRID_ARG(n - 1, ...) (its
 // slot in the grid's four push-constant words), the n-th DN_MODE row
-// DN_MODE(n - 1, ...) (its value of the constant MODE). A row
+// DN_MODE(n - 1, ...) (its value of the constant MODE). A DN_PARAM
+// row (a pass-local tunable) goes to the parameter table instead. A row
 // `#include "<other>.pass"` is replaced by that file's rows, numbered on. OUT
 // is rewritten only when it changes, so shaders rebuild only when it does.
 #include <fstream>
@@ -35,6 +36,8 @@ void number(const std::string& path, Counters& n, std::ostream& out) {
       out << "DN_BINDING(" << ++n.bindings << ", " << line.substr(11) << '\n';
     } else if (starts_with(line, "DN_SPEC(")) {
       out << "DN_SPEC(" << ++n.constants << ", " << line.substr(8) << '\n';
+    } else if (starts_with(line, "DN_PARAM(")) {
+      out << "// (a pass-local tunable: generated/parameters.def holds it)\n";
     } else if (starts_with(line, "DN_MODE(")) {
       out << "DN_MODE(" << n.modes++ << ", " << line.substr(8) << '\n';
     } else if (starts_with(line, "DN_GRID_ARG(")) {
