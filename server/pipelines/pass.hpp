@@ -1,6 +1,6 @@
 // One pass of a graph: a shader whose buffers are bound and whose
 // specialization constants are set by the names its declaration gives them
-// (shaders/passes/<shader>.pass, dn::shaders::declaration). Pure data: no
+// (its <shader>.pass, dn::shaders::declaration). Pure data: no
 // device objects, so building and checking a graph needs no device.
 #pragma once
 

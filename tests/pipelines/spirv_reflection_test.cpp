@@ -1,4 +1,4 @@
-// Every embedded shader against its declaration (shaders/passes/<name>.pass,
+// Every embedded shader against its declaration (its <name>.pass,
 // dn::shaders::declaration), from the compiled SPIR-V itself: spirv-cross
 // --reflect output written at build time (shaders/CMakeLists.txt). Storage
 // buffers: binding numbers, names, element type, readonly/writeonly;
