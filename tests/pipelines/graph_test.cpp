@@ -3,6 +3,7 @@
 // binding must be bound, and specializations are canonical. No device.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <stdexcept>
 
@@ -80,8 +81,10 @@ TEST(GraphSpec, ModesAreSelectedByNameAndRequireTheirBindings) {
   EXPECT_TRUE(pull.unbound_required().empty());  // pull needs no plane
   EXPECT_NO_THROW(g.check());
   const uint32_t mode_id = pull.declaration().constant("MODE")->id;
-  for (const auto& c : pull.specialization(8))
-    if (c.id == mode_id) EXPECT_EQ(c.value, 1u);  // the second mode
+  const auto constants = pull.specialization(8);
+  const auto mode = std::find_if(constants.begin(), constants.end(), [&](const auto& c) { return c.id == mode_id; });
+  ASSERT_NE(mode, constants.end());
+  EXPECT_EQ(mode->value, 1u);  // the second mode
 }
 
 // An alias reaches its buffer and costs no memory; from the first pass that

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <deque>
 #include <vector>
 
 #include "dn/protocol/codec.hpp"
@@ -84,11 +85,10 @@ class ConnectionLayerTest : public ::testing::Test {
   ServerCounters counters;
   ConnectionLayer layer;
   RecordingHandler handler;
-  std::vector<Peer> peers;
+  std::deque<Peer> peers;  // connect() hands out references: push_back keeps them
 };
 
 TEST_F(ConnectionLayerTest, HelloAndPingAreItsOwnEveryOtherRequestGoesAbove) {
-  peers.reserve(2);
   Peer& p = connect();
   p.send(protocol::Hello{0, "test", ""}, 1);
   turns();
@@ -115,7 +115,6 @@ TEST_F(ConnectionLayerTest, HelloAndPingAreItsOwnEveryOtherRequestGoesAbove) {
 
 // Before HELLO nothing reaches the layer above: the request gets a fatal ERROR.
 TEST_F(ConnectionLayerTest, ARequestBeforeHelloNeverReachesTheHandler) {
-  peers.reserve(1);
   Peer& p = connect();
   p.send(protocol::StatsRequest{}, 9);
   turns();
