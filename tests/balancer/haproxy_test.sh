@@ -169,9 +169,11 @@ until grep -q "held 4" "$work/drain.log"; do
   [ "$(date +%s)" -lt "$end" ] || fail "the drain check's connections did not open: $(cat "$work/drain.log")"
   sleep 0.1
 done
-echo "draining $drain, then 4 new connections: $(stat | tr '\n' ' ')"
-stat | awk -v d="$drain" '$1 == d && $4 != 0 { bad = 1 } $1 != d && $2 == "UP" && $4 != 4 { bad = 1 } END { exit bad }' ||
-  fail "draining $drain did not send the 4 new connections to the other live backend"
+# One snapshot, printed and checked (two reads of haproxy's counters can differ).
+after_drain=$(stat)
+echo "draining $drain, then 4 new connections: $(echo "$after_drain" | tr '\n' ' ')"
+echo "$after_drain" | awk -v d="$drain" '$1 == d && $4 != 0 { bad = 1 } $1 != d && $2 == "UP" && $4 != 4 { bad = 1 } END { exit bad }' ||
+  fail "draining $drain did not send the 4 new connections to the other live backend: $(echo "$after_drain" | tr '\n' ' ')"
 kill "$holder" 2>/dev/null || true
 [ "$status" = 0 ] || fail "the clients' checks failed"
 # The backends saw the clients' own addresses (PROXY), and the checks as LOCAL.
