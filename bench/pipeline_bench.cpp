@@ -49,6 +49,7 @@
 #include "gpu/timestamps.hpp"
 #include "online_stats.hpp"
 #include "half.hpp"
+#include "pipelines/frame_input.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace {
@@ -524,7 +525,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   for (int t = 0; t < o.frames; ++t) {
     EncodedFrame f = make_frame(config, t, o.sample_period);
     std::vector<dn::protocol::PassTiming> timings;
-    pipe->process(f.frame, true, output, timings);
+    pipe->process(dn::pipelines::frame_input_or_throw(f.frame, config), true, output, timings);
     if (t == 0)
       for (const auto& tm : timings)
         if (tm.name != "upload" && tm.name != "download") row.first_frame_ms += tm.milliseconds;

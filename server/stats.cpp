@@ -1,14 +1,34 @@
 #include "server/stats.hpp"
 
 #include <algorithm>
+#include <map>
 
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
 #include "gpu/transient_pool.hpp"
+#include "pipelines/input_forms.hpp"
 #include "server/capacity/pipeline_costs.hpp"
 
 namespace dn::server {
+namespace {
+
+// Per pipeline: its input forms and the distinct kernels they compile (pure
+// data, the same for the server's lifetime).
+struct Variants {
+  size_t forms = 0, kernels = 0;
+};
+const std::map<std::string, Variants>& variants_by_pipeline() {
+  static const std::map<std::string, Variants> table = [] {
+    std::map<std::string, Variants> t;
+    for (const auto& p : pipelines::available_pipelines())
+      t[p.name] = {pipelines::input_forms(p).size(), pipelines::kernel_variants(p).kernels};
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
 
 void ServerCounters::add_frame_timings(const std::vector<protocol::PassTiming>& timings) {
   for (const auto& t : timings) {
@@ -83,6 +103,10 @@ protocol::Stats make_stats(const ServerCounters& counters, const LiveState& live
     const std::string prefix = "pipeline." + cost.pipeline + ".";
     add(prefix + "device_bytes_fixed", cost.fixed_bytes);
     add(prefix + "device_bytes_per_pixel", cost.bytes_per_pixel);
+    if (const auto v = variants_by_pipeline().find(cost.pipeline); v != variants_by_pipeline().end()) {
+      add(prefix + "input_forms", n(v->second.forms));
+      add(prefix + "kernel_variants", n(v->second.kernels));  // every one compiled by the warm-up
+    }
     // The model's session's channel_bit mask, in halves: a STATS value is a double, exact only below 2^53.
     add(prefix + "reference_channels_lo", n(cost.reference_channels & 0xFFFFFFFFu));  // ids 0-31: bit i = id i
     add(prefix + "reference_channels_hi", n(cost.reference_channels >> 32));          // ids 32-63: bit i = id 32 + i

@@ -18,7 +18,7 @@ void main() {
   if (!dn_in_grid(p)) return;
   const uint i = dn_grid_index(p, dn_grid.size);
   if (MODE == DN_MODE_fill) {
-    const vec3 c = DN_LOAD3(radiance, false, i);
+    const vec3 c = DN_LOAD3(radiance, i);
     values.data[i] = vec4(c, 0.0);
     valid.data[i] = c.r >= 0.0 ? 1u : 0u;
     return;

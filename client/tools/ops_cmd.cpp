@@ -1,6 +1,7 @@
 // dn ping / dn stats / dn pipelines: small operational checks.
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -96,15 +97,24 @@ int run_pipelines(const std::vector<std::string>& argv) {
   args.parse(argv);
   if (args.has("help")) {
     std::printf("usage: dn pipelines [--server URL] [--pipeline NAME]\n\n"
-                "Lists the server's pipelines: required and optional channels, and each parameter's\n"
-                "name, default, range, whether it is an integer, and what it does.\n\noptions:\n%s",
+                "Lists the server's pipelines: required and optional channels, how many kernels its\n"
+                "input forms compile, and each parameter's name, default, range, whether it is an\n"
+                "integer, and what it does.\n\noptions:\n%s",
                 args.usage().c_str());
     return 0;
   }
   client::Connection conn = connect_for(args, "dn-pipelines");
   const auto& w = conn.welcome();
+  // Each pipeline's kernel variants come from STATS: a server that does not
+  // answer it still gets its pipelines listed, without them.
+  std::optional<protocol::Stats> stats;
+  try {
+    stats = conn.stats();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dn pipelines: no kernel variants (STATS failed: %s)\n", e.what());
+  }
   std::printf("%s: %s on %s\n\n%s", conn.endpoint().c_str(), w.server_version.c_str(), w.device_name.c_str(),
-              pipelines_report(w, args.get_or("pipeline", "")).c_str());
+              pipelines_report(w, args.get_or("pipeline", ""), stats ? &*stats : nullptr).c_str());
   return 0;
 }
 

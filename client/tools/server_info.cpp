@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <vector>
 
 #include "commands.hpp"
@@ -60,7 +61,13 @@ std::string parameter_names(const protocol::Welcome& welcome, const protocol::Pi
   return out.empty() ? "none" : out;
 }
 
-std::string pipelines_report(const protocol::Welcome& welcome, const std::string& only) {
+std::string pipelines_report(const protocol::Welcome& welcome, const std::string& only, const protocol::Stats* stats) {
+  auto stat = [&](const std::string& name) -> std::optional<double> {
+    if (stats)
+      for (const auto& v : stats->values)
+        if (v.name == name) return v.value;
+    return std::nullopt;
+  };
   std::string out, offered;
   for (const auto& p : welcome.pipelines) {
     offered += (offered.empty() ? "" : ", ") + p.name;
@@ -68,6 +75,10 @@ std::string pipelines_report(const protocol::Welcome& welcome, const std::string
     out += (out.empty() ? "" : "\n") + p.name + "\n";
     out += "  requires  " + channel_set(p.required_channels) + "\n";
     out += "  optional  " + channel_set(p.optional_channels) + "\n";
+    const auto kernels = stat("pipeline." + p.name + ".kernel_variants"), forms = stat("pipeline." + p.name + ".input_forms");
+    if (kernels && forms)
+      out += "  kernels   " + std::to_string(static_cast<uint64_t>(*kernels)) + " over " +
+             std::to_string(static_cast<uint64_t>(*forms)) + " input forms (the warm-up compiles them all)\n";
     if (!welcome.has_parameters)
       out += "  parameters: not announced (the server speaks protocol 1.0; see docs/pipelines.md)\n";
     else if (p.parameters.empty())

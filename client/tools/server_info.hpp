@@ -21,9 +21,12 @@ std::string channel_set(uint64_t mask);
 // when the server sent no tables (protocol 1.0).
 std::string parameter_names(const protocol::Welcome& welcome, const protocol::PipelineInfo& pipeline);
 
-// Every pipeline (or only `only`, when not empty) with its channels and its
-// parameter table: name, default, range, integer, description. Throws
-// UsageError naming the pipelines offered when `only` is not one of them.
-std::string pipelines_report(const protocol::Welcome& welcome, const std::string& only = {});
+// Every pipeline (or only `only`, when not empty) with its channels, its
+// kernel variants when `stats` has them (pipeline.<name>.kernel_variants and
+// .input_forms), and its parameter table: name, default, range, integer,
+// description. Throws UsageError naming the pipelines offered when `only` is
+// not one of them.
+std::string pipelines_report(const protocol::Welcome& welcome, const std::string& only = {},
+                             const protocol::Stats* stats = nullptr);
 
 }  // namespace dn::cli

@@ -171,11 +171,15 @@ void Buffer::release() noexcept {
 }
 
 void Buffer::write(std::span<const uint8_t> bytes, uint64_t offset) {
+  write_with(bytes.size(), [&](uint8_t* dst) { std::memcpy(dst, bytes.data(), bytes.size()); }, offset);
+}
+
+void Buffer::write_with(uint64_t bytes, const std::function<void(uint8_t*)>& fill, uint64_t offset) {
   if (kind_ != BufferKind::StorageUpload && kind_ != BufferKind::Constants)
     throw Error("buffer " + name_ + " is not host-writable");
-  if (offset > size_ || bytes.size() > size_ - offset) throw Error("write past the end of buffer " + name_);
-  if (bytes.empty()) return;
-  std::memcpy(mapped_ + offset, bytes.data(), bytes.size());
+  if (offset > size_ || bytes > size_ - offset) throw Error("write past the end of buffer " + name_);
+  if (bytes == 0) return;
+  fill(mapped_ + offset);
   if (!coherent_) {
     VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
     range.memory = staged() ? staging_memory_ : memory_;
@@ -186,9 +190,13 @@ void Buffer::write(std::span<const uint8_t> bytes, uint64_t offset) {
 }
 
 void Buffer::read(std::span<uint8_t> bytes, uint64_t offset) const {
+  read_with(bytes.size(), [&](const uint8_t* src) { std::memcpy(bytes.data(), src, bytes.size()); }, offset);
+}
+
+void Buffer::read_with(uint64_t bytes, const std::function<void(const uint8_t*)>& consume, uint64_t offset) const {
   if (kind_ != BufferKind::StorageDownload) throw Error("buffer " + name_ + " is not host-readable");
-  if (offset > size_ || bytes.size() > size_ - offset) throw Error("read past the end of buffer " + name_);
-  if (bytes.empty()) return;
+  if (offset > size_ || bytes > size_ - offset) throw Error("read past the end of buffer " + name_);
+  if (bytes == 0) return;
   if (!coherent_) {
     VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
     range.memory = staged() ? staging_memory_ : memory_;
@@ -196,7 +204,7 @@ void Buffer::read(std::span<uint8_t> bytes, uint64_t offset) const {
     range.size = VK_WHOLE_SIZE;
     check(vkInvalidateMappedMemoryRanges(device_, 1, &range), "vkInvalidateMappedMemoryRanges");
   }
-  std::memcpy(bytes.data(), mapped_ + offset, bytes.size());
+  consume(mapped_ + offset);
 }
 
 void Buffer::record_upload(VkCommandBuffer cmd, uint64_t bytes) const {

@@ -17,6 +17,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 
@@ -52,6 +53,9 @@ class Buffer {
   // Copies bytes to offset in the host-visible memory (the buffer itself or
   // its staging buffer). Upload and Uniform buffers only.
   void write(std::span<const uint8_t> bytes, uint64_t offset = 0);
+  // The same, but `fill` writes the `bytes` bytes at offset itself (a copy
+  // that converts as it goes).
+  void write_with(uint64_t bytes, const std::function<void(uint8_t*)>& fill, uint64_t offset = 0);
   // Records the staging -> device copy of [0, bytes) (no-op when not staged).
   void record_upload(VkCommandBuffer cmd, uint64_t bytes) const;
   // Records the device -> staging copy of [0, bytes) (no-op when not staged).
@@ -63,6 +67,8 @@ class Buffer {
   // Copies bytes from offset of the host-visible memory. Download buffers only;
   // call after the work (and record_download) has completed.
   void read(std::span<uint8_t> bytes, uint64_t offset = 0) const;
+  // The same, but `consume` reads the `bytes` bytes at offset itself.
+  void read_with(uint64_t bytes, const std::function<void(const uint8_t*)>& consume, uint64_t offset = 0) const;
 
  private:
   void release() noexcept;

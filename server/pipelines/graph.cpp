@@ -1,5 +1,8 @@
 #include "pipelines/graph.hpp"
+
+#include "pipelines/frame_input.hpp"
 #include "pipelines/sample_summary.hpp"
+#include "pipelines/wire_format.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -21,16 +24,12 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-const char* channel_name(protocol::ChannelId id) {
-  const auto* c = protocol::find_channel(id);
-  return c ? c->name.data() : "?";
-}
-
 // projection * view and its inverse; both the identity when it is singular
 // or not finite (a client that sends no real camera), so no pass ever reads
 // NaN from them.
-void view_projection(const protocol::FrameInfo& info, float forward[16], float inverse[16]) {
-  glm::mat4 vp = glm::make_mat4(info.projection.data()) * glm::make_mat4(info.view.data());
+void view_projection(const std::array<float, 16>& view, const std::array<float, 16>& projection, float forward[16],
+                     float inverse[16]) {
+  glm::mat4 vp = glm::make_mat4(projection.data()) * glm::make_mat4(view.data());
   glm::mat4 inv = glm::inverse(vp);
   bool finite = std::isfinite(glm::determinant(vp)) && glm::determinant(vp) != 0.0f;
   for (int c = 0; c < 4; ++c)
@@ -76,7 +75,7 @@ const gpu::Buffer& GraphPipeline::bound(const BindingRef& ref, uint32_t parity) 
 
 GraphPipeline::GraphPipeline(gpu::Context& context, const SessionConfig& config,
                              std::shared_ptr<const GraphSpec> spec)
-    : context_(context), spec_(std::move(spec)), output_format_(config.output_format) {
+    : context_(context), config_(config), spec_(std::move(spec)) {
   try {
     nodes_.reserve(spec_->buffers.size());
     for (const auto& b : spec_->buffers) {
@@ -188,7 +187,7 @@ GraphPipeline::~GraphPipeline() {
   commands_.reset();
 }
 
-void GraphPipeline::process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+void GraphPipeline::process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
                             std::vector<protocol::PassTiming>& timings) {
   std::lock_guard lock(mutex_);
   try {
@@ -202,57 +201,37 @@ void GraphPipeline::process(const protocol::Frame& frame, bool want_output, std:
   }
 }
 
-const protocol::PlaneView& GraphPipeline::plane_of(const protocol::Frame& frame, const BufferSpec& input) {
-  const protocol::PlaneView* plane = nullptr;
-  for (const auto& p : frame.planes)
-    if (p.id == input.channel) plane = &p;
-  if (!plane || plane->format != input.format || plane->bytes.size() != input.plane_bytes)
-    throw std::invalid_argument(std::string("frame violates process()'s precondition: plane ") +
-                                channel_name(input.channel) +
-                                (!plane ? " is missing"
-                                        : plane->format != input.format
-                                              ? " has the wrong format"
-                                              : " has " + std::to_string(plane->bytes.size()) + " bytes, expected " +
-                                                    std::to_string(input.plane_bytes)));
-  return *plane;
-}
-
-void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+void GraphPipeline::run(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
                         std::vector<protocol::PassTiming>& timings) {
   if (context_.lost()) throw gpu::VulkanError(VK_ERROR_DEVICE_LOST, "process");
 
-  // Upload: planes are copied verbatim into their (mapped or staging) buffers.
+  // Upload: planes are copied into their (mapped or staging) buffers as fp32.
   const auto upload_start = Clock::now();
   bool any_staged_input = false;
   for (auto& n : nodes_) {
     if (n.spec->role != BufferRole::Input) continue;
-    n.copies[0].write(plane_of(frame, *n.spec).bytes);
+    const std::span<const uint8_t> bytes = frame.planes.at(n.spec->plane);
+    if (bytes.size() != n.spec->plane_bytes) throw std::logic_error("a FrameInput plane of the wrong size");
+    if (n.spec->format == protocol::Format::F16)
+      n.copies[0].write_with(n.spec->bytes, [&](uint8_t* dst) {
+        widen_halves(bytes.data(), bytes.size() / 2, reinterpret_cast<float*>(dst));
+      });
+    else
+      n.copies[0].write(bytes);
     any_staged_input = any_staged_input || n.copies[0].staged();
   }
 
-  const bool reset = (frame.info.flags & protocol::kFrameReset) != 0 || !history_valid_;
+  const bool reset = frame.reset || !history_valid_;
   FrameConstants constants{};
   constants.size[0] = spec_->width;
   constants.size[1] = spec_->height;
   constants.size[2] = spec_->width * spec_->height;
   constants.size[3] = reset ? kFrameFlagReset : 0u;
-  switch (frame.info.motion) {
-    case protocol::MotionConvention::PixelsToPrevious:
-      constants.motion[0] = constants.motion[1] = 1.0f;
-      break;
-    case protocol::MotionConvention::PixelsToNext:
-      constants.motion[0] = constants.motion[1] = -1.0f;
-      break;
-    case protocol::MotionConvention::UvToPrevious:
-      constants.motion[0] = static_cast<float>(spec_->width);
-      constants.motion[1] = static_cast<float>(spec_->height);
-      break;
-    default:
-      throw std::invalid_argument("unknown motion convention");
-  }
+  constants.motion[0] = frame.motion_to_previous_pixels[0];
+  constants.motion[1] = frame.motion_to_previous_pixels[1];
   constants.params = spec_->parameters;
   std::memcpy(constants.previous_view_projection, view_projection_, sizeof view_projection_);
-  view_projection(frame.info, view_projection_, constants.inverse_view_projection);
+  view_projection(frame.view, frame.projection, view_projection_, constants.inverse_view_projection);
   constants_.write({reinterpret_cast<const uint8_t*>(&constants), sizeof constants});
   const double upload_host_ms = ms_since(upload_start);
 
@@ -280,7 +259,7 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     }
   if (any_staged_input || constants_staged_ || any_readback) {
     for (auto& n : nodes_) {
-      if (n.spec->role == BufferRole::Input) n.copies[0].record_upload(cmd, n.spec->plane_bytes);
+      if (n.spec->role == BufferRole::Input) n.copies[0].record_upload(cmd, n.spec->bytes);
       if (n.spec->role == BufferRole::Constant && constants_staged_) n.copies[0].record_upload(cmd, n.spec->bytes);
     }
     gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
@@ -306,9 +285,8 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
     record_captures(cmd, pass, parity);
   }
 
-  const uint64_t out_bytes = out_node ? out_node->spec->plane_bytes : 0;
   if (want_output && out_node) {
-    out_node->copies[0].record_readback(cmd, out_bytes, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+    out_node->copies[0].record_readback(cmd, out_node->spec->bytes, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                                         VK_ACCESS_SHADER_WRITE_BIT);
   }
   for (auto& n : nodes_)
@@ -326,8 +304,14 @@ void GraphPipeline::run(const protocol::Frame& frame, bool want_output, std::vec
   if (want_output && out_node) {
     download_ms = intervals.back();  // staging copy, if any
     const auto t0 = Clock::now();
-    output.resize(out_bytes);
-    out_node->copies[0].read(output);
+    const BufferSpec& out = *out_node->spec;
+    output.resize(out.plane_bytes);
+    if (out.format == protocol::Format::F16)
+      out_node->copies[0].read_with(out.bytes, [&](const uint8_t* src) {
+        narrow_to_halves(reinterpret_cast<const float*>(src), out.plane_bytes / 2, output.data());
+      });
+    else
+      out_node->copies[0].read(output);
     download_ms += ms_since(t0);
   }
 

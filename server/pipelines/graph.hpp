@@ -4,8 +4,10 @@
 // device); GraphPipeline turns it into device objects and runs frames.
 //
 // Buffers:
-//  - Input:   one client plane, uploaded verbatim (fp16 or fp32 as declared)
-//  - Output:  the Output plane, written by the last pass in the session's format
+//  - Input:   one client plane, held as fp32 whatever the client sends
+//             (wire_format.hpp: an fp16 plane is widened as it is uploaded)
+//  - Output:  the Output plane, written as fp32 by the last pass and
+//             narrowed to the session's output format as it is read back
 //  - History: persistent per-session state, allocated twice and ping-ponged:
 //             a pass binds the Current or the Previous copy, and the two
 //             descriptor sets of each pass swap them on alternate frames
@@ -62,10 +64,11 @@ struct SharedResourceDecl {
 struct BufferSpec {
   std::string name;
   BufferRole role = BufferRole::Scratch;
-  uint64_t bytes = 0;                                    // allocation size (rounded up to 4)
-  uint64_t plane_bytes = 0;                              // Input/Output: exact plane size
+  uint64_t bytes = 0;                                    // allocation size (rounded up to 4; Input/Output: the fp32 plane)
+  uint64_t plane_bytes = 0;                              // Input/Output: the plane's size on the wire
   protocol::ChannelId channel = protocol::ChannelId::Radiance;  // Input/Output
-  protocol::Format format = protocol::Format::F32;       // Input/Output
+  protocol::Format format = protocol::Format::F32;       // Input/Output: on the wire
+  size_t plane = 0;                                      // Input: its index in FrameInput::planes
   SharedResource shared = nullptr;                       // Shared
   std::vector<uint8_t> data;                             // Constant: its contents
 };
@@ -135,8 +138,6 @@ uint64_t round_up4(uint64_t bytes);
 protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel);
 // Whether the session declared the channel.
 bool has_channel(const SessionConfig& config, protocol::ChannelId channel);
-// Specialization value "this plane is fp16".
-uint32_t is_half(protocol::Format format);
 
 // The context's buffer for optional bindings a pass leaves unbound (the
 // shader does not touch them): one small placeholder, never a real buffer
@@ -151,7 +152,8 @@ class GraphPipeline final : public Pipeline {
 
   uint64_t device_bytes() const override { return device_bytes_; }
   uint64_t transient_bytes() const override { return transient_bytes_; }
-  void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+  const SessionConfig& config() const override { return config_; }
+  void process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
                std::vector<protocol::PassTiming>& timings) override;
   std::optional<protocol::SampleCounts> samples() const override;
 
@@ -188,14 +190,10 @@ class GraphPipeline final : public Pipeline {
     uint32_t groups_x = 1, groups_y = 1;
   };
 
-  void run(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+  void run(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
            std::vector<protocol::PassTiming>& timings);
   Node& node(const std::string& name);
   const gpu::Buffer& bound(const BindingRef& ref, uint32_t parity);
-  // The plane of `input` in `frame`; throws std::invalid_argument when it is
-  // missing or malformed (the precondition of process(): the session has
-  // checked it already and reports errors to the client).
-  static const protocol::PlaneView& plane_of(const protocol::Frame& frame, const BufferSpec& input);
   void record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity);
   // Leases this frame's scratch (the buffers held last frame when they are
   // free) and points the descriptor sets at them if they changed.
@@ -205,8 +203,8 @@ class GraphPipeline final : public Pipeline {
   void check_texel_limit(const Pass& pass);
 
   gpu::Context& context_;
+  SessionConfig config_;
   std::shared_ptr<const GraphSpec> spec_;
-  protocol::Format output_format_;
   std::vector<Node> nodes_;
   gpu::Buffer constants_;
   std::unique_ptr<gpu::DescriptorPool> descriptors_;

@@ -21,8 +21,6 @@ bool has_channel(const SessionConfig& config, protocol::ChannelId channel) {
   return false;
 }
 
-uint32_t is_half(protocol::Format format) { return format == protocol::Format::F16 ? 1u : 0u; }
-
 uint64_t GraphSpec::device_bytes() const {
   uint64_t total = kConstantBytes;
   for (const auto& b : buffers) total += b.role == BufferRole::History ? 2 * b.bytes : b.bytes;
@@ -61,8 +59,10 @@ void GraphSpec::add_input(const SessionConfig& config, protocol::ChannelId chann
   b.role = BufferRole::Input;
   b.channel = channel;
   b.format = format;
+  for (size_t i = 0; i < config.channels.size(); ++i)
+    if (config.channels[i].id == channel) b.plane = i;
   b.plane_bytes = protocol::plane_bytes(*info, format, config.width, config.height);
-  b.bytes = round_up4(b.plane_bytes);
+  b.bytes = protocol::plane_bytes(*info, protocol::Format::F32, config.width, config.height);
   buffers.push_back(std::move(b));
 }
 
@@ -74,7 +74,7 @@ void GraphSpec::add_output(const SessionConfig& config) {
   b.channel = protocol::ChannelId::Output;
   b.format = config.output_format;
   b.plane_bytes = protocol::plane_bytes(*info, config.output_format, config.width, config.height);
-  b.bytes = round_up4(b.plane_bytes);
+  b.bytes = protocol::plane_bytes(*info, protocol::Format::F32, config.width, config.height);
   buffers.push_back(std::move(b));
 }
 

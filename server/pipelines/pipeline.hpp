@@ -51,7 +51,8 @@ struct ConfigError {
   std::string message;  // names the value and what was expected
 };
 
-struct GraphSpec;  // pipelines/graph.hpp
+struct GraphSpec;   // pipelines/graph.hpp
+struct FrameInput;  // pipelines/frame_input.hpp
 
 // A configuration that passed validation, with its pass graph built (once):
 // what prepare() returns and create() consumes, so one OPEN_SESSION builds
@@ -89,12 +90,13 @@ class Pipeline {
   // for each frame and shared with other sessions in between.
   virtual uint64_t transient_bytes() const { return 0; }
   uint64_t persistent_bytes() const { return device_bytes() - transient_bytes(); }
-  // Runs one frame. The caller guarantees every declared channel is present
-  // exactly once with width*height*components bytes in its declared format.
+  // The session this pipeline serves.
+  virtual const SessionConfig& config() const = 0;
+  // Runs one frame (its planes checked by frame_input(), frame_input.hpp).
   // Fills `output` with the Output plane (width*height*3 in the session's
   // output format) when want_output is true, and appends one timing per
   // device pass plus the host stages "upload" and "download".
-  virtual void process(const protocol::Frame& frame, bool want_output, std::vector<uint8_t>& output,
+  virtual void process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
                        std::vector<protocol::PassTiming>& timings) = 0;
   // After process(): how many input frames the last frame's output rests on
   // per pixel, over the frame (RESULT.samples); nullopt for a pipeline that

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
+#include "pipelines/frame_input.hpp"
 
 namespace dn::server {
 
@@ -23,13 +24,14 @@ struct ResultForm {
   size_t index() const { return (input ? 2 : 0) + (samples ? 1 : 0); }
 };
 
-// A validated frame; `frame` views into `payload`.
+// A validated frame; `frame` and `input` view into `payload`.
 struct FrameJob {
   uint64_t request_id = 0;
   bool owner_wants_output = true;
   bool owner_gets_samples = false;          // the owner's protocol is >= 1.9
   std::array<bool, 4> watcher_forms = {};   // by ResultForm::index(): some watcher wants that form
   protocol::Frame frame;
+  pipelines::FrameInput input;  // what the pipeline runs: the planes checked once
   std::vector<uint8_t> payload;
 
   bool anyone_wants_output() const;

@@ -12,6 +12,8 @@
 #include "gpu/compute.hpp"
 #include "gpu/context.hpp"
 #include "gpu/pipeline_cache.hpp"
+#include "pipelines/frame_input.hpp"
+#include "pipelines/input_forms.hpp"
 
 namespace dn::server {
 namespace {
@@ -28,17 +30,17 @@ double ms_since(Clock::time_point t0) {
 // kernel cache shares VkPipelines across sessions: dispatching once here
 // keeps that cost out of every session's first frame.
 void run_one_frame(pipelines::Pipeline& pipeline, const pipelines::SessionConfig& config) {
-  std::vector<std::vector<uint8_t>> planes;  // the frame's views point into these
+  std::vector<std::vector<uint8_t>> planes;  // the input's views point into these
   planes.reserve(config.channels.size());
-  protocol::Frame frame;
+  pipelines::FrameInput input;
   for (const auto& c : config.channels) {
     const auto* info = protocol::find_channel(c.id);
     planes.emplace_back(protocol::plane_bytes(*info, c.format, config.width, config.height), uint8_t{0});
-    frame.planes.push_back({c.id, c.format, planes.back()});
+    input.planes.push_back(planes.back());
   }
   std::vector<uint8_t> output;
   std::vector<protocol::PassTiming> timings;
-  pipeline.process(frame, false, output, timings);
+  pipeline.process(input, false, output, timings);
 }
 
 // Whether a frame on a private device keeps kernel compiles out of the shared
@@ -199,67 +201,12 @@ void PipelineBuilder::warm_up(std::function<void(const WarmUpReport&)> on_done) 
   });
 }
 
-namespace {
-
-using protocol::ChannelId;
-
-uint64_t bits(std::initializer_list<ChannelId> ids) {
-  uint64_t mask = 0;
-  for (ChannelId id : ids) mask |= protocol::channel_bit(id);
-  return mask;
-}
-
-// The signal channels of each input form a pipeline accepts: radiance, or the
-// split pair with each signal in radiance or lighting form (specular_lighting
-// comes with specular_albedo); with a sample mask and without, and with the
-// sample statistics and without, where they are optional.
-std::vector<uint64_t> input_forms(const pipelines::PipelineDescription& p) {
-  const uint64_t accepted = p.required_channels | p.optional_channels;
-  const uint64_t radiance = bits({ChannelId::Radiance});
-  std::vector<uint64_t> forms;
-  if (accepted & radiance) forms.push_back(radiance);
-  if (p.required_channels & radiance) {
-    // Its only signal form; passthrough passes every other channel through.
-    if (p.name == "passthrough") return forms;
-  } else {
-    for (uint64_t diffuse : {bits({ChannelId::Diffuse}), bits({ChannelId::DiffuseLighting})})
-      for (uint64_t specular :
-           {bits({ChannelId::Specular}), bits({ChannelId::SpecularLighting, ChannelId::SpecularAlbedo})})
-        if (((diffuse | specular) & ~accepted) == 0) forms.push_back(diffuse | specular);
-  }
-  const uint64_t groups[] = {bits({ChannelId::SampleCount}), bits({ChannelId::StatCount, ChannelId::StatMean,
-                                                                   ChannelId::StatM2, ChannelId::StatM3})};
-  for (const uint64_t group : groups)
-    if ((p.optional_channels & group) == group) {
-      const size_t n = forms.size();
-      for (size_t i = 0; i < n; ++i) forms.push_back(forms[i] | group);
-    }
-  return forms;
-}
-
-}  // namespace
-
 std::vector<pipelines::SessionConfig> PipelineBuilder::warm_up_configs() {
-  const uint64_t signals = bits({ChannelId::Radiance, ChannelId::Diffuse, ChannelId::DiffuseLighting,
-                                 ChannelId::Specular, ChannelId::SpecularLighting, ChannelId::SpecularAlbedo});
+  // Formats decide no kernel: the forms that hold every kernel, in fp32.
   std::vector<pipelines::SessionConfig> out;
-  // fp32 first: the common case is warm soonest.
-  for (const protocol::Format format : {protocol::Format::F32, protocol::Format::F16}) {
-    for (const auto& p : pipelines::available_pipelines()) {
-      for (const uint64_t form : input_forms(p)) {
-        pipelines::SessionConfig config;
-        config.width = kWarmUpWidth;
-        config.height = kWarmUpHeight;
-        config.pipeline = p.name;
-        config.output_format = format;
-        const uint64_t mask = (p.required_channels & ~signals) | form;
-        for (const auto& c : protocol::kChannels)
-          if (mask & protocol::channel_bit(c.id))  // sample statistics are fp32 only (their sums overflow fp16)
-            config.channels.push_back({c.id, protocol::is_sample_statistic(c.id) ? protocol::Format::F32 : format});
-        out.push_back(std::move(config));
-      }
-    }
-  }
+  for (const auto& p : pipelines::available_pipelines())
+    for (const uint64_t form : pipelines::kernel_variants(p).covering_forms)
+      out.push_back(pipelines::form_config(p, form, kWarmUpWidth, kWarmUpHeight));
   return out;
 }
 

@@ -78,12 +78,11 @@ class PipelineBuilder {
   // Finishes the build in progress, drops the rest, joins the thread.
   void stop();
 
-  // The sessions the warm-up builds: every offered pipeline with its default
-  // parameters, its required channels and each input form it accepts
-  // (radiance; diffuse or diffuse_lighting with specular or
-  // specular_lighting; each also with sample_count where offered), all planes
-  // fp32, then all fp16 (statistics stay fp32). A configuration a pipeline
-  // refuses is reported in WarmUpReport::error.
+  // The sessions the warm-up builds: for every offered pipeline at its
+  // default parameters, the input forms whose graphs hold every kernel any of
+  // its forms compiles (pipelines/input_forms.hpp), fp32 (no kernel depends on
+  // a wire format). A configuration a pipeline refuses is reported in
+  // WarmUpReport::error.
   static std::vector<pipelines::SessionConfig> warm_up_configs();
   // Lavapipe compiles a kernel anew for some frame sizes: measured with one
   // svgf kernel set, 256x144, 640x360 and 1280x720 share machine code, while

@@ -150,7 +150,8 @@ void SessionService::on_frame(net::Connection& c, const protocol::Header& h, pro
                       "session " + std::to_string(s->id()) + " is closing");
   if (shutting_down_)
     return error(c, h.request_id, ErrorCode::ShuttingDown, "", "server is shutting down");
-  if (auto err = s->check_frame(m)) return error(c, h.request_id, err->code, err->field, err->message);
+  auto checked = s->check_frame(m);
+  if (auto* err = std::get_if<protocol::Error>(&checked)) return error(c, h.request_id, err->code, err->field, err->message);
 
   s->last_frame_index = m.info.frame_index;
   ++s->in_flight;
@@ -161,6 +162,7 @@ void SessionService::on_frame(net::Connection& c, const protocol::Header& h, pro
   for (uint64_t w : s->watchers)
     if (const net::Connection* wc = connections_.find(w)) job.watcher_forms[watcher_form(*s, *wc).index()] = true;
   job.frame = std::move(m);
+  job.input = std::get<pipelines::FrameInput>(std::move(checked));
   job.payload = std::move(payload);  // the planes view into this buffer; moving a vector keeps its storage
   scheduler_->submit(s, std::move(job));
   if (s->in_flight >= options_.max_frames_in_flight) c.set_reading_paused(true);  // backpressure: stop reading

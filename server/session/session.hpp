@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
@@ -37,7 +38,7 @@ class Session {
   // Checks a decoded FRAME against this session: declared channels present
   // exactly once, in the declared format, with the right byte length, and a
   // frame index above the last one accepted.
-  std::optional<protocol::Error> check_frame(const protocol::Frame& frame) const;
+  std::variant<pipelines::FrameInput, protocol::Error> check_frame(const protocol::Frame& frame) const;
 
   // Runs a frame on the device; called by one worker at a time.
   FrameOutcome run(const FrameJob& job);

@@ -2,7 +2,7 @@
 // and normal planes (the later passes read its guide; docs/pipelines.md, "svgf
 // in detail"): guards (svgf_guards.glsl) and the per-pixel geometry gradients.
 // Requires, declared before the include: the planes `depth` and `normal`
-// ({ uint data[]; }) and the bools DEPTH_HALF and NORMAL_HALF, plus
+// ({ uint data[]; }), plus
 // frame.glsl, plane.glsl, sanitize.glsl and luminance.glsl.
 #ifndef DN_SVGF_GLSL
 #define DN_SVGF_GLSL
@@ -10,8 +10,8 @@
 #include "svgf_guards.glsl"
 #include "inside.glsl"
 
-float dn_svgf_depth(uint p) { return DN_LOAD1(depth, DEPTH_HALF, p); }
-vec3 dn_svgf_normal(uint p) { return dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p)); }
+float dn_svgf_depth(uint p) { return DN_LOAD1(depth, p); }
+vec3 dn_svgf_normal(uint p) { return dn_sanitize_normal(DN_LOAD3(normal, p)); }
 
 // Geometry gradients of a foreground pixel: per axis the one-sided difference
 // of smaller magnitude over the neighbours that are inside and foreground

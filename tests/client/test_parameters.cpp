@@ -214,6 +214,17 @@ TEST(DnPipelines, ReportListsChannelsAndEveryParameterColumn) {
             "  parameters: none\n");
 }
 
+TEST(DnPipelines, ReportShowsKernelVariantsFromStats) {
+  protocol::Stats stats;
+  stats.values = {{"pipeline.acc.input_forms", 4}, {"pipeline.acc.kernel_variants", 7}, {"pipeline.pt.input_forms", 1}};
+  const std::string report = cli::pipelines_report(report_welcome(), "", &stats);
+  EXPECT_NE(report.find("acc\n  requires  radiance,albedo\n  optional  emission\n"
+                        "  kernels   7 over 4 input forms (the warm-up compiles them all)\n  parameters:\n"),
+            std::string::npos)
+      << report;
+  EXPECT_EQ(report.find("pt\n  requires  radiance\n  optional  -\n  kernels"), std::string::npos) << report;  // no count: no line
+}
+
 TEST(DnPipelines, OnePipelineOrAClearErrorAndOneZeroServers) {
   EXPECT_EQ(cli::pipelines_report(report_welcome(), "pt"),
             "pt\n  requires  radiance\n  optional  -\n  parameters: none\n");

@@ -27,11 +27,16 @@ struct Form {
 };
 
 // Every input form a client can open, written out here rather than taken from
-// the server: radiance or the split pair with each signal in radiance or
-// lighting form, the extras each pipeline requires, progressive with and
-// without its sample mask, stat-temporal with and without statistics.
+// the server (docs/server.md, "warm-up"; docs/protocol.md §7.6 for extra
+// samples): radiance or the split pair with each signal in radiance or
+// lighting form, the extras each pipeline requires, and each optional
+// channel the pipeline reads present or not: emission (svgf, svgf-fb,
+// reflect, progressive), roughness (svgf), reflection_footprint (reflect),
+// sample_count (progressive), the sample statistics (stat-temporal), and 0 to
+// 3 extra samples with radiance or diffuse + specular (svgf, svgf-fb, reflect).
 std::vector<Form> input_forms() {
   using C = ChannelId;
+  using F = protocol::SampleField;
   const std::vector<C> gbuffer = {C::Albedo, C::Normal, C::Depth, C::Motion};
   const std::vector<std::vector<C>> svgf_signals = {{C::Radiance},
                                                    {C::Diffuse, C::Specular},
@@ -43,26 +48,58 @@ std::vector<Form> input_forms() {
   const std::vector<C> reflection = {C::Position,        C::ReflectionPosition, C::ReflectionAlbedo,
                                      C::ReflectionNormal, C::ReflectionDepth,   C::ReflectionDirection,
                                      C::ReflectionDistance};
-  const std::vector<C> statistics = {C::Radiance, C::Albedo, C::Normal, C::StatCount, C::StatMean, C::StatM2, C::StatM3};
+  const std::vector<C> statistics = {C::StatCount, C::StatMean, C::StatM2, C::StatM3};
+  const std::vector<C> stat_frame = {C::Radiance, C::Albedo, C::Normal};
   auto join = [](std::initializer_list<std::vector<C>> parts) {
     std::vector<C> out;
     for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
     return out;
   };
+  // Every subset of `optional` added to `base`.
+  auto with_subsets = [](const std::vector<C>& base, const std::vector<C>& optional) {
+    std::vector<std::vector<C>> out;
+    for (size_t subset = 0; subset < (size_t{1} << optional.size()); ++subset) {
+      std::vector<C> form = base;
+      for (size_t i = 0; i < optional.size(); ++i)
+        if (subset >> i & 1) form.push_back(optional[i]);
+      out.push_back(form);
+    }
+    return out;
+  };
+  // 0 to 3 extra samples of a signal form: only radiance or diffuse + specular take them.
+  auto with_samples = [](const std::vector<C>& signals) {
+    std::vector<F> colours;
+    if (signals == std::vector<C>{C::Radiance}) colours = {F::Radiance};
+    if (signals == std::vector<C>{C::Diffuse, C::Specular}) colours = {F::Diffuse, F::Specular};
+    std::vector<std::vector<C>> out = {{}};
+    for (uint32_t k = 1; !colours.empty() && k <= 3; ++k) {
+      std::vector<C> samples;
+      for (uint32_t j = 1; j <= k; ++j) {
+        for (F f : colours) samples.push_back(protocol::sample_channel(j, f));
+        for (F f : {F::Normal, F::Depth, F::Offset}) samples.push_back(protocol::sample_channel(j, f));
+      }
+      out.push_back(samples);
+    }
+    return out;
+  };
   std::vector<Form> forms = {{"passthrough", {C::Radiance}},
                              {"accumulate", {C::Radiance, C::Normal, C::Depth, C::Motion}},
-                             {"stat", statistics},
-                             {"stat-temporal", join({statistics, {C::Depth, C::Motion}})},
-                             {"stat-temporal", {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion}}};
+                             {"stat", join({stat_frame, statistics})},
+                             {"stat-temporal", join({stat_frame, statistics, {C::Depth, C::Motion}})},
+                             {"stat-temporal", join({stat_frame, {C::Depth, C::Motion}})}};
   for (const auto& s : svgf_signals) {
-    forms.push_back({"svgf", join({s, gbuffer})});
-    forms.push_back({"progressive", join({s, gbuffer})});
-    forms.push_back({"progressive", join({s, gbuffer, {C::SampleCount}})});
+    for (const auto& extras : with_subsets(join({s, gbuffer}), {C::Emission, C::Roughness}))
+      for (const auto& samples : with_samples(s)) forms.push_back({"svgf", join({extras, samples})});
+    for (const auto& extras : with_subsets(join({s, gbuffer}), {C::Emission, C::SampleCount}))
+      forms.push_back({"progressive", extras});
   }
-  for (const auto& s : fb_signals) {
-    forms.push_back({"svgf-fb", join({s, gbuffer, fb_extra})});
-    forms.push_back({"reflect", join({s, gbuffer, fb_extra, reflection})});
-  }
+  for (const auto& s : fb_signals)
+    for (const auto& samples : with_samples(s)) {
+      for (const auto& extras : with_subsets(join({s, gbuffer, fb_extra}), {C::Emission}))
+        forms.push_back({"svgf-fb", join({extras, samples})});
+      for (const auto& extras : with_subsets(join({s, gbuffer, fb_extra, reflection}), {C::Emission, C::ReflectionFootprint}))
+        forms.push_back({"reflect", join({extras, samples})});
+    }
   return forms;
 }
 
@@ -130,7 +167,7 @@ std::map<std::string, double> wait_for_warm_up(RawClient& c) {
 // After the warm-up, every pipeline in every input form, fp32 and fp16, opens
 // and runs its first frame without compiling a kernel or running one for the
 // first time: the warm-up built and dispatched every one (on lavapipe a
-// kernel compiles at its first dispatch).
+// kernel compiles at its first dispatch). The server counts the same forms.
 TEST(FirstFrame, AfterTheWarmUpNoInputFormCompilesAKernel) {
   ServerProcess server({"--warm-up", "--no-disk-cache"});
   RawClient c(server.tcp_url());
@@ -138,8 +175,11 @@ TEST(FirstFrame, AfterTheWarmUpNoInputFormCompilesAKernel) {
   const auto warm = wait_for_warm_up(c);
   ASSERT_EQ(warm.at("warm_up_done"), 1.0);
   const auto forms = input_forms();
-  EXPECT_EQ(warm.at("warm_up_configs_offered"), 2.0 * forms.size());
-  EXPECT_EQ(warm.at("warm_up_configs"), 2.0 * forms.size());  // none refused
+  std::map<std::string, double> forms_of;
+  for (const Form& form : forms) ++forms_of[form.pipeline];
+  for (const auto& [pipeline, n] : forms_of) EXPECT_EQ(warm.at("pipeline." + pipeline + ".input_forms"), n) << pipeline;
+  EXPECT_GT(warm.at("warm_up_configs_offered"), 0.0);
+  EXPECT_EQ(warm.at("warm_up_configs"), warm.at("warm_up_configs_offered"));  // none refused
   EXPECT_EQ(server.log().find("level=warn event=warm_up"), std::string::npos) << server.log();
 
   uint64_t id = 10;

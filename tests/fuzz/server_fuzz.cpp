@@ -59,6 +59,7 @@
 #include "dn/protocol/codec.hpp"
 #include "server/gpu/context.hpp"
 #include "server/log.hpp"
+#include "server/pipelines/frame_input.hpp"
 #include "server/pipelines/pipeline.hpp"
 #include "server/server.hpp"
 
@@ -98,15 +99,16 @@ class Input {
 };
 
 // The device stand-in: sizes like the real pipeline, an Output plane of the
-// session's size, and device failures on demand (width 7 cannot be built; a
-// frame whose index is 5 mod 11 fails on the "device").
+// session's size, and device failures on demand (width 7 cannot be built;
+// a session's 6th, 17th, 28th, ... frame fails on the "device").
 class HostPipeline : public pipelines::Pipeline {
  public:
   explicit HostPipeline(const pipelines::PreparedPipeline& p) : config_(p.config()), bytes_(p.device_bytes()) {}
   uint64_t device_bytes() const override { return bytes_; }
-  void process(const Frame& frame, bool want_output, std::vector<uint8_t>& output,
+  const pipelines::SessionConfig& config() const override { return config_; }
+  void process(const pipelines::FrameInput&, bool want_output, std::vector<uint8_t>& output,
                std::vector<PassTiming>& timings) override {
-    if (frame.info.frame_index % 11 == 5) throw pipelines::DeviceFailure("fuzz: simulated device loss");
+    if (frames_++ % 11 == 5) throw pipelines::DeviceFailure("fuzz: simulated device loss");
     if (want_output)
       output.assign(uint64_t{config_.width} * config_.height * 3 * bytes_per_component(config_.output_format), 0x3c);
     timings.push_back({"host", 0.0});
@@ -115,6 +117,7 @@ class HostPipeline : public pipelines::Pipeline {
  private:
   pipelines::SessionConfig config_;
   uint64_t bytes_;
+  uint64_t frames_ = 0;
 };
 
 std::unique_ptr<pipelines::Pipeline> make_host_pipeline(const pipelines::PreparedPipeline& p) {

@@ -25,12 +25,12 @@ TEST(DeviceFailure, LostDeviceFailsFramesFastWithTheResultName) {
     f.add(ChannelId::Radiance, Format::F32, std::vector<float>(8 * 4 * 3, 1.0f));
     std::vector<uint8_t> out;
     std::vector<protocol::PassTiming> timings;
-    pipe->process(f.view(), true, out, timings);
+    test::process(*pipe, f.view(), true, out, timings);
 
     context.mark_lost();
     for (int i = 0; i < 2; ++i) {
       try {
-        pipe->process(f.view(), true, out, timings);
+        test::process(*pipe, f.view(), true, out, timings);
         FAIL() << "process succeeded on a lost device";
       } catch (const pipelines::DeviceFailure& e) {
         EXPECT_NE(std::string(e.what()).find("VK_ERROR_DEVICE_LOST"), std::string::npos) << e.what();

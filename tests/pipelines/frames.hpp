@@ -11,6 +11,7 @@
 #include "dn/protocol/channels.hpp"
 #include "dn/protocol/messages.hpp"
 #include "half.hpp"
+#include "pipelines/frame_input.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace dn::test {
@@ -73,6 +74,13 @@ struct HostFrame {
     return f;
   }
 };
+
+// Runs `frame` through `pipeline` as a session does: its planes checked by
+// frame_input() (std::invalid_argument when they do not fit the session).
+inline void process(pipelines::Pipeline& pipeline, const protocol::Frame& frame, bool want_output,
+                    std::vector<uint8_t>& output, std::vector<protocol::PassTiming>& timings) {
+  pipeline.process(pipelines::frame_input_or_throw(frame, pipeline.config()), want_output, output, timings);
+}
 
 inline pipelines::SessionConfig make_config(const std::string& pipeline, uint32_t w, uint32_t h,
                                             std::vector<protocol::ChannelDecl> channels,

@@ -115,7 +115,7 @@ TEST_F(GraphLevelsTest, PyramidAtReducedResolutionsMatchesCpuReference) {
     pipelines::GraphPipeline pipe(ctx(), config, g);
     std::vector<uint8_t> output;
     std::vector<protocol::PassTiming> timings;
-    pipe.process(frame.view(), true, output, timings);
+    test::process(pipe, frame.view(), true, output, timings);
     const std::vector<float> got = test::decode_output(output, Format::F32);
     const std::vector<double> want = reference(radiance, c);
     ASSERT_EQ(got.size(), want.size());

@@ -41,8 +41,8 @@ TEST_F(StagingTest, AccumulateAndPassthroughMatchTheDirectPath) {
       f.add(ChannelId::Motion, in, s.motion);
       std::vector<uint8_t> a, b;
       std::vector<protocol::PassTiming> ta, tb;
-      direct->process(f.view(), true, a, ta);
-      staging->process(f.view(), t != 2, b, tb);  // one frame without download
+      test::process(*direct, f.view(), true, a, ta);
+      test::process(*staging, f.view(), t != 2, b, tb);  // one frame without download
       if (t != 2) {
         EXPECT_EQ(a, b) << "frame " << t;
       } else {
@@ -56,8 +56,8 @@ TEST_F(StagingTest, AccumulateAndPassthroughMatchTheDirectPath) {
       p.add(ChannelId::Radiance, in, s.radiance);
       a.clear();
       b.clear();
-      pass_direct->process(p.view(), true, a, ta);
-      pass_staging->process(p.view(), true, b, tb);
+      test::process(*pass_direct, p.view(), true, a, ta);
+      test::process(*pass_staging, p.view(), true, b, tb);
       EXPECT_EQ(a, b) << "passthrough frame " << t;
       EXPECT_EQ(b, p.planes[0].bytes) << "passthrough is not an exact copy";
     }

@@ -128,7 +128,7 @@ inline std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, 
                        std::vector<protocol::PassTiming>* timings = nullptr) {
   std::vector<uint8_t> bytes;
   std::vector<protocol::PassTiming> t;
-  p.process(f.view(), true, bytes, timings ? *timings : t);
+  test::process(p, f.view(), true, bytes, timings ? *timings : t);
   return test::decode_output(bytes, out);
 }
 

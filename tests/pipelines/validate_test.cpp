@@ -291,13 +291,13 @@ TEST_F(DeviceBytesTest, EstimateEqualsAllocatedBytes) {
   // accumulate, fp32 everywhere: inputs 12+12+4+8, history 2*(16+16), output 12 = 112 B/px, + the constants block (FrameConstants).
   EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48)), 64u * 48 * 112 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
-  // fp16 planes: 6+6+2+4 + 64 + 6 = 88 B/px; odd counts round each plane up to 4 bytes.
+  // fp16 planes and output: the same 112 B/px (planes are fp32 on the device, widened at upload).
   EXPECT_EQ(pipelines::estimate_device_bytes(test::accumulate_config(64, 48, Format::F16, Format::F16)),
-            64u * 48 * 88 + pipelines::GraphSpec::kConstantBytes +
+            64u * 48 * 112 + pipelines::GraphSpec::kConstantBytes +
             pipelines::kSampleSummaryBytes);
   EXPECT_EQ(pipelines::estimate_device_bytes(
                 test::make_config("passthrough", 3, 1, {{ChannelId::Radiance, Format::F16}}, Format::F16)),
-            2u * 20 + pipelines::GraphSpec::kConstantBytes);
+            2u * 36 + pipelines::GraphSpec::kConstantBytes);
 }
 
 TEST_F(DeviceBytesTest, CreateRejectsConfigurationsValidateRejects) {

@@ -1,6 +1,6 @@
 #version 450
 // accumulate: temporal accumulation with reprojection (docs/pipelines.md).
-// One invocation per pixel pair (so an fp16 RGB output pair is whole words).
+// One invocation per pixel pair.
 //
 // Per foreground pixel p (finite depth > 0):
 //   c      = sanitize(radiance)
@@ -44,15 +44,15 @@ void accumulate_tap(ivec2 q, float w, vec3 n, float z, inout vec3 sum_colour, in
 
 vec3 accumulate_pixel(uint p) {
   uvec2 size = frame.size.xy;
-  vec3 c = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p));
-  float z = DN_LOAD1(depth, DEPTH_HALF, p);
+  vec3 c = dn_sanitize_radiance(DN_LOAD3(radiance, p));
+  float z = DN_LOAD1(depth, p);
   if (!dn_is_foreground(z)) {
     cur_colour.data[p] = vec4(c, 0.0);
     cur_geometry.data[p] = vec4(0.0);
     return c;
   }
-  vec3 n = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec3 n = dn_sanitize_normal(DN_LOAD3(normal, p));
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
 
   vec3 prev = vec3(0.0);
   float prev_len = 0.0;
@@ -90,5 +90,5 @@ void main() {
   vec3 a = accumulate_pixel(p0);
   vec3 b = vec3(0.0);
   if (has_b) b = accumulate_pixel(p0 + 1u);
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
 }

@@ -31,12 +31,7 @@ GraphSpec build(const SessionConfig& config) {
       .bind("prev_geometry", "history_geometry", Slot::Previous)
       .bind("cur_colour", "history_colour", Slot::Current)
       .bind("cur_geometry", "history_geometry", Slot::Current)
-      .bind("result", "output")
-      .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
-      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
-      .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
-      .set("OUTPUT_HALF", is_half(config.output_format));
+      .bind("result", "output");
   add_sample_summary(g, "history_colour");
   return g;
 }

@@ -1,7 +1,7 @@
-// passthrough: Radiance -> Output, format conversion on the device and no
-// filtering. The honest baseline for transport benchmarks: it accepts every
-// input channel and uploads each one declared, so a transport measurement
-// pays the upload of a real pipeline's channel set.
+// passthrough: Radiance -> Output, no filtering (non-finite values become 0).
+// The honest baseline for transport benchmarks: it accepts every input channel
+// and uploads each one declared, so a transport measurement pays the upload of
+// a real pipeline's channel set.
 #include "pipelines/definitions.hpp"
 
 namespace dn::pipelines {
@@ -17,9 +17,7 @@ GraphSpec build(const SessionConfig& config) {
   g.add_output(config);
   g.add_pass("passthrough", "passthrough")
       .bind("radiance", "radiance")
-      .bind("result", "output")
-      .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
-      .set("OUTPUT_HALF", is_half(config.output_format));
+      .bind("result", "output");
   return g;
 }
 

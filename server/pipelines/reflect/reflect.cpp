@@ -17,7 +17,6 @@
 // with the reflection features of docs/protocol.md §7.5 as inputs. Passes in
 // front of the SVGF chains: svgf_fb_factor, reflect_prepare, reflect_motion.
 #include "pipelines/definitions.hpp"
-#include <cctype>
 
 #include "pipelines/stages/fb_factor.hpp"
 #include "pipelines/stages/split_signals.hpp"
@@ -66,12 +65,6 @@ bool takes_footprint(const SessionConfig& config, const Parameters& p) {
   return p.reflect_footprint_omega > 0.0f && has_channel(config, ChannelId::ReflectionFootprint);
 }
 
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = char(std::toupper(static_cast<unsigned char>(c)));
-  return out;
-}
-
 SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   SvgfVariant v = svgf_variant_from(config, p);
   v.signals = split_signals(config, Modulator{kModulator, std::nullopt});
@@ -105,7 +98,6 @@ GraphSpec build(const SessionConfig& config) {
   g.add_output(config);
 
   add_fb_factor(g, config, kFactor);
-  auto half = [&](ChannelId id) { return is_half(channel_format(config, id)); };
 
   PassSpec& prepare = g.add_pass("reflect_prepare", "reflect_prepare");
   prepare.bind("roughness", "roughness")
@@ -115,19 +107,15 @@ GraphSpec build(const SessionConfig& config) {
       .bind("features", kFeatures)
       .bind("modulator", kModulator)
       .bind("feature_depth", kFeatureDepth)
-      .bind("feature_normal", kFeatureNormal)
-      .set("ROUGHNESS_HALF", half(ChannelId::Roughness))
-      .set("DEPTH_HALF", half(ChannelId::Depth))
-      .set("NORMAL_HALF", half(ChannelId::Normal));
+      .bind("feature_normal", kFeatureNormal);
   for (ChannelId id : kFeatureChannels) {
     const std::string name(protocol::find_channel(id)->name);
-    prepare.bind(name, name).set(upper(name) + "_HALF", half(id));
+    prepare.bind(name, name);
   }
   if (footprint)
     prepare.bind("reflection_footprint", "reflection_footprint")
         .bind("bandwidth", kBandwidth)
-        .set("FOOTPRINT", 1u)
-        .set("REFLECTION_FOOTPRINT_HALF", half(ChannelId::ReflectionFootprint));
+        .set("FOOTPRINT", 1u);
   if (virtual_start) prepare.bind("virtual_motion", kVirtualMotion).set("VIRTUAL_START", 1u);
   prepare.pixels_per_invocation = 1;
 
@@ -135,8 +123,7 @@ GraphSpec build(const SessionConfig& config) {
   search.bind("features", kFeatures)
       .bind("prev_features", kFeatures, Slot::Previous)
       .bind("motion", "motion")
-      .bind("result", kMotion)
-      .set("MOTION_HALF", half(ChannelId::Motion));
+      .bind("result", kMotion);
   if (virtual_start) search.bind("virtual_motion", kVirtualMotion).set("VIRTUAL_START", 1u);
   search.pixels_per_invocation = 1;
 
@@ -146,13 +133,10 @@ GraphSpec build(const SessionConfig& config) {
     median.bind("src", kDisplay)
         .bind("features", kFeatures)
         .bind("depth", "depth")
-        .bind("result", v.extra_samples ? kSupersampleDisplay : "output")
-        .set("DEPTH_HALF", half(ChannelId::Depth))
-        .set("OUTPUT_HALF", v.extra_samples ? 0u : is_half(config.output_format));
+        .bind("result", v.extra_samples ? kSupersampleDisplay : "output");
     if (v.emission)
       median.bind("emission", "emission")
-          .set("HAS_EMISSION", 1u)
-          .set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+          .set("HAS_EMISSION", 1u);
     if (const std::string still = still_mean_buffer(v); !still.empty())
       median.bind("still_mean", still).bind("still_m2", still_m2_buffer(v)).set("CONVERGE_STILL", 1u);
     if (v.extra_samples) add_supersample_resolve(g, config, kSupersampleDisplay);

@@ -40,7 +40,7 @@
 #include "svgf_guards.glsl"
 #include "reflect.glsl"
 
-vec3 emitted(uint p) { return HAS_EMISSION ? dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)) : vec3(0.0); }
+vec3 emitted(uint p) { return HAS_EMISSION ? dn_sanitize_radiance(DN_LOAD3(emission, p)) : vec3(0.0); }
 
 // One exchange of the network: a gets the component-wise min, b the max.
 #define DN_EXCHANGE(a, b) \
@@ -74,7 +74,7 @@ bool window_median(uint p, out vec3 median) {
   [[unroll]] for (int k = 0; k < 9; ++k) {
     ivec2 q = pos + ivec2(k % 3 - 1, k / 3 - 1);
     uint qi = uint(q.y) * frame.size.x + uint(q.x);
-    taken[k] = dn_inside(q, frame.size.xy) && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, qi));
+    taken[k] = dn_inside(q, frame.size.xy) && dn_is_foreground(DN_LOAD1(depth, qi));
     colours[k] = vec3(0.0);
     if (taken[k]) {
       if (features.data[2u * qi].w != DN_REFLECT_NONE) return false;
@@ -111,7 +111,7 @@ bool window_median(uint p, out vec3 median) {
 const float DN_MEDIAN_T = 3.0;
 vec3 filtered(uint p) {
   vec3 c = src_at(p).rgb;
-  if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) return c;
+  if (features.data[2u * p].w != DN_REFLECT_NONE || !dn_is_foreground(DN_LOAD1(depth, p))) return c;
   vec3 median;
   if (!window_median(p, median)) return c;
   vec3 e = emitted(p);
@@ -136,5 +136,5 @@ void main() {
   bool has_b = p0 + 1u < frame.size.z;
   vec3 a = filtered(p0);
   vec3 b = has_b ? filtered(p0 + 1u) : vec3(0.0);
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
 }

@@ -132,7 +132,7 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   pa = features_at(2u * p);
   pb = features_at(2u * p + 1u);
   bool searched = pa.w != DN_REFLECT_NONE && (pa.w == DN_REFLECT_MIRROR || dn_reflect_ray_exists(pb.w)) &&

@@ -75,7 +75,7 @@ vec2 glossy_virtual_motion(uint p, vec3 o, float t) {
 }
 
 float reflection_class(uint p, float z) {
-  float r = dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p));
+  float r = dn_sanitize_roughness(DN_LOAD1(roughness, p));
   if (!dn_is_foreground(z)) return DN_REFLECT_NONE;
   if (r < DN_PARAM_VALUE(reflect, mirror_roughness)) return DN_REFLECT_MIRROR;
   if (r < DN_PARAM_VALUE(reflect, glossy_roughness)) return DN_REFLECT_GLOSSY;
@@ -85,32 +85,32 @@ float reflection_class(uint p, float z) {
 void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
-  float z = DN_LOAD1(depth, DEPTH_HALF, p);
+  float z = DN_LOAD1(depth, p);
   const float primary_depth = z;
-  vec3 n = DN_LOAD3(normal, NORMAL_HALF, p);
+  vec3 n = DN_LOAD3(normal, p);
   float cls = reflection_class(p, z);
   vec3 f = vec3(fb_factor.data[3u * p], fb_factor.data[3u * p + 1u], fb_factor.data[3u * p + 2u]);
 
   vec4 a = vec4(0.0), b = vec4(0.0);
   vec2 vmv = vec2(DN_REFLECT_INVALID);  // VIRTUAL_START
   if (cls == DN_REFLECT_MIRROR) {
-    vec3 w = DN_LOAD3(reflection_position, REFLECTION_POSITION_HALF, p);
+    vec3 w = DN_LOAD3(reflection_position, p);
     if (dn_is_finite(w)) {
       a = vec4(w, cls);
-      f *= dn_guarded_albedo(DN_LOAD3(reflection_albedo, REFLECTION_ALBEDO_HALF, p));
-      float vz = DN_LOAD1(reflection_depth, REFLECTION_DEPTH_HALF, p);
-      if (VIRTUAL_START) vmv = mirror_virtual_motion(p, DN_LOAD3(position, POSITION_HALF, p), vz, primary_depth);
+      f *= dn_guarded_albedo(DN_LOAD3(reflection_albedo, p));
+      float vz = DN_LOAD1(reflection_depth, p);
+      if (VIRTUAL_START) vmv = mirror_virtual_motion(p, DN_LOAD3(position, p), vz, primary_depth);
       if (dn_is_foreground(vz)) {
         z = vz;
-        n = DN_LOAD3(reflection_normal, REFLECTION_NORMAL_HALF, p);
+        n = DN_LOAD3(reflection_normal, p);
       }
     } else {
       cls = DN_REFLECT_NONE;
     }
   } else if (cls == DN_REFLECT_GLOSSY) {
-    vec3 o = DN_LOAD3(position, POSITION_HALF, p);
-    vec3 d = DN_LOAD3(reflection_direction, REFLECTION_DIRECTION_HALF, p);
-    float t = DN_LOAD1(reflection_distance, REFLECTION_DISTANCE_HALF, p);
+    vec3 o = DN_LOAD3(position, p);
+    vec3 d = DN_LOAD3(reflection_direction, p);
+    float t = DN_LOAD1(reflection_distance, p);
     float len = length(d);
     if (dn_is_finite(o) && dn_is_finite(len) && len > 0.5) {
       a = vec4(o, cls);
@@ -122,7 +122,7 @@ void main() {
   }
   if (VIRTUAL_START) virtual_motion.data[p] = vmv;
   if (FOOTPRINT) {
-    float fp = DN_LOAD1(reflection_footprint, REFLECTION_FOOTPRINT_HALF, p);
+    float fp = DN_LOAD1(reflection_footprint, p);
     bool take = cls == DN_REFLECT_GLOSSY && dn_is_finite(fp) && fp >= 0.0;
     float omega = DN_PARAM_VALUE(reflect, footprint_omega);
     bandwidth.data[p] = take ? max(exp(-fp / omega), DN_REFLECT_MIN_BANDWIDTH) : 0.0;

@@ -16,7 +16,6 @@ void add_fb_factor(GraphSpec& g, const SessionConfig& config, const std::string&
   g.add_input(config, ChannelId::SpecularF0, "specular_f0");
   g.add_shared(kFbLutResource.name, kFbLutResource.resource);
   g.add_scratch(factor, kFactorBytes);
-  auto half = [&](ChannelId id) { return is_half(channel_format(config, id)); };
   g.add_pass("svgf_fb_factor", "svgf_fb_factor")
       .bind("specular_f0", "specular_f0")
       .bind("roughness", "roughness")
@@ -24,10 +23,6 @@ void add_fb_factor(GraphSpec& g, const SessionConfig& config, const std::string&
       .bind("depth", "depth")
       .bind("fb_lut", kFbLutResource.name)
       .bind("factor", factor)
-      .set("F0_HALF", half(ChannelId::SpecularF0))
-      .set("ROUGHNESS_HALF", half(ChannelId::Roughness))
-      .set("NORMAL_HALF", half(ChannelId::Normal))
-      .set("DEPTH_HALF", half(ChannelId::Depth))
       .pixels_per_invocation = 1;
 }
 

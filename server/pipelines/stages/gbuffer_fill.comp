@@ -30,11 +30,11 @@ void main() {
   const uvec2 size0 = uvec2(dn_arg_width0(), dn_arg_height0());
   const uint here = dn_level_offset(size0, factor, level) + dn_grid_index(p, dn_grid.size);
   if (MODE == DN_MODE_seed) {
-    const float z = DN_LOAD1(depth, DEPTH_HALF, here);
+    const float z = DN_LOAD1(depth, here);
     const bool fg = dn_is_foreground(z);
-    const vec3 n = fg ? dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, here)) : vec3(0.0);
+    const vec3 n = fg ? dn_sanitize_normal(DN_LOAD3(normal, here)) : vec3(0.0);
     pyramid.data[here] = vec4(n, fg ? z : 0.0);
-    valid.data[here] = dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, here)) ? 1u : 0u;
+    valid.data[here] = dn_is_sampled(DN_LOAD1(sample_count, here)) ? 1u : 0u;
     return;
   }
   if (MODE == DN_MODE_pull) {

@@ -7,8 +7,6 @@
 
 namespace dn::pipelines::svgf {
 
-using protocol::ChannelId;
-
 namespace {
 
 // The number of levels above level 0 of the 3x3 pyramid: down to one pixel.
@@ -23,7 +21,7 @@ uint32_t gbuffer_levels(const SessionConfig& config) {
 
 // gbuffer_fill: seed level 0 from the planes, pull to the coarsest level,
 // push back down; the push at level 0 writes the filled planes.
-void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask) {
+void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config) {
   const uint32_t levels = gbuffer_levels(config);
   // The grid arguments of every gbuffer_fill pass: its level of the pyramid over the full size.
   auto over = [&](PassSpec& pass, gpu::Extent size, gpu::Extent source, uint32_t level) -> PassSpec& {
@@ -40,10 +38,7 @@ void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, ChannelId mask)
       .bind("sample_count", "sample_count")
       .bind("pyramid", kGbufferPyramid)
       .bind("valid", kGbufferValid)
-      .mode("seed")
-      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
-      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
+      .mode("seed");
   over(seed, full, full, 0);
   for (uint32_t l = 1; l <= levels; ++l) {
     PassSpec& pull = g.add_pass("gbuffer_pull_" + std::to_string(l), "gbuffer_fill");

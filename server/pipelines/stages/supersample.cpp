@@ -107,17 +107,11 @@ void add_supersample_buffers(GraphSpec& g, const std::vector<std::string>& input
 
 void add_supersample_assign(GraphSpec& g, const SessionConfig& config) {
   const uint32_t n = extra_samples(config);
-  auto half = [&](ChannelId id) { return is_half(channel_format(config, id)); };
   PassSpec& assign = g.add_pass("supersample_assign", "supersample_assign");
   assign.bind("normal", "normal")
       .bind("depth", "depth")
       .bind("assignment", kAssignment)
-      .set("SAMPLES", n)
-      .set("NORMAL_HALF", half(ChannelId::Normal))
-      .set("DEPTH_HALF", half(ChannelId::Depth))
-      .set("SAMPLE_NORMAL_HALF", half(sample_channel(1, SampleField::Normal)))
-      .set("SAMPLE_DEPTH_HALF", half(sample_channel(1, SampleField::Depth)))
-      .set("SAMPLE_OFFSET_HALF", half(sample_channel(1, SampleField::Offset)));
+      .set("SAMPLES", n);
   for (uint32_t j = 1; j <= n; ++j) {
     const std::string k = std::to_string(j);
     assign.bind("normal_" + k, name(sample_channel(j, SampleField::Normal)))
@@ -134,9 +128,7 @@ void add_supersample_mix(GraphSpec& g, const SessionConfig& config, ChannelId si
   mix.bind("signal", input)
       .bind("assignment", kAssignment)
       .bind("mixed", mixed_signal(input))
-      .set("SAMPLES", n)
-      .set("SIGNAL_HALF", is_half(channel_format(config, signal)))
-      .set("SAMPLE_SIGNAL_HALF", is_half(channel_format(config, sample_channel(1, field_of(signal)))));
+      .set("SAMPLES", n);
   for (uint32_t j = 1; j <= n; ++j) mix.bind("signal_" + std::to_string(j), name(sample_channel(j, field_of(signal))));
   mix.pixels_per_invocation = 1;
 }
@@ -147,7 +139,6 @@ void add_supersample_resolve(GraphSpec& g, const SessionConfig& config, const st
       .bind("assignment", kAssignment)
       .bind("result", "output")
       .set("SAMPLES", extra_samples(config))
-      .set("OUTPUT_HALF", is_half(config.output_format))
       .pixels_per_invocation = 2;
 }
 

@@ -28,14 +28,14 @@ uint assign(ivec2 pos, vec3 n, float z, vec2 offset) {
     ivec2 g = base + ivec2(k & 1, k >> 1);
     if (!dn_inside(g, frame.size.xy)) continue;
     uint gi = uint(g.y) * frame.size.x + uint(g.x);
-    float zg = DN_LOAD1(depth, DEPTH_HALF, gi);
+    float zg = DN_LOAD1(depth, gi);
     bool guide_foreground = dn_is_foreground(zg);
     float w;
     if (!foreground || !guide_foreground) {
       w = foreground == guide_foreground ? 1.0 : 0.0;
     } else {
       // Sanitized (no normal: no match), so a huge normal cannot make pow() infinite.
-      float c = dot(dn_sanitize_normal(n), dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, gi)));
+      float c = dot(dn_sanitize_normal(n), dn_sanitize_normal(DN_LOAD3(normal, gi)));
       w = exp(-abs(z - zg) / (DN_SAMPLE_DEPTH_SCALE * max(z, zg))) * pow(max(c, 0.0), DN_SAMPLE_NORMAL_POWER);
     }
     // Proximity: the sample's bilinear weight for this guide, so that among
@@ -52,8 +52,8 @@ uint assign(ivec2 pos, vec3 n, float z, vec2 offset) {
 
 #define DN_ASSIGN(j, n_buf, z_buf, o_buf)                                                              \
   if (SAMPLES >= j)                                                                                    \
-    word |= assign(pos, DN_LOAD3(n_buf, SAMPLE_NORMAL_HALF, p), DN_LOAD1(z_buf, SAMPLE_DEPTH_HALF, p), \
-                   DN_LOAD2(o_buf, SAMPLE_OFFSET_HALF, p))                                             \
+    word |= assign(pos, DN_LOAD3(n_buf, p), DN_LOAD1(z_buf, p), \
+                   DN_LOAD2(o_buf, p))                                             \
             << (4u * (j - 1u));
 
 void main() {

@@ -21,7 +21,7 @@ vec3 sanitized(vec3 c) { return dn_sanitize_radiance(c); }
 
 #define DN_MIX(j, buf)                                                                \
   if (SAMPLES >= j && dn_sample_code(word, j) == want) {                              \
-    sum += sanitized(DN_LOAD3(buf, SAMPLE_SIGNAL_HALF, qi));                          \
+    sum += sanitized(DN_LOAD3(buf, qi));                          \
     count += 1.0;                                                                     \
   }
 
@@ -29,7 +29,7 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec3 sum = sanitized(DN_LOAD3(signal, SIGNAL_HALF, p));
+  vec3 sum = sanitized(DN_LOAD3(signal, p));
   float count = 1.0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {

@@ -15,14 +15,14 @@
 
 vec3 resolved(uint p) {
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
-  vec3 sum = DN_LOAD3(src, false, p);
+  vec3 sum = DN_LOAD3(src, p);
   float count = 1.0;
   uint word = assignment_at(p);
   for (uint j = 1u; j <= SAMPLES; ++j) {
     uint code = dn_sample_code(word, j);
     if (code == DN_SAMPLE_UNUSED) continue;
     ivec2 g = pos + dn_sample_guide_offset(code);  // inside: assign picks only pixels inside
-    sum += DN_LOAD3(src, false, uint(g.y) * frame.size.x + uint(g.x));
+    sum += DN_LOAD3(src, uint(g.y) * frame.size.x + uint(g.x));
     count += 1.0;
   }
   return sum / count;
@@ -35,5 +35,5 @@ void main() {
   bool has_b = p0 + 1u < frame.size.z;
   vec3 a = resolved(p0);
   vec3 b = has_b ? resolved(p0 + 1u) : vec3(0.0);
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
 }

@@ -260,7 +260,7 @@ void main() {
         if (DISPLAY_FILL && result.w == DN_SVGF_NO_DATA) fill_mask[s] |= 1u << uint(k);
         if (s == 0) dst.data[pi] = result;
         else dst2.data[pi] = result;
-        if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, pi))) &&
+        if (FEEDBACK && (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, pi))) &&
             (!AGE_GATED_LUMINANCE || dn_temporal_load(s, pi).z >= min_age)) {
           if (s == 0) colour_history.data[pi].rgb = result.rgb;
           else colour_history2.data[pi].rgb = result.rgb;

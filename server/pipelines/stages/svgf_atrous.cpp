@@ -40,7 +40,7 @@ std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, c
       if (i == tap) atrous.bind("colour_history2", v.signals[1].history + "_colour");
       bind_second_geometry(atrous, buffers[0], buffers[1]);
     }
-    if (i == tap && v.validity_mask) bind_validity_mask(config, *v.validity_mask, atrous);
+    if (i == tap && v.validity_mask) bind_validity_mask(atrous);
     if (!last.spatial_bandwidth.empty()) atrous.bind("bandwidth", last.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
     // Grid of server/pipelines/stages/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
     const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;

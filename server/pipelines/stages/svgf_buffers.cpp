@@ -4,21 +4,12 @@
 
 namespace dn::pipelines::svgf {
 
-using protocol::ChannelId;
-
-uint32_t modulator_half(const SessionConfig& config, const Modulator& m) {
-  return m.plane ? is_half(channel_format(config, *m.plane)) : 0u;
-}
-
 std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s) {
   return v.extra_samples ? mixed_signal(s.input) : s.input;
 }
-uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s) {
-  return v.extra_samples ? 0u : is_half(channel_format(config, s.channel));
-}
 
-void bind_validity_mask(const SessionConfig& config, ChannelId mask, PassSpec& pass) {
-  pass.bind("sample_count", "sample_count").set("MASKED", 1u).set("SAMPLE_COUNT_HALF", is_half(channel_format(config, mask)));
+void bind_validity_mask(PassSpec& pass) {
+  pass.bind("sample_count", "sample_count").set("MASKED", 1u);
 }
 
 SignalBuffers signal_buffers(const SvgfVariant& v, size_t index) {

@@ -85,14 +85,11 @@ inline constexpr const char* kFilledDepth = "gbuffer_depth";
 inline constexpr const char* kFilledNormal = "gbuffer_normal";
 inline constexpr uint32_t kGbufferFactor = 3;
 
-// The half flag of a modulator plane (0 for a buffer the server computes).
-uint32_t modulator_half(const SessionConfig& config, const Modulator& m);
 // The buffer a chain reads its signal from: the plane, or with extra samples
-// supersample_mix's fp32 result; and its half flag.
+// supersample_mix's result.
 std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s);
-uint32_t signal_half(const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s);
 // The sample_count plane as a pass's validity mask (MASKED).
-void bind_validity_mask(const SessionConfig& config, protocol::ChannelId mask, PassSpec& pass);
+void bind_validity_mask(PassSpec& pass);
 
 // The scratch buffers of signal `index`.
 struct SignalBuffers {

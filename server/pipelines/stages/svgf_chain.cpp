@@ -152,11 +152,11 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     add_supersample_assign(g, config);
     for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
   }
-  if (v.sparse_gbuffer) add_gbuffer_fill(g, config, *v.validity_mask);
-  for (size_t i = 0; i < v.signals.size(); ++i) add_reprojection(g, config, v, i);
+  if (v.sparse_gbuffer) add_gbuffer_fill(g, config);
+  for (size_t i = 0; i < v.signals.size(); ++i) add_reprojection(g, v, i);
   add_variance(g, v);
   const std::vector<std::string> results = add_atrous(g, config, v);
-  add_remodulate(g, config, v, results);
+  add_remodulate(g, v, results);
   if (v.extra_samples && v.display.empty()) add_supersample_resolve(g, config, kSupersampleDisplay);
   // RESULT.samples: the first chain's history length, or its still mean's count.
   add_sample_summary(g, v.signals[0].history + "_colour", still_mean_buffer(v));

@@ -28,7 +28,7 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   if (MODE == DN_MODE_current) {
-    dst.data[p] = vec4(dn_svgf_current(p), dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) ? 1.0 : 0.0);
+    dst.data[p] = vec4(dn_svgf_current(p), dn_is_foreground(DN_LOAD1(depth, p)) ? 1.0 : 0.0);
     return;
   }
   bool vertical = MODE == DN_MODE_vertical;

@@ -37,12 +37,12 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   vec3 f = vec3(1.0);
-  if (dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) {
-    vec3 n = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
+  if (dn_is_foreground(DN_LOAD1(depth, p))) {
+    vec3 n = dn_sanitize_normal(DN_LOAD3(normal, p));
     float n2 = dot(n, n);
     float cos_o = n2 > 0.0 ? clamp(-dot(n, view_ray(p)) * inversesqrt(n2), 0.0, 1.0) : 0.0;
-    float alpha = dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p));
-    vec3 f0 = dn_sanitize_f0(DN_LOAD3(specular_f0, F0_HALF, p));
+    float alpha = dn_sanitize_roughness(DN_LOAD1(roughness, p));
+    vec3 f0 = dn_sanitize_f0(DN_LOAD3(specular_f0, p));
     vec2 ab = dn_fb_lut(cos_o, alpha);
     f = f0 * ab.x + ab.y;
   }

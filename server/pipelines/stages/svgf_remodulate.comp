@@ -1,10 +1,10 @@
 #version 450
 // svgf_remodulate: Output = filtered demodulated colour * guarded albedo
 // (+ the filtered specular in split mode, + sanitized emission, never
-// filtered: a still pixel's running mean of it) in the session's output
-// format (docs/pipelines.md, "svgf in detail", 4). One invocation per pixel
+// filtered: a still pixel's running mean of it) as fp32
+// (docs/pipelines.md, "svgf in detail", 4). One invocation per pixel
 // pair.
-// With TAA (taa_alpha or taa_static_alpha > 0, spec constant 6) it writes, instead of Output, the
+// With TAA (taa_alpha or taa_static_alpha > 0: TAA) it writes, instead of Output, the
 // current colour and the bilinearly reprojected previous final output for
 // svgf_taa (docs/pipelines.md, "svgf in detail", 5): the TAA history is read
 // only here and rewritten only by svgf_taa, so one persistent copy suffices.
@@ -119,12 +119,12 @@ vec3 dn_harm_guard(vec3 f, vec4 own, float len, int s, uint p) {
 // still its own unfiltered temporal mean.
 
 vec3 specular_modulator(uint p) {
-  return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)) : vec3(1.0);
+  return SPECULAR_FACTOR ? dn_guarded_albedo(DN_LOAD3(specular_factor, p)) : vec3(1.0);
 }
 
 // The specular radiance sent for p (split sessions with KEEP_UNEXPLAINED).
 vec3 raw_specular(uint p) {
-  return dn_sanitize_radiance(DN_LOAD3(raw2, RAW2_HALF, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
+  return dn_sanitize_radiance(DN_LOAD3(raw2, p)) * (RAW2_DIVIDED ? specular_modulator(p) : vec3(1.0));
 }
 
 // The current radiance of an unexplained pixel, less emission; a: its
@@ -134,14 +134,14 @@ vec3 raw_specular(uint p) {
 // one reflected sample hit), and the means of other frames' samples, which
 // other albedos demodulated, are not radiance times it.
 vec3 kept_radiance(uint p, vec3 a, vec3 ga) {
-  vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, RAW_HALF, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
+  vec3 c = dn_sanitize_radiance(DN_LOAD3(raw, p)) * (RAW_DIVIDED ? ga : vec3(1.0));
   if (HAS_SPECULAR) {
     c += raw_specular(p);
   } else if (HAS_EMISSION) {
-    c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, EMISSION_HALF, p)), vec3(0.0));
+    c = max(c - dn_sanitize_radiance(DN_LOAD3(emission, p)), vec3(0.0));
   }
   if (HARM_GUARD && dn_no_reflectance(a)) {
-    vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+    vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
     vec4 m = dn_guard_mean(own_at(p), 0, p);
     vec4 m2 = HAS_SPECULAR ? dn_guard_mean(own2_at(p), 1, p) : vec4(0.0);
     if (dn_motion_usable(mv) && m.w >= 0.0 && m2.w >= 0.0)
@@ -167,14 +167,14 @@ vec3 kept_radiance(uint p, vec3 a, vec3 ga) {
 const float DN_EMISSION_T = 6.0;
 const float DN_EMISSION_MIN_SAMPLES = 8.0;
 vec3 emission_added(uint p) {
-  vec3 raw = DN_LOAD3(emission, EMISSION_HALF, p);
+  vec3 raw = DN_LOAD3(emission, p);
   vec3 e = dn_sanitize_radiance(raw);
   if (!EMISSION_STILL) return e;
-  if (!dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p))) {
+  if (!dn_is_foreground(DN_LOAD1(depth, p))) {
     emission_still.data[p] = vec4(0.0);
     return e;
   }
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   vec4 s = vec4(0.0);
   vec2 t = vec2(0.0);  // M2 of the samples' luminance, suspect
   if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) && dn_is_still(mv)) {
@@ -205,11 +205,11 @@ vec3 emission_added(uint p) {
 }
 
 vec3 remodulate(uint p, out bool kept) {
-  vec3 a = DN_LOAD3(albedo, ALBEDO_HALF, p);
+  vec3 a = DN_LOAD3(albedo, p);
   vec3 ga = dn_guarded_albedo(a);
   // Below one sample per pixel an unsampled pixel has no radiance of its own: the filter's, as every pixel's.
   bool keeping = KEEP_UNEXPLAINED && DN_PARAM_VALUE(svgf, keep_unexplained) != 0.0 &&
-                 (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, p)));
+                 (!MASKED || dn_is_sampled(DN_LOAD1(sample_count, p)));
   kept = keeping && dn_unexplained(a);
   vec3 c;
   if (kept) {
@@ -217,7 +217,7 @@ vec3 remodulate(uint p, out bool kept) {
   } else {
     c = dn_harm_guard(illum_at(p).rgb, HARM_GUARD ? own_at(p) : vec4(-1.0),
                       HARM_GUARD ? colour_history_at(p).a : 0.0, 0, p) * ga;
-    if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, SPECULAR_FACTOR_HALF, p)))
+    if (HAS_SPECULAR && keeping && SPECULAR_FACTOR && dn_no_reflectance(DN_LOAD3(specular_factor, p)))
       c += raw_specular(p);  // no specular lobe: what the filter brought in is the neighbours'
     else if (HAS_SPECULAR)
       c += dn_harm_guard(specular_at(p).rgb, HARM_GUARD ? own2_at(p) : vec4(-1.0),
@@ -274,11 +274,11 @@ void taa_prepare(uint p, vec3 c, bool kept) {
   vec3 prev = vec3(0.0);
   float prev_lag = 0.0;
   bool valid = false;
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   float weight = dn_motion_usable(mv) ? taa_weight(p, mv, kept) : 1.0;
   ivec2 origin;
   vec4 weights;
-  if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, DEPTH_HALF, p)) &&
+  if (weight < 1.0 && (frame.size.w & DN_FLAG_RESET) == 0u && dn_is_foreground(DN_LOAD1(depth, p)) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, weights)) {
     vec3 s = vec3(0.0);
     float sw = 0.0, heaviest = 0.0;
@@ -323,6 +323,6 @@ void main() {
     display.data[p0] = vec4(a, 0.0);
     if (has_b) display.data[p0 + 1u] = vec4(b, 0.0);
   } else {
-    DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+    DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
   }
 }

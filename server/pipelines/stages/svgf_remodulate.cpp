@@ -7,8 +7,7 @@ namespace dn::pipelines::svgf {
 
 using protocol::ChannelId;
 
-void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v,
-                    const std::vector<std::string>& results) {
+void add_remodulate(GraphSpec& g, const SvgfVariant& v, const std::vector<std::string>& results) {
   // With TAA, svgf_remodulate writes the current colour and the reprojected
   // TAA history instead of Output, and svgf_taa blends them: into the
   // temporal and the guide scratch, whose contents are dead once the a-trous
@@ -18,25 +17,22 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
     g.add_alias(kTaaPrevious, kGuide);
   }
   const Modulator& first = v.signals[0].modulator;
-  // Output, or a scratch frame for the caller's pass or the resolve.
-  const bool direct = v.display.empty() && !v.extra_samples;
+  // Output, or a scratch frame for the resolve.
   const std::string result = v.extra_samples ? kSupersampleDisplay : "output";
-  const uint32_t result_half = direct ? is_half(config.output_format) : 0u;
   // The last pass's frame: Output (or the resolve's), or the caller's display.
   auto bind_result = [&](PassSpec& pass) {
-    if (v.display.empty()) pass.bind("result", result).set("OUTPUT_HALF", result_half);
+    if (v.display.empty()) pass.bind("result", result);
     else pass.bind("display", v.display).set("TO_DISPLAY", 1u);
   };
   PassSpec& remodulate = g.add_pass("svgf_remodulate", "svgf_remodulate");
   remodulate.bind("illum", results[0])
       .bind("albedo", first.buffer)
-      .set("ALBEDO_HALF", modulator_half(config, first))
       .set("HAS_EMISSION", v.emission)
       .set("HAS_SPECULAR", v.signals.size() > 1)
       .set("TAA", v.taa);
   if (!v.taa) bind_result(remodulate);
   if (v.emission)
-    remodulate.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+    remodulate.bind("emission", "emission");
   if (keeps_still_emission(v))
     remodulate.bind("emission_still", kEmissionStill).bind("emission_test", kEmissionTest).set("EMISSION_STILL", 1u);
   if (v.signals.size() > 1) {
@@ -44,8 +40,7 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
     const Modulator& second = v.signals[1].modulator;
     if (!second.empty())
       remodulate.bind("specular_factor", second.buffer)
-          .set("SPECULAR_FACTOR", 1u)
-          .set("SPECULAR_FACTOR_HALF", modulator_half(config, second));
+          .set("SPECULAR_FACTOR", 1u);
   }
   // keep: the (diffuse) albedo must be a client plane, the test's input; with
   // a validity mask only sampled pixels have a current radiance to keep.
@@ -53,11 +48,10 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
   const bool keep = v.keep_unexplained && (radiance || v.signals.size() == 2) && !v.extra_samples &&
                     first.plane == ChannelId::Albedo;
   // Motion: the TAA reprojection's, a still unexplained pixel's history (with the guard's buffer), still emission.
-  if (v.taa || keep || keeps_still_emission(v)) remodulate.bind("motion", "motion").set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+  if (v.taa || keep || keeps_still_emission(v)) remodulate.bind("motion", "motion");
   // Depth: the TAA's foreground test, still emission's (a background pixel keeps no mean).
   if (v.taa || keeps_still_emission(v))
-    remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
-        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
+    remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth");
   if (v.taa) remodulate.bind("taa_history", kTaaHistory).bind("taa_current", kTaaCurrent).bind("taa_previous", kTaaPrevious);
   const bool guard = v.harm_guard && v.iterations > 0;
   // The first chain's history (its length): read by the display lag and the harm guard.
@@ -66,12 +60,10 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
   if (keep) {
     remodulate.bind("raw", v.signals[0].input)
         .set("KEEP_UNEXPLAINED", 1u)
-        .set("RAW_HALF", is_half(channel_format(config, v.signals[0].channel)))
         .set("RAW_DIVIDED", first.client_divided);
-    if (v.validity_mask) bind_validity_mask(config, *v.validity_mask, remodulate);
+    if (v.validity_mask) bind_validity_mask(remodulate);
     if (v.signals.size() > 1)
       remodulate.bind("raw2", v.signals[1].input)
-          .set("RAW2_HALF", is_half(channel_format(config, v.signals[1].channel)))
           .set("RAW2_DIVIDED", v.signals[1].modulator.client_divided);
   }
   if (guard) {
@@ -92,8 +84,7 @@ void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
     taa.bind("current", kTaaCurrent).bind("previous", kTaaPrevious).bind("history", kTaaHistory)
-        .bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth")
-        .set("DEPTH_HALF", v.sparse_gbuffer ? 0u : is_half(channel_format(config, ChannelId::Depth)));
+        .bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth");
     bind_result(taa);
     if (v.display_lag) taa.set("DISPLAY_LAG", 1u);
   }

@@ -22,7 +22,7 @@
 #include "reflect.glsl"
 
 // MASKED: whether pixel q has a sample this frame (sanitize.glsl's rule).
-bool sampled(uint q) { return dn_is_sampled(DN_LOAD1(sample_count, SAMPLE_COUNT_HALF, q)); }
+bool sampled(uint q) { return dn_is_sampled(DN_LOAD1(sample_count, q)); }
 
 // An unsampled background pixel's fill sources: the background pixels
 // sampled this frame (background keeps no history).
@@ -119,7 +119,7 @@ bool history_rejected(ivec2 pos, float l, float lp, float lh, float sigma, bool 
 // Whether p's history is clipped: sanitized roughness below clip_roughness
 // (a non-finite one counts as rough, 1: not clipped).
 bool clipped_here(uint p) {
-  return CLIP && dn_sanitize_roughness(DN_LOAD1(roughness, ROUGHNESS_HALF, p)) < DN_PARAM_VALUE(svgf, clip_roughness);
+  return CLIP && dn_sanitize_roughness(DN_LOAD1(roughness, p)) < DN_PARAM_VALUE(svgf, clip_roughness);
 }
 
 // Whether the history's depth and normal tests apply at this pixel (off at
@@ -289,7 +289,7 @@ void main() {
   vec3 n = dn_svgf_normal(p);
   bool has_normal = dot(n, n) > 0.0;
   vec2 grad = dn_svgf_gradients(pos, z, n);
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   // Whether p is still: its surface's motion, but at a mirror the
   // reflection's (its modulator holds the reflected albedo, which a moving
   // reflection changes). A still glossy pixel's representative-ray match
@@ -402,7 +402,7 @@ void main() {
   bool own_kept = depth_only ? reads_history && own_z != 0.0 && dn_same_depth(z, grad.x, abs(own_z))
                              : surface_kept && tap_valid(pos, z, n, grad, own_aux);
   bool continues = CONVERGE_STILL && dn_is_still(still_mv) && (SURFACE_STILL ? surface_still.data[p].a >= 2.0 : own_kept);
-  bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, SIGNAL_HALF, p));
+  bool has_sample = dn_is_valid_radiance(DN_LOAD3(signal, p));
   if (has_sample && !still_unchanged(p, pos, continues) && continues) {
     continues = false;
     valid = false;

@@ -4,27 +4,21 @@
 
 namespace dn::pipelines::svgf {
 
-using protocol::ChannelId;
-
 namespace {
 
 // The passes of the separable 7x7 prefilter history clipping takes its box
 // from: the demodulated current signal once per pixel, rows, columns.
-void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, const SvgfSignal& s,
-                        bool demodulate) {
+void add_clip_prefilter(GraphSpec& g, const SvgfVariant& v, const SvgfSignal& s, bool demodulate) {
   PassSpec& current = g.add_pass("svgf_clip_current" + s.suffix, "svgf_clip_prefilter");
   current.bind("signal", signal_buffer(v, s))
       .bind("depth", "depth")
       .bind("dst", kClipCurrent)
       .mode("current")
-      .set("SIGNAL_HALF", signal_half(config, v, s))
-      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
       .set("DEMODULATE", demodulate)
-      .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
       .set("SUBTRACT_EMISSION", s.subtract_emission);
   if (demodulate) current.bind("modulator", s.modulator.buffer);
   if (s.subtract_emission)
-    current.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+    current.bind("emission", "emission");
   current.pixels_per_invocation = 1;
   g.add_pass("svgf_clip_prefilter_x" + s.suffix, "svgf_clip_prefilter")
       .bind("src", kClipCurrent)
@@ -40,20 +34,16 @@ void add_clip_prefilter(GraphSpec& g, const SessionConfig& config, const SvgfVar
 
 }  // namespace
 
-void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index) {
+void add_reprojection(GraphSpec& g, const SvgfVariant& v, size_t index) {
   const SvgfSignal& s = v.signals[index];
   const SignalBuffers buffers = signal_buffers(v, index);
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
-  // Features: the signal's own (fp32 buffers), the filled sparse G-buffer
-  // (fp32 buffers) or the primary planes.
-  const bool own = s.features.has_value() || v.sparse_gbuffer;
+  // Features: the signal's own, the filled sparse G-buffer or the primary planes.
   const std::string depth = s.features ? s.features->depth : v.sparse_gbuffer ? kFilledDepth : "depth";
   const std::string normal = s.features ? s.features->normal : v.sparse_gbuffer ? kFilledNormal : "normal";
-  const uint32_t normal_half = own ? 0u : is_half(channel_format(config, ChannelId::Normal));
-  const uint32_t depth_half = own ? 0u : is_half(channel_format(config, ChannelId::Depth));
   const bool clip = v.clip && s.clip;
-  if (clip) add_clip_prefilter(g, config, v, s, demodulate);
+  if (clip) add_clip_prefilter(g, v, s, demodulate);
 
   PassSpec& reproject = g.add_pass("svgf_reproject" + s.suffix, "svgf_reproject");
   reproject.bind("signal", signal_buffer(v, s))
@@ -65,11 +55,6 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
       .bind("illum", buffers.illum)
       .bind("guide", buffers.guide)
       .bind("temporal", buffers.temporal)
-      .set("SIGNAL_HALF", signal_half(config, v, s))
-      .set("MODULATOR_HALF", demodulate ? modulator_half(config, s.modulator) : 0u)
-      .set("NORMAL_HALF", normal_half)
-      .set("DEPTH_HALF", depth_half)
-      .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("DEMODULATE", demodulate)
       .set("WRITE_GUIDE", index == 0 || s.features.has_value())  // else: the first signal's guide
       .set("SUBTRACT_EMISSION", s.subtract_emission)
@@ -85,15 +70,14 @@ void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVaria
   if (keeps_still_mean(v) && index > 0 && s.features)
     reproject.bind("surface_still", still_mean_of(v.signals[0].history)).set("SURFACE_STILL", 1u);
   if (s.subtract_emission)
-    reproject.bind("emission", "emission").set("EMISSION_HALF", is_half(channel_format(config, ChannelId::Emission)));
+    reproject.bind("emission", "emission");
   if (clip)
     reproject.bind("neighbourhood", kClipNeighbourhood)
         .bind("current", kClipCurrent)
         .bind("roughness", "roughness")
-        .set("CLIP", 1u)
-        .set("ROUGHNESS_HALF", is_half(channel_format(config, ChannelId::Roughness)));
+        .set("CLIP", 1u);
   if (s.motion == MotionSource::Reflection) reproject.bind("reflection", s.reflection_motion).set("REFLECTION", 1u);
-  if (v.validity_mask) bind_validity_mask(config, *v.validity_mask, reproject);
+  if (v.validity_mask) bind_validity_mask(reproject);
   reproject.pixels_per_invocation = 1;
 }
 

@@ -12,10 +12,10 @@ namespace dn::pipelines::svgf {
 
 // gbuffer_fill.cpp: the sparse G-buffer's depth and normal filled from the
 // sampled pixels (sparse_gbuffer).
-void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config, protocol::ChannelId mask);
+void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config);
 // svgf_reproject.cpp: signal `index`'s reprojection (and history clipping):
 // its temporal colour in its illum buffer, its temporal moments and length.
-void add_reprojection(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v, size_t index);
+void add_reprojection(GraphSpec& g, const SvgfVariant& v, size_t index);
 // svgf_variance.cpp: every signal's variance and history write-back.
 void add_variance(GraphSpec& g, const SvgfVariant& v);
 // svgf_atrous.cpp: the a-trous iterations; returns the buffer holding each
@@ -23,7 +23,6 @@ void add_variance(GraphSpec& g, const SvgfVariant& v);
 std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v);
 // svgf_remodulate.cpp: the filtered signals times their modulators (and the
 // guards), then with taa the final blend.
-void add_remodulate(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v,
-                    const std::vector<std::string>& results);
+void add_remodulate(GraphSpec& g, const SvgfVariant& v, const std::vector<std::string>& results);
 
 }  // namespace dn::pipelines::svgf

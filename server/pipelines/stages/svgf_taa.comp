@@ -31,7 +31,7 @@ void depths_around(ivec2 pos, out float z[9]) {
   for (int k = 0; k < 9; ++k) {
     ivec2 q = pos + ivec2(k % 3 - 1, k / 3 - 1);
     bool inside = q.x >= 0 && q.y >= 0 && q.x < size.x && q.y < size.y;
-    z[k] = inside ? DN_LOAD1(depth, DEPTH_HALF, uint(q.y) * frame.size.x + uint(q.x)) : 0.0;
+    z[k] = inside ? DN_LOAD1(depth, uint(q.y) * frame.size.x + uint(q.x)) : 0.0;
   }
 }
 
@@ -94,6 +94,6 @@ void main() {
     display.data[p0] = vec4(a, 0.0);
     if (has_b) display.data[p0 + 1u] = vec4(b, 0.0);
   } else {
-    DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+    DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
   }
 }

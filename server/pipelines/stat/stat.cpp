@@ -14,9 +14,7 @@ GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   add_stat_inputs(g, config, /*with_statistics=*/true, g.parameters.stat_alpha);
   g.add_output(config);
-  add_stat_filter(g, config,
-                  StatSources{"stat_count", "stat_mean", "stat_m2", "stat_m3", "radiance",
-                              is_half(channel_format(config, ChannelId::Radiance)) != 0});
+  add_stat_filter(g, config, StatSources{"stat_count", "stat_mean", "stat_m2", "stat_m3", "radiance"});
   return g;
 }
 

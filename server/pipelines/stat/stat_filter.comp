@@ -53,8 +53,8 @@ vec3 filter_pixel(uint p) {
   ivec2 size = ivec2(frame.size.xy);
   ivec2 pos = ivec2(p % frame.size.x, p / frame.size.x);
   vec3 var_p = var_p4.rgb;
-  vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, p));
-  vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, p));
+  vec3 albedo_p = dn_sanitize_albedo(DN_LOAD3(albedo, p));
+  vec3 normal_p = dn_sanitize_normal(DN_LOAD3(normal, p));
   int r = int(DN_PARAM_VALUE(stat, radius));
   DnStatKernel k = dn_stat_kernel_from_parameters();
   k.asymmetric = k.asymmetric || var_p4.w == DN_STAT_MOVING;
@@ -73,8 +73,8 @@ vec3 filter_pixel(uint p) {
       bool still = var_p4.w == DN_STAT_TESTED && var_q4.w == DN_STAT_TESTED;
       float m = dn_stat_membership(theta_p, var_p, theta_at(q), var_q4.rgb, k, still);
       if (m == 0.0) continue;
-      vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q));
-      vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, q));
+      vec3 da = albedo_p - dn_sanitize_albedo(DN_LOAD3(albedo, q));
+      vec3 dn = normal_p - dn_sanitize_normal(DN_LOAD3(normal, q));
       float w = m * dn_stat_base_weight(d2xy, da, dn, k);
       sum += w * (dn_stat_value(q) - raw_p);
       weight_sum += w;
@@ -92,5 +92,5 @@ void main() {
   vec3 a = filter_pixel(p0);
   vec3 b = vec3(0.0);
   if (has_b) b = filter_pixel(p0 + 1u);
-  DN_STORE_RGB_PAIR(result, OUTPUT_HALF, pair, a, b, has_b)
+  DN_STORE_RGB_PAIR(result, pair, a, b, has_b)
 }

@@ -12,7 +12,7 @@ float dn_stat_t_squared(uint nu, bool still) {
 // What pixel q contributes to an average: its sanitized raw mean (the
 // radiance plane, stat-temporal's accumulated raw means, or with
 // DEMODULATED stat_prepare's demodulated means).
-vec3 dn_stat_value(uint q) { return dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q)); }
+vec3 dn_stat_value(uint q) { return dn_sanitize_radiance(DN_LOAD3(radiance, q)); }
 
 // An average of values back in radiance at pixel p: with DEMODULATED times
 // p's modulation (dn_stat_modulation, from the frame's own samples).

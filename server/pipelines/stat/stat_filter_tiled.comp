@@ -34,8 +34,8 @@ struct Tap {
 Tap dn_tile_fetch(ivec2 p) {
   uint i = dn_grid_index(uvec2(p), dn_grid.size);
   return Tap(theta_at(i), variance_at(i), vec4(dn_stat_value(i), 0.0),
-             vec4(dn_sanitize_albedo(DN_LOAD3(albedo, ALBEDO_HALF, i)), 0.0),
-             vec4(dn_sanitize_normal(DN_LOAD3(normal, NORMAL_HALF, i)), 0.0));
+             vec4(dn_sanitize_albedo(DN_LOAD3(albedo, i)), 0.0),
+             vec4(dn_sanitize_normal(DN_LOAD3(normal, i)), 0.0));
 }
 
 vec3 filter_pixel() {
@@ -76,6 +76,6 @@ void main() {
   barrier();
   if (inside && (p.x & 1u) == 0u) {
     vec3 b = dn_tile[gl_LocalInvocationIndex + 1u].raw.rgb;
-    DN_STORE_RGB_PAIR(result, OUTPUT_HALF, dn_grid_index(p, dn_grid.size) / 2u, result_p, b, true)
+    DN_STORE_RGB_PAIR(result, dn_grid_index(p, dn_grid.size) / 2u, result_p, b, true)
   }
 }

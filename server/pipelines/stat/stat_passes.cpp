@@ -74,18 +74,16 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
   prepare.pixels_per_invocation = 1;
   if (s.classify)
     prepare.bind("motion", "motion")
-        .set("CLASSIFY", true)
-        .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)));
+        .set("CLASSIFY", true);
   const bool modulates = demodulated && s.prepare_modulates;
   if (s.classify || modulates)
-    prepare.bind("albedo", "albedo").set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+    prepare.bind("albedo", "albedo");
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.
     g.add_scratch("stat_value", kStatRgbBytes);
     prepare.bind("value", "stat_value")
         .bind("radiance", "radiance")
-        .set("DEMODULATED", true)
-        .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)));
+        .set("DEMODULATED", true);
     if (modulates) {
       g.add_scratch(kStatModulation, kStatRgbBytes);
       prepare.bind("modulation", kStatModulation).set("MODULATION", true);
@@ -104,10 +102,6 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
       .bind("normal", "normal")
       .bind("t_squared", "stat_t_squared")
       .bind("result", "output")
-      .set("RADIANCE_HALF", !demodulated && s.raw_half)
-      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)))
-      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("OUTPUT_HALF", is_half(config.output_format))
       .set("TABLE_SIZE", kStatTableSize)
       .set("DEMODULATED", demodulated);
   if (demodulated) filter.bind("modulation", kStatModulation);

@@ -21,8 +21,7 @@ inline constexpr uint32_t kStatTileApron = 6;
 // planes (stat) or the accumulators (stat-temporal), in the planes' layouts.
 struct StatSources {
   std::string count, mean, m2, m3;
-  std::string raw;        // the raw means that are averaged
-  bool raw_half = false;  // raw is an fp16 plane
+  std::string raw;  // the raw means that are averaged
   // With demodulated statistics (parameter demodulated), who writes the
   // plane kStatModulation that remodulates the result: stat_prepare from
   // the frame's planes (the sources are the frame's: stat), or a pass before

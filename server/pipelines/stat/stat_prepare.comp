@@ -60,9 +60,9 @@ void store3(uint p, vec3 v, bool to_modulation) {
 // The demodulated value and modulation of pixel p with statistics s (n = 0: none).
 void demodulate(uint p, DnStat s) {
   bool has_data = s.n > 0.0;
-  s.raw = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, p));
+  s.raw = dn_sanitize_radiance(DN_LOAD3(radiance, p));
   store3(p, has_data ? dn_stat_raw_from_moments(s) : s.raw, false);
-  if (MODULATION) store3(p, dn_stat_pixel_modulation(s, has_data, DN_LOAD3(albedo, ALBEDO_HALF, p)), true);
+  if (MODULATION) store3(p, dn_stat_pixel_modulation(s, has_data, DN_LOAD3(albedo, p)), true);
 }
 
 DnStat stat_at(uint p) {
@@ -121,7 +121,7 @@ vec3 quadrant_variance(uint p, out float count) {
 float pixel_class = DN_STAT_TESTED;  // variance.w
 
 bool pixel_moves(uint p) {
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   return !dn_motion_usable(mv) || !dn_is_still(mv);
 }
 
@@ -129,7 +129,7 @@ void main() {
   uint p = dn_invocation_index();
   if (p >= frame.size.z) return;
   bool moves = CLASSIFY && pixel_moves(p);
-  bool unexplained = CLASSIFY && dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p));
+  bool unexplained = CLASSIFY && dn_unexplained(DN_LOAD3(albedo, p));
   if (moves) pixel_class = unexplained ? DN_STAT_KEPT : DN_STAT_MOVING;
   DnStat s = stat_at(p);
   if (!dn_stat_usable(s)) {

@@ -56,8 +56,8 @@
 // The frame's statistics at pixel q (no data: n = 0). FROM_RADIANCE: its
 // sanitized radiance is one sample (demodulated: over q's guarded albedo).
 DnStat current_stat(uint q) {
-  vec3 x = dn_sanitize_radiance(DN_LOAD3(radiance, RADIANCE_HALF, q));
-  if (FROM_RADIANCE) return dn_stat_sample(DEMODULATED ? x / dn_guarded_albedo(DN_LOAD3(albedo, ALBEDO_HALF, q)) : x, x);
+  vec3 x = dn_sanitize_radiance(DN_LOAD3(radiance, q));
+  if (FROM_RADIANCE) return dn_stat_sample(DEMODULATED ? x / dn_guarded_albedo(DN_LOAD3(albedo, q)) : x, x);
   DnStat s = DnStat(count.data[q], DN_READ3(mean, q), DN_READ3(m2, q), DN_READ3(m3, q), x);
   return dn_stat_usable(s) ? s : dn_stat_empty();
 }
@@ -159,7 +159,7 @@ void store(uint p, DnStat s, float z, vec3 n, bool suspect) {
 // give it.
 void store_modulation(uint p, DnStat c, DnStat acc) {
   if (!DEMODULATED) return;
-  vec3 m = dn_stat_pixel_modulation(c, acc.n > 0.0, DN_LOAD3(albedo, ALBEDO_HALF, p));
+  vec3 m = dn_stat_pixel_modulation(c, acc.n > 0.0, DN_LOAD3(albedo, p));
   for (uint k = 0u; k < 3u; ++k) modulation.data[3u * p + k] = m[k];
 }
 
@@ -177,14 +177,14 @@ void main() {
     return;
   }
   vec2 grad = dn_svgf_gradients(pos, z, n);
-  vec2 mv = DN_LOAD2(motion, MOTION_HALF, p) * frame.motion.xy;
+  vec2 mv = DN_LOAD2(motion, p) * frame.motion.xy;
   ivec2 origin;
   vec4 w;
   DnStat acc = c;
   bool suspect = false;
   if ((frame.size.w & DN_FLAG_RESET) == 0u && dn_motion_usable(mv) &&
       dn_bilinear_footprint(dn_previous_position(p, size.x, mv), size, origin, w)) {
-    float fading = dn_unexplained(DN_LOAD3(albedo, ALBEDO_HALF, p)) ? 0.0 : DN_PARAM_VALUE(stat_temporal, fading);
+    float fading = dn_unexplained(DN_LOAD3(albedo, p)) ? 0.0 : DN_PARAM_VALUE(stat_temporal, fading);
     float beta = mix(fading, 1.0, dn_stillness(mv));
     DnStat h = dn_stat_scale(reprojected(origin, w, z, n, grad), beta);
     ivec2 prev = ivec2(floor(dn_previous_position(p, size.x, mv)));

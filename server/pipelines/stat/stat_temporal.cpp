@@ -49,13 +49,8 @@ GraphSpec build(const SessionConfig& config) {
       .bind("acc_m3", "stat_acc_m3")
       .bind("acc_raw", "stat_acc_raw")
       .bind("acc_geometry", "stat_acc_geometry")
-      .set("RADIANCE_HALF", is_half(channel_format(config, ChannelId::Radiance)))
-      .set("DEPTH_HALF", is_half(channel_format(config, ChannelId::Depth)))
-      .set("NORMAL_HALF", is_half(channel_format(config, ChannelId::Normal)))
-      .set("MOTION_HALF", is_half(channel_format(config, ChannelId::Motion)))
       .set("TABLE_SIZE", kStatTableSize)
-      .bind("albedo", "albedo")
-      .set("ALBEDO_HALF", is_half(channel_format(config, ChannelId::Albedo)));
+      .bind("albedo", "albedo");
   temporal.pixels_per_invocation = 1;
   if (from_radiance)
     temporal.set("FROM_RADIANCE", true);

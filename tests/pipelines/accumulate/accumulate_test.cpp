@@ -56,7 +56,7 @@ test::ReferenceFrame reference_frame(const test::HostFrame& f, int w, int h) {
 std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, std::vector<protocol::PassTiming>* timings = nullptr) {
   std::vector<uint8_t> out;
   std::vector<protocol::PassTiming> t;
-  p.process(f.view(), true, out, timings ? *timings : t);
+  test::process(p, f.view(), true, out, timings ? *timings : t);
   return out.empty() ? std::vector<float>{} : test::decode_output(out, Format::F32);
 }
 
@@ -95,7 +95,7 @@ TEST_P(AccumulateReferenceTest, MatchesCpuReferenceOverFrames) {
     const test::HostFrame f = host_frame(scene.frame(t), v.w, v.h, v.in, v.conv, flags, t);
     std::vector<uint8_t> bytes;
     std::vector<protocol::PassTiming> timings;
-    pipe->process(f.view(), true, bytes, timings);
+    test::process(*pipe, f.view(), true, bytes, timings);
     ASSERT_EQ(bytes.size(), size_t(v.w) * v.h * 3 * protocol::bytes_per_component(v.out));
     const std::vector<float> got = test::decode_output(bytes, v.out);
     const std::vector<double> want = ref.step(reference_frame(f, v.w, v.h));
@@ -346,7 +346,7 @@ TEST_F(AccumulateTest, SkippingOutputKeepsHistory) {
     std::vector<uint8_t> out;
     std::vector<protocol::PassTiming> timings;
     const bool want = t == 4;
-    b->process(f.view(), want, out, timings);
+    test::process(*b, f.view(), want, out, timings);
     EXPECT_EQ(out.empty(), !want);
     ASSERT_EQ(timings.size(), 4u);  // upload, accumulate, sample_summary, download
     if (!want) {

@@ -31,7 +31,7 @@ class PassthroughTest : public test::GpuTest {
     f.add(ChannelId::Radiance, in, radiance);
     std::vector<uint8_t> bytes;
     std::vector<protocol::PassTiming> t;
-    pipe->process(f.view(), true, bytes, timings ? *timings : t);
+    test::process(*pipe, f.view(), true, bytes, timings ? *timings : t);
     return bytes;
   }
 };
@@ -126,7 +126,7 @@ TEST_F(PassthroughTest, ReportsTimingsAndSkipsDownloadWhenAsked) {
   f.add(ChannelId::Radiance, Format::F32, std::vector<float>(16 * 16 * 3, 0.5f));
   std::vector<uint8_t> out;
   std::vector<protocol::PassTiming> timings;
-  pipe->process(f.view(), false, out, timings);
+  test::process(*pipe, f.view(), false, out, timings);
   EXPECT_TRUE(out.empty());
   ASSERT_EQ(timings.size(), 3u);
   EXPECT_EQ(timings[0].name, "upload");
@@ -142,18 +142,18 @@ TEST_F(PassthroughTest, BadFrameThrowsAndThePipelineKeepsWorking) {
   std::vector<protocol::PassTiming> timings;
   test::HostFrame wrong_size;
   wrong_size.add(ChannelId::Radiance, Format::F32, std::vector<float>(8 * 8 * 3 - 1, 1.0f));
-  EXPECT_THROW(pipe->process(wrong_size.view(), true, out, timings), std::invalid_argument);
+  EXPECT_THROW(test::process(*pipe, wrong_size.view(), true, out, timings), std::invalid_argument);
   test::HostFrame wrong_format;
   wrong_format.add(ChannelId::Radiance, Format::F16, std::vector<float>(8 * 8 * 3, 1.0f));
-  EXPECT_THROW(pipe->process(wrong_format.view(), true, out, timings), std::invalid_argument);
+  EXPECT_THROW(test::process(*pipe, wrong_format.view(), true, out, timings), std::invalid_argument);
   test::HostFrame missing;
-  EXPECT_THROW(pipe->process(missing.view(), true, out, timings), std::invalid_argument);
+  EXPECT_THROW(test::process(*pipe, missing.view(), true, out, timings), std::invalid_argument);
 
   test::HostFrame good;
   const std::vector<float> values(8 * 8 * 3, 0.75f);
   good.add(ChannelId::Radiance, Format::F32, values);
   timings.clear();
-  pipe->process(good.view(), true, out, timings);
+  test::process(*pipe, good.view(), true, out, timings);
   EXPECT_EQ(test::decode_output(out, Format::F32), values);
 }
 
