@@ -65,6 +65,7 @@ struct BufferSpec {
   std::string name;
   BufferRole role = BufferRole::Scratch;
   uint64_t bytes = 0;                                    // allocation size (rounded up to 4; Input/Output: the fp32 plane)
+  bool sized_by_bindings = false;                        // bytes come from its bindings' DN_PER_PIXEL rules
   uint64_t plane_bytes = 0;                              // Input/Output: the plane's size on the wire
   protocol::ChannelId channel = protocol::ChannelId::Radiance;  // Input/Output
   protocol::Format format = protocol::Format::F32;       // Input/Output: on the wire
@@ -101,8 +102,12 @@ struct GraphSpec {
   // Builders used by pipeline definitions.
   void add_input(const SessionConfig& config, protocol::ChannelId channel, std::string name);
   void add_output(const SessionConfig& config);
-  void add_history(std::string name, uint64_t bytes_per_pixel);
-  void add_persistent(std::string name, uint64_t bytes_per_pixel);
+  // A buffer over the session's pixels, sized by size_from_bindings() from
+  // the DN_PER_PIXEL rules of the bindings that bind it (its .pass files).
+  void add_history(std::string name);
+  void add_persistent(std::string name);
+  void add_scratch(std::string name);
+  // Scratch of a size given here, for a buffer no binding sizes.
   void add_scratch(std::string name, uint64_t bytes_per_pixel);
   // Scratch over another grid than the session's: a reduced resolution (a
   // level(), e.g. 1/2 or 1/3), or elements = pyramid_pixels() for a packed pyramid.
@@ -121,6 +126,11 @@ struct GraphSpec {
   // Appends a pass running `shader`; bind and set on the result (the
   // reference is valid until the next add_pass).
   PassSpec& add_pass(std::string name, std::string_view shader);
+
+  // Sizes every buffer added without a size from the DN_PER_PIXEL rules of
+  // the bindings that bind it (through aliases too). Throws std::logic_error
+  // when no binding of it declares one or two disagree, naming them.
+  void size_from_bindings();
 
   // The build-time check of the whole graph: buffer names unique, every
   // required binding bound, every bound buffer defined, Previous slots only

@@ -86,12 +86,49 @@ void GraphSpec::add_sized(std::string name, BufferRole role, uint64_t bytes) {
   buffers.push_back(std::move(b));
 }
 
-void GraphSpec::add_history(std::string name, uint64_t bytes_per_pixel) {
-  add_sized(std::move(name), BufferRole::History, uint64_t{width} * height * bytes_per_pixel);
+void GraphSpec::add_history(std::string name) {
+  add_sized(std::move(name), BufferRole::History, 0);
+  buffers.back().sized_by_bindings = true;
 }
 
-void GraphSpec::add_persistent(std::string name, uint64_t bytes_per_pixel) {
-  add_sized(std::move(name), BufferRole::Persistent, uint64_t{width} * height * bytes_per_pixel);
+void GraphSpec::add_persistent(std::string name) {
+  add_sized(std::move(name), BufferRole::Persistent, 0);
+  buffers.back().sized_by_bindings = true;
+}
+
+void GraphSpec::add_scratch(std::string name) {
+  add_sized(std::move(name), BufferRole::Scratch, 0);
+  buffers.back().sized_by_bindings = true;
+}
+
+void GraphSpec::size_from_bindings() {
+  const uint64_t pixels = uint64_t{width} * height;
+  for (BufferSpec& b : buffers) {
+    if (!b.sized_by_bindings) continue;
+    std::string first;  // "pass.binding" that gave the size
+    uint64_t bytes = 0;
+    for (const PassSpec& pass : passes)
+      for (size_t i = 0; i < pass.bindings().size(); ++i) {
+        const BindingRef& ref = pass.bindings()[i];
+        const BufferSpec* bound = ref.bound() ? find(ref.buffer) : nullptr;
+        if (bound != &b) continue;
+        const shaders::BindingDecl& decl = pass.declaration().bindings[i];
+        const uint32_t per_pixel = pass.declaration().per_pixel(decl.name);
+        if (per_pixel == 0) continue;
+        const uint64_t rule = pixels * per_pixel * shaders::element_bytes(decl.element);
+        const std::string here = pass.name() + "." + std::string(decl.name);
+        if (first.empty()) {
+          first = here;
+          bytes = rule;
+        } else if (rule != bytes) {
+          throw std::logic_error("buffer " + b.name + ": " + here + " declares " + std::to_string(rule) +
+                                 " bytes, " + first + " " + std::to_string(bytes));
+        }
+      }
+    if (first.empty())
+      throw std::logic_error("buffer " + b.name + " has no size: no binding of it declares DN_PER_PIXEL");
+    b.bytes = round_up4(bytes);
+  }
 }
 
 void GraphSpec::add_scratch(std::string name, uint64_t bytes_per_pixel) {

@@ -73,11 +73,13 @@ namespace {
 
 std::atomic<uint64_t> graphs_built{0};
 
-// The one place a graph is built: the definition's builder, then the
-// build-time check of every binding and buffer name.
+// The one place a graph is built: the definition's builder, the buffers'
+// sizes from their bindings' rules, then the build-time check of every
+// binding and buffer name.
 std::shared_ptr<const GraphSpec> build_graph(const PipelineDefinition& def, const SessionConfig& config) {
   graphs_built.fetch_add(1, std::memory_order_relaxed);
   auto g = std::make_shared<GraphSpec>(def.build(config));
+  g->size_from_bindings();
   g->check();
   return g;
 }

@@ -66,5 +66,8 @@
 // the bindings a mode needs are the host's check alone.
 #define DN_MODE(value, name) const uint DN_MODE_##name = value;
 #define DN_MODE_NEEDS(mode, binding)
+// How many elements per pixel of the session the binding's buffer holds: the
+// host sizes the buffer from it (GraphSpec::size_from_bindings).
+#define DN_PER_PIXEL(binding, count)
 
 #endif

@@ -4,7 +4,8 @@
 // DN_SPEC(n, ...), the n-th DN_GRID_ARG row DN_GRID_ARG(n - 1, ...) (its
 // slot in the grid's four push-constant words), the n-th DN_MODE row
 // DN_MODE(n - 1, ...) (its value of the constant MODE). A DN_PARAM
-// row (a pass-local tunable) goes to the parameter table instead. A row
+// row (a pass-local tunable) goes to the parameter table instead; other rows
+// (DN_MODE_NEEDS, DN_PER_PIXEL, comments) are copied as they are. A row
 // `#include "<other>.pass"` is replaced by that file's rows, numbered on. OUT
 // is rewritten only when it changes, so shaders rebuild only when it does.
 #include <fstream>

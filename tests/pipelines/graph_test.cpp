@@ -172,6 +172,44 @@ TEST(GraphSpec, SpecializationListsEveryConstantById) {
   EXPECT_EQ(sa[14], (gpu::SpecConstant{14, 0}));  // LUMINANCE_RAMP's default
 }
 
+// A buffer added without a size takes it from the DN_PER_PIXEL rules of the
+// bindings that bind it (through an alias too): reflect_prepare's modulator
+// holds 3 floats per pixel, svgf_reproject's illum one vec4; rules that
+// disagree, or none at all, are refused with the names involved.
+TEST(GraphSpec, BuffersAreSizedByTheirBindingsRules) {
+  pipelines::GraphSpec g = passthrough_graph();  // 4 x 2 pixels
+  g.add_scratch("modulator");
+  g.add_scratch("illum");
+  g.add_alias("illum_again", "illum");
+  g.add_pass("prepare", "reflect_prepare").bind("modulator", "modulator");
+  g.add_pass("reproject", "svgf_reproject").bind("illum", "illum");
+  g.add_pass("variance", "svgf_variance").bind("illum", "illum_again");
+  g.size_from_bindings();
+  EXPECT_EQ(g.find("modulator")->bytes, 4u * 2 * 3 * 4);
+  EXPECT_EQ(g.find("illum")->bytes, 4u * 2 * 16);
+
+  pipelines::GraphSpec disagree = passthrough_graph();
+  disagree.add_scratch("both");
+  disagree.add_pass("prepare", "reflect_prepare").bind("modulator", "both");
+  disagree.add_pass("reproject", "svgf_reproject").bind("illum", "both");
+  try {
+    disagree.size_from_bindings();
+    ADD_FAILURE() << "disagreeing rules accepted";
+  } catch (const std::logic_error& e) {
+    EXPECT_EQ(std::string(e.what()), "buffer both: reproject.illum declares 128 bytes, prepare.modulator 96");
+  }
+
+  pipelines::GraphSpec unsized = passthrough_graph();
+  unsized.add_scratch("read_only");
+  unsized.add_pass("atrous", "svgf_atrous").bind("src", "read_only");  // a texel read declares no size
+  try {
+    unsized.size_from_bindings();
+    ADD_FAILURE() << "a buffer without a rule accepted";
+  } catch (const std::logic_error& e) {
+    EXPECT_EQ(std::string(e.what()), "buffer read_only has no size: no binding of it declares DN_PER_PIXEL");
+  }
+}
+
 // Every configuration the tests use builds a graph that passes check().
 TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
   for (const auto& def : pipelines::definitions()) {

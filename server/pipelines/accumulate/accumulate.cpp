@@ -8,18 +8,14 @@ namespace {
 
 using protocol::ChannelId;
 
-// Per pixel, fp32: vec4(rgb, history length) and vec4(normal, depth).
-constexpr uint64_t kColourHistoryBytes = 16;
-constexpr uint64_t kGeometryHistoryBytes = 16;
-
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   g.add_input(config, ChannelId::Radiance, "radiance");
   g.add_input(config, ChannelId::Normal, "normal");
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
-  g.add_history("history_colour", kColourHistoryBytes);
-  g.add_history("history_geometry", kGeometryHistoryBytes);
+  g.add_history("history_colour");
+  g.add_history("history_geometry");
   g.add_output(config);
 
   g.add_pass("accumulate", "accumulate")

@@ -33,25 +33,18 @@ using protocol::ChannelId;
 // vec4 (reflect_motion).
 constexpr const char* kFactor = "svgf_fb";
 constexpr const char* kModulator = "reflect_modulator";
-constexpr uint64_t kModulatorBytes = 12;
 constexpr const char* kFeatureDepth = "reflect_depth";
-constexpr uint64_t kFeatureDepthBytes = 4;
 constexpr const char* kFeatureNormal = "reflect_normal";
-constexpr uint64_t kFeatureNormalBytes = 12;
 constexpr const char* kMotion = "reflect_motion";
-constexpr uint64_t kMotionBytes = 16;
 // Eq. 6's sigma per pixel, fp32 (reflect_prepare), when the session sends
 // reflection_footprint and footprint_omega > 0.
 constexpr const char* kBandwidth = "reflect_bandwidth";
-constexpr uint64_t kBandwidthBytes = 4;
 // The virtual point's motion per pixel, vec2 fp32 (reflect_prepare), the
 // search's third start, with virtual_start.
 constexpr const char* kVirtualMotion = "reflect_virtual_motion";
-constexpr uint64_t kVirtualMotionBytes = 8;
 // History (this frame's and the previous frame's copy): the search features,
 // two vec4 per pixel (shaders/include/reflect.glsl).
 constexpr const char* kFeatures = "reflect_features";
-constexpr uint64_t kFeaturesBytes = 32;
 // The displayed frame before the firefly median (SvgfVariant::display).
 constexpr const char* kDisplay = "reflect_display";
 
@@ -87,14 +80,14 @@ GraphSpec build(const SessionConfig& config) {
   const bool footprint = takes_footprint(config, g.parameters);
   if (footprint) g.add_input(config, ChannelId::ReflectionFootprint, "reflection_footprint");
   add_svgf_buffers(g, v);
-  g.add_scratch(kModulator, kModulatorBytes);
-  g.add_scratch(kFeatureDepth, kFeatureDepthBytes);
-  g.add_scratch(kFeatureNormal, kFeatureNormalBytes);
-  g.add_scratch(kMotion, kMotionBytes);
-  if (footprint) g.add_scratch(kBandwidth, kBandwidthBytes);
+  g.add_scratch(kModulator);
+  g.add_scratch(kFeatureDepth);
+  g.add_scratch(kFeatureNormal);
+  g.add_scratch(kMotion);
+  if (footprint) g.add_scratch(kBandwidth);
   const bool virtual_start = g.parameters.reflect_virtual_start != 0.0f;
-  if (virtual_start) g.add_scratch(kVirtualMotion, kVirtualMotionBytes);
-  g.add_history(kFeatures, kFeaturesBytes);
+  if (virtual_start) g.add_scratch(kVirtualMotion);
+  g.add_history(kFeatures);
   g.add_output(config);
 
   add_fb_factor(g, config, kFactor);

@@ -8,14 +8,10 @@ using protocol::ChannelId;
 
 const SharedResourceDecl kFbLutResource{"fb_lut", fb_lut_buffer};
 
-namespace {
-constexpr uint64_t kFactorBytes = 12;  // F_beta rgb fp32
-}
-
 void add_fb_factor(GraphSpec& g, const SessionConfig& config, const std::string& factor) {
   g.add_input(config, ChannelId::SpecularF0, "specular_f0");
   g.add_shared(kFbLutResource.name, kFbLutResource.resource);
-  g.add_scratch(factor, kFactorBytes);
+  g.add_scratch(factor);
   g.add_pass("svgf_fb_factor", "svgf_fb_factor")
       .bind("specular_f0", "specular_f0")
       .bind("roughness", "roughness")

@@ -9,8 +9,6 @@ using protocol::SampleField;
 using protocol::sample_channel;
 
 constexpr const char* kAssignment = "supersample_assignment";
-constexpr uint64_t kAssignmentBytes = 4;  // 4 bits per extra sample (server/pipelines/stages/supersample.glsl)
-constexpr uint64_t kMixedBytes = 12;      // rgb fp32
 
 std::string name(ChannelId id) { return std::string(protocol::find_channel(id)->name); }
 
@@ -101,8 +99,8 @@ void add_supersample_inputs(GraphSpec& g, const SessionConfig& config, const std
 }
 
 void add_supersample_buffers(GraphSpec& g, const std::vector<std::string>& inputs) {
-  g.add_scratch(kAssignment, kAssignmentBytes);
-  for (const std::string& input : inputs) g.add_scratch(mixed_signal(input), kMixedBytes);
+  g.add_scratch(kAssignment);
+  for (const std::string& input : inputs) g.add_scratch(mixed_signal(input));
 }
 
 void add_supersample_assign(GraphSpec& g, const SessionConfig& config) {

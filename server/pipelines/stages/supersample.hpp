@@ -33,7 +33,6 @@ std::string mixed_signal(const std::string& input);
 // The displayed frame before the resolve when no pass of the chain's caller
 // provides one (rgb fp32 scratch).
 inline constexpr const char* kSupersampleDisplay = "supersample_display";
-inline constexpr uint64_t kSupersampleDisplayBytes = 12;
 // The extra samples' planes of the signal sent as `channel` (Radiance,
 // Diffuse or Specular) and the features all signals share.
 void add_supersample_inputs(GraphSpec& g, const SessionConfig& config, const std::vector<protocol::ChannelId>& signals);

@@ -12,43 +12,21 @@
 
 namespace dn::pipelines::svgf {
 
-// Per pixel, a single persistent copy (svgf_reproject reads it; svgf_variance
-// and the feedback a-trous iteration rewrite it after that pass):
-// vec4(demodulated rgb, length) fp32 and uvec4(m1, m2, depth as fp32 bits,
-// octahedral snorm16x2 normal).
-inline constexpr uint64_t kColourHistoryBytes = 16;
-inline constexpr uint64_t kAuxHistoryBytes = 16;
-// converge_still: a still pixel's running mean of its own samples,
-// vec4(demodulated rgb, samples), the M2 of their luminance, and its change
-// test's vec4(running mean, M2, recent mean, recent spread variance) of the
-// 3x3 box luminance, fp32, read and rewritten at p by svgf_reproject.
-inline constexpr uint64_t kStillMeanBytes = 16;
-inline constexpr uint64_t kStillM2Bytes = 4;
-inline constexpr uint64_t kStillChangeBytes = 16;
-// With emission: a still pixel's running mean of its emission, vec4(rgb,
-// samples), and its change test's (M2 of the luminance, suspect), fp32, one
-// copy each, read and rewritten at p by svgf_remodulate.
+// The chain's buffers; each is sized by the DN_PER_PIXEL rules of the
+// bindings that write it (their .pass files say what an element holds).
+// A signal's colour and aux history (<history>_colour, _aux): one persistent
+// copy, read by svgf_reproject and rewritten after it by svgf_variance and
+// the feedback a-trous iteration. converge_still: a still pixel's running
+// mean of its own samples, the M2 of their luminance and its change test,
+// read and rewritten at p by svgf_reproject. With emission: a still pixel's
+// running mean of its emission and its change test, read and rewritten at p
+// by svgf_remodulate.
 inline constexpr const char* kEmissionStill = "emission_still";
 inline constexpr const char* kEmissionTest = "emission_test";
-inline constexpr uint64_t kEmissionStillBytes = 16;
-inline constexpr uint64_t kEmissionTestBytes = 8;
-// TAA: the previous final output and, with SvgfVariant::display_lag, the
-// lag state: vec4(rgb, lag) fp32, one persistent copy (read as texels by
-// svgf_remodulate, rewritten by svgf_taa after it).
-inline constexpr uint64_t kTaaHistoryBytes = 16;
-// SvgfVariant::display: the displayed frame, vec4(rgb, 0) fp32 (a texel
-// for the caller's neighbourhood reads: reflect_median).
-inline constexpr uint64_t kDisplayBytes = 16;
-// Scratch, per pixel: vec4(demodulated rgb, variance) fp32, two for the a-trous ping-pong.
-inline constexpr uint64_t kIlluminationBytes = 16;
-// Scratch, per pixel: guide uvec4(signed depth, packed normal, dz, 0) and
-// temporal vec4(m1, m2, length, luminance), written by svgf_reproject.
-inline constexpr uint64_t kGuideBytes = 16;
-inline constexpr uint64_t kTemporalBytes = 16;
 // a-trous register block: one invocation filters kAtrousBlock^2 pixels.
 inline constexpr uint32_t kAtrousBlock = 4;
 
-// Illumination ping-pong of the first signal (a, b) and of the second (c, d).
+// Illumination ping-pong (scratch) of the first signal (a, b) and of the second (c, d).
 inline constexpr const char* kIllumA = "svgf_illum_a";
 inline constexpr const char* kIllumB = "svgf_illum_b";
 inline constexpr const char* kIllumC = "svgf_illum_c";
@@ -75,7 +53,6 @@ inline constexpr const char* kTaaPrevious = "svgf_taa_previous";
 inline constexpr const char* kClipCurrent = "svgf_clip_current";
 inline constexpr const char* kClipPartial = "svgf_clip_partial";
 inline constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
-inline constexpr uint64_t kClipBytes = 16;
 // sparse_gbuffer: the packed 3x3 pyramid (gbuffer_fill.comp) of vec4(normal,
 // depth) fp32 and its validity (uint), and the filled planes the chain reads
 // instead of depth and normal, fp32 (1 and 3 per pixel).

@@ -95,54 +95,54 @@ void add_svgf_inputs(GraphSpec& g, const SessionConfig& config, const SvgfVarian
 
 void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
   for (const SvgfSignal& s : v.signals) {
-    g.add_persistent(s.history + "_colour", kColourHistoryBytes);
-    g.add_persistent(s.history + "_aux", kAuxHistoryBytes);
+    g.add_persistent(s.history + "_colour");
+    g.add_persistent(s.history + "_aux");
     if (keeps_still_mean(v)) {
-      g.add_persistent(still_mean_of(s.history), kStillMeanBytes);
-      g.add_persistent(still_m2_of(s.history), kStillM2Bytes);
-      g.add_persistent(still_change_of(s.history), kStillChangeBytes);
+      g.add_persistent(still_mean_of(s.history));
+      g.add_persistent(still_m2_of(s.history));
+      g.add_persistent(still_change_of(s.history));
     }
   }
   if (keeps_still_emission(v)) {
-    g.add_persistent(kEmissionStill, kEmissionStillBytes);
-    g.add_persistent(kEmissionTest, kEmissionTestBytes);
+    g.add_persistent(kEmissionStill);
+    g.add_persistent(kEmissionTest);
   }
-  if (v.taa) g.add_persistent(kTaaHistory, kTaaHistoryBytes);
-  if (!v.display.empty()) g.add_scratch(v.display, kDisplayBytes);
+  if (v.taa) g.add_persistent(kTaaHistory);
+  if (!v.display.empty()) g.add_scratch(v.display);
   if (v.extra_samples) {
     std::vector<std::string> inputs;
     for (const SvgfSignal& s : v.signals) inputs.push_back(s.input);
     add_supersample_buffers(g, inputs);
-    g.add_scratch(kSupersampleDisplay, kSupersampleDisplayBytes);
+    g.add_scratch(kSupersampleDisplay);
   }
   const bool third = v.harm_guard && v.iterations > 1;  // the guard's own ping-pong partner
-  g.add_scratch(kIllumA, kIlluminationBytes);
-  if (v.iterations > 0) g.add_scratch(kIllumB, kIlluminationBytes);
-  if (third) g.add_scratch(kIllumE, kIlluminationBytes);
+  g.add_scratch(kIllumA);
+  if (v.iterations > 0) g.add_scratch(kIllumB);
+  if (third) g.add_scratch(kIllumE);
   if (v.signals.size() > 1) {
-    g.add_scratch(kIllumC, kIlluminationBytes);
-    if (v.iterations > 0) g.add_scratch(kIllumD, kIlluminationBytes);
-    if (third) g.add_scratch(kIllumF, kIlluminationBytes);
+    g.add_scratch(kIllumC);
+    if (v.iterations > 0) g.add_scratch(kIllumD);
+    if (third) g.add_scratch(kIllumF);
   }
   if (v.sparse_gbuffer) {
     const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
     g.add_scratch_elements(kGbufferPyramid, elements, 16);
     g.add_scratch_elements(kGbufferValid, elements, 4);
-    g.add_scratch(kFilledDepth, 4);
-    g.add_scratch(kFilledNormal, 12);
+    g.add_scratch(kFilledDepth);
+    g.add_scratch(kFilledNormal);
   }
   // One guide and temporal per signal (the joint a-trous passes read both),
   // except that a second signal without features of its own shares the guide.
   for (size_t i = 0; i < v.signals.size(); ++i) {
     const SignalBuffers b = signal_buffers(v, i);
-    if (i == 0 || b.guide != kGuide) g.add_scratch(b.guide, kGuideBytes);
-    g.add_scratch(b.temporal, kTemporalBytes);
+    if (i == 0 || b.guide != kGuide) g.add_scratch(b.guide);
+    g.add_scratch(b.temporal);
   }
   const bool clips = v.clip && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; });
   if (clips) {
-    g.add_scratch(kClipCurrent, kClipBytes);
-    g.add_scratch(kClipPartial, kClipBytes);
-    g.add_scratch(kClipNeighbourhood, kClipBytes);
+    g.add_scratch(kClipCurrent);
+    g.add_scratch(kClipPartial);
+    g.add_scratch(kClipNeighbourhood);
   }
 }
 

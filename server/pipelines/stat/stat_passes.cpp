@@ -10,10 +10,6 @@ namespace {
 
 using protocol::ChannelId;
 
-// Per pixel, fp32: vec4(theta rgb, n) and vec4(variance of the mean rgb, class).
-constexpr uint64_t kThetaBytes = 16;
-constexpr uint64_t kVarianceBytes = 16;
-
 constexpr ChannelId kStatistics[] = {ChannelId::StatCount, ChannelId::StatMean, ChannelId::StatM2, ChannelId::StatM3};
 
 }  // namespace
@@ -62,8 +58,8 @@ void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statis
 
 void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSources& s) {
   const bool demodulated = g.parameters.stat_demodulated != 0.0f;
-  g.add_scratch("stat_theta", kThetaBytes);
-  g.add_scratch("stat_variance", kVarianceBytes);
+  g.add_scratch("stat_theta");
+  g.add_scratch("stat_variance");
   PassSpec& prepare = g.add_pass("stat_prepare", "stat_prepare")
                           .bind("count", s.count)
                           .bind("mean", s.mean)
@@ -80,12 +76,12 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
     prepare.bind("albedo", "albedo");
   if (demodulated) {
     // The values averaged and, for the frame's own statistics, what remodulates them.
-    g.add_scratch("stat_value", kStatRgbBytes);
+    g.add_scratch("stat_value");
     prepare.bind("value", "stat_value")
         .bind("radiance", "radiance")
         .set("DEMODULATED", true);
     if (modulates) {
-      g.add_scratch(kStatModulation, kStatRgbBytes);
+      g.add_scratch(kStatModulation);
       prepare.bind("modulation", kStatModulation).set("MODULATION", true);
     }
   }

@@ -37,8 +37,6 @@ struct StatSources {
 // The channels both take besides their own: radiance, albedo, normal and the
 // four statistics.
 uint64_t stat_channels();
-// Bytes of an rgb fp32 plane (stat-temporal's accumulators, the demodulation planes).
-inline constexpr uint64_t kStatRgbBytes = 12;
 // The plane that remodulates stat_filter's result with demodulated statistics.
 inline constexpr const char* kStatModulation = "stat_modulation";
 // Declares the frame's planes of stat_channels(), named by their channels'

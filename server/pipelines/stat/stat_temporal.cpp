@@ -12,11 +12,6 @@ namespace {
 
 using protocol::ChannelId;
 
-// Accumulators, fp32, in the layouts of the statistics planes, and their
-// geometry: uvec4(depth bits, octahedral normal, suspect, 0).
-constexpr uint64_t kCountBytes = 4;
-constexpr uint64_t kGeometryBytes = 16;
-
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
   // Without the renderer's statistics each frame's radiance is one sample.
@@ -25,10 +20,10 @@ GraphSpec build(const SessionConfig& config) {
   g.add_input(config, ChannelId::Depth, "depth");
   g.add_input(config, ChannelId::Motion, "motion");
   g.add_constant("stat_history_t_squared", t_squared_table(g.parameters.stat_temporal_history_alpha));
-  g.add_history("stat_acc_count", kCountBytes);
+  g.add_history("stat_acc_count");
   for (const char* name : {"stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw"})
-    g.add_history(name, kStatRgbBytes);
-  g.add_history("stat_acc_geometry", kGeometryBytes);
+    g.add_history(name);
+  g.add_history("stat_acc_geometry");
   g.add_output(config);
 
   PassSpec& temporal = g.add_pass("stat_temporal", "stat_temporal")
@@ -58,7 +53,7 @@ GraphSpec build(const SessionConfig& config) {
     temporal.bind("count", "stat_count").bind("mean", "stat_mean").bind("m2", "stat_m2").bind("m3", "stat_m3");
   if (g.parameters.stat_demodulated != 0.0f) {
     // The frame's own samples give the modulation; the accumulators cannot.
-    g.add_scratch(kStatModulation, kStatRgbBytes);
+    g.add_scratch(kStatModulation);
     temporal.bind("modulation", kStatModulation).set("DEMODULATED", true);
   }
   StatSources accumulators{"stat_acc_count", "stat_acc_mean", "stat_acc_m2", "stat_acc_m3", "stat_acc_raw"};

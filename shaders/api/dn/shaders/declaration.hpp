@@ -63,6 +63,22 @@ struct ModeNeed {
   std::string_view binding;
 };
 
+// The size rule of a binding: its buffer holds `per_pixel` elements per
+// pixel of the session (DN_PER_PIXEL), so the host sizes it from here.
+struct SizeDecl {
+  std::string_view binding;
+  uint32_t per_pixel = 0;
+};
+
+// Bytes of one element of a binding's data[] (std430), 0 for a type a size
+// rule cannot use.
+constexpr uint32_t element_bytes(std::string_view element) {
+  if (element == "float" || element == "uint" || element == "int") return 4;
+  if (element == "vec2" || element == "uvec2" || element == "ivec2") return 8;
+  if (element == "vec4" || element == "uvec4" || element == "ivec4") return 16;
+  return 0;
+}
+
 struct Declaration {
   std::string_view shader;
   std::span<const BindingDecl> bindings;  // bindings[i].binding == i + 1
@@ -70,6 +86,7 @@ struct Declaration {
   std::span<const GridArgDecl> grid_args;  // grid_args[i].slot == i
   std::span<const ModeDecl> modes;          // modes[i].value == i
   std::span<const ModeNeed> mode_needs;
+  std::span<const SizeDecl> sizes;
 
   constexpr const BindingDecl* binding(std::string_view name) const {
     for (const auto& b : bindings)
@@ -85,6 +102,12 @@ struct Declaration {
     for (const auto& m : modes)
       if (m.name == name) return &m;
     return nullptr;
+  }
+  // The binding's DN_PER_PIXEL count; 0 when it declares no size rule.
+  constexpr uint32_t per_pixel(std::string_view binding) const {
+    for (const auto& s : sizes)
+      if (s.binding == binding) return s.per_pixel;
+    return 0;
   }
   constexpr const GridArgDecl* grid_arg(std::string_view name) const {
     for (const auto& a : grid_args)
