@@ -61,8 +61,8 @@ struct SignalFeatures {
 // (both guarded: components below 1e-3 or not finite count as 1).
 struct Modulator {
   std::string buffer;   // a graph buffer with 3 components per pixel; empty: none (factor 1)
-  // Set: the buffer is this client plane (add_svgf_inputs adds it; fp16 or
-  // fp32 as declared). Unset: an fp32 buffer the caller provides.
+  // Set: the buffer is this client plane (add_svgf_inputs adds it). Unset: a
+  // buffer the caller provides.
   std::optional<protocol::ChannelId> plane;
   bool client_divided = false;  // the client sent the signal divided already: multiply only
   bool empty() const { return buffer.empty(); }
