@@ -178,6 +178,14 @@ TEST(FirstFrame, AfterTheWarmUpNoInputFormCompilesAKernel) {
   std::map<std::string, double> forms_of;
   for (const Form& form : forms) ++forms_of[form.pipeline];
   for (const auto& [pipeline, n] : forms_of) EXPECT_EQ(warm.at("pipeline." + pipeline + ".input_forms"), n) << pipeline;
+  // Every pipeline the server offers has its forms written out here.
+  for (const auto& [name, value] : warm) {
+    const bool forms_key =
+        name.rfind("pipeline.", 0) == 0 && name.size() > 21 && name.compare(name.size() - 12, 12, ".input_forms") == 0;
+    if (forms_key) {
+      EXPECT_TRUE(forms_of.count(name.substr(9, name.size() - 21))) << name << ": no input forms in this test";
+    }
+  }
   EXPECT_GT(warm.at("warm_up_configs_offered"), 0.0);
   EXPECT_EQ(warm.at("warm_up_configs"), warm.at("warm_up_configs_offered"));  // none refused
   EXPECT_EQ(server.log().find("level=warn event=warm_up"), std::string::npos) << server.log();
