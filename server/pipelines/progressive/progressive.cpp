@@ -11,6 +11,7 @@
 #include <string>
 
 #include "pipelines/definitions.hpp"
+#include "pipelines/progressive/gbuffer_fill.hpp"
 #include "pipelines/stages/split_signals.hpp"
 #include "pipelines/stages/supersample.hpp"
 #include "pipelines/stages/svgf_chain.hpp"
@@ -34,12 +35,22 @@ SvgfVariant variant(const SessionConfig& config, const Parameters& p) {
   v.luminance_weight = p.progressive_luminance_form == 0.0f ? LuminanceWeight::VarianceGuided : LuminanceWeight::Variance;
   v.young_variance = sparse ? YoungVariance::LuminanceOff : YoungVariance::SpatialEstimate;
   if (sparse) v.validity_mask = ChannelId::SampleCount;
-  v.sparse_gbuffer = p.progressive_sparse_gbuffer != 0.0f;  // check_channels: only with sample_count
   v.display_lag = sparse && v.taa && p.progressive_display_lag != 0.0f;
   return v;
 }
 
-GraphSpec build(const SessionConfig& config) { return svgf_graph(config, variant); }
+// svgf's graph; with sparse_gbuffer (check_channels: only with sample_count)
+// the chain reads the depth and normal gbuffer_fill fills first.
+GraphSpec build(const SessionConfig& config) {
+  GraphSpec g = begin_graph(config);
+  SvgfVariant v = variant(config, g.parameters);
+  add_svgf_inputs(g, config, v);
+  add_svgf_buffers(g, v);
+  g.add_output(config);
+  if (g.parameters.progressive_sparse_gbuffer != 0.0f) v.primary_features = add_gbuffer_fill(g, config);
+  add_svgf_passes(g, config, v);
+  return g;
+}
 
 std::optional<ConfigError> check_channels(const SessionConfig& config) {
   // svgf's history clipping reads every neighbour's current sample, which

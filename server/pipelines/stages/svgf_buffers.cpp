@@ -4,6 +4,9 @@
 
 namespace dn::pipelines::svgf {
 
+std::string primary_depth(const SvgfVariant& v) { return v.primary_features ? v.primary_features->depth : "depth"; }
+std::string primary_normal(const SvgfVariant& v) { return v.primary_features ? v.primary_features->normal : "normal"; }
+
 std::string signal_buffer(const SvgfVariant& v, const SvgfSignal& s) {
   return v.extra_samples ? mixed_signal(s.input) : s.input;
 }

@@ -1,6 +1,5 @@
 // The SVGF chain's buffers, shared by its stage files (svgf_reproject.cpp,
-// svgf_variance.cpp, svgf_atrous.cpp, svgf_remodulate.cpp, gbuffer_fill.cpp,
-// svgf_chain.cpp): their names and per-pixel sizes, the scratch each signal
+// svgf_variance.cpp, svgf_atrous.cpp, svgf_remodulate.cpp, svgf_chain.cpp): their names and per-pixel sizes, the scratch each signal
 // uses, and the binding helpers the stages share.
 #pragma once
 
@@ -53,14 +52,10 @@ inline constexpr const char* kTaaPrevious = "svgf_taa_previous";
 inline constexpr const char* kClipCurrent = "svgf_clip_current";
 inline constexpr const char* kClipPartial = "svgf_clip_partial";
 inline constexpr const char* kClipNeighbourhood = "svgf_clip_neighbourhood";
-// sparse_gbuffer: the packed 3x3 pyramid (gbuffer_fill.comp) of vec4(normal,
-// depth) fp32 and its validity (uint), and the filled planes the chain reads
-// instead of depth and normal, fp32 (1 and 3 per pixel).
-inline constexpr const char* kGbufferPyramid = "gbuffer_pyramid";
-inline constexpr const char* kGbufferValid = "gbuffer_valid";
-inline constexpr const char* kFilledDepth = "gbuffer_depth";
-inline constexpr const char* kFilledNormal = "gbuffer_normal";
-inline constexpr uint32_t kGbufferFactor = 3;
+// The depth and normal the chain's passes read: the planes, or the caller's
+// buffers (SvgfVariant::primary_features).
+std::string primary_depth(const SvgfVariant& v);
+std::string primary_normal(const SvgfVariant& v);
 
 // The buffer a chain reads its signal from: the plane, or with extra samples
 // supersample_mix's result.

@@ -69,7 +69,8 @@ void check_supported(const SvgfVariant& v) {
   }
   if (v.validity_mask && *v.validity_mask != ChannelId::SampleCount)
     reject("validity mask: only the sample_count plane is one");
-  if (v.sparse_gbuffer && !v.validity_mask) reject("a sparse G-buffer needs the validity mask that says where it has data");
+  if (v.primary_features && (v.primary_features->depth.empty() || v.primary_features->normal.empty()))
+    reject("primary features need a depth and a normal buffer");
   if (v.display_lag && !v.taa) reject("display_lag lags the final blend: it needs taa");
   if (v.validity_mask && std::any_of(v.signals.begin(), v.signals.end(), [](const SvgfSignal& s) { return s.clip; }))
     reject("validity mask with a clipped signal: the clip box reads every neighbour's current sample");
@@ -124,13 +125,6 @@ void add_svgf_buffers(GraphSpec& g, const SvgfVariant& v) {
     if (v.iterations > 0) g.add_scratch(kIllumD);
     if (third) g.add_scratch(kIllumF);
   }
-  if (v.sparse_gbuffer) {
-    const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
-    g.add_scratch_elements(kGbufferPyramid, elements, 16);
-    g.add_scratch_elements(kGbufferValid, elements, 4);
-    g.add_scratch(kFilledDepth);
-    g.add_scratch(kFilledNormal);
-  }
   // One guide and temporal per signal (the joint a-trous passes read both),
   // except that a second signal without features of its own shares the guide.
   for (size_t i = 0; i < v.signals.size(); ++i) {
@@ -152,7 +146,6 @@ void add_svgf_passes(GraphSpec& g, const SessionConfig& config, const SvgfVarian
     add_supersample_assign(g, config);
     for (const SvgfSignal& s : v.signals) add_supersample_mix(g, config, s.channel, s.input, s.suffix);
   }
-  if (v.sparse_gbuffer) add_gbuffer_fill(g, config);
   for (size_t i = 0; i < v.signals.size(); ++i) add_reprojection(g, v, i);
   add_variance(g, v);
   const std::vector<std::string> results = add_atrous(g, config, v);

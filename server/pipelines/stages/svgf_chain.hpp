@@ -98,10 +98,11 @@ struct SvgfVariant {
   // frame; the others keep their history as it is, and a pixel with neither
   // has no data, which no neighbour takes (paper 004 §5; svgf_reproject's MASKED).
   std::optional<protocol::ChannelId> validity_mask;
-  // With a validity mask: the depth and normal planes hold nothing where
-  // the mask is 0 (a ray-traced G-buffer below one sample per pixel); the
-  // chain reads them filled by gbuffer_fill's 3x3 pull-push pyramid.
-  bool sparse_gbuffer = false;
+  // Set: the depth and normal every pass of the chain reads instead of the
+  // planes (a signal's own features aside), buffers of 1 and 3 fp32 per
+  // pixel that the caller's passes write before the chain's (progressive's
+  // G-buffer filled where a sparse one has no sample).
+  std::optional<SignalFeatures> primary_features;
   bool taa = false;                  // final svgf_taa pass
   // With taa: the display one step behind where a still pixel's history
   // switches source (progressive's display_lag; svgf_remodulate's display_lag).

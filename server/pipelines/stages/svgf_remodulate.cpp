@@ -51,7 +51,7 @@ void add_remodulate(GraphSpec& g, const SvgfVariant& v, const std::vector<std::s
   if (v.taa || keep || keeps_still_emission(v)) remodulate.bind("motion", "motion");
   // Depth: the TAA's foreground test, still emission's (a background pixel keeps no mean).
   if (v.taa || keeps_still_emission(v))
-    remodulate.bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth");
+    remodulate.bind("depth", primary_depth(v));
   if (v.taa) remodulate.bind("taa_history", kTaaHistory).bind("taa_current", kTaaCurrent).bind("taa_previous", kTaaPrevious);
   const bool guard = v.harm_guard && v.iterations > 0;
   // The first chain's history (its length): read by the display lag and the harm guard.
@@ -84,7 +84,7 @@ void add_remodulate(GraphSpec& g, const SvgfVariant& v, const std::vector<std::s
   if (v.taa) {
     PassSpec& taa = g.add_pass("svgf_taa", "svgf_taa");
     taa.bind("current", kTaaCurrent).bind("previous", kTaaPrevious).bind("history", kTaaHistory)
-        .bind("depth", v.sparse_gbuffer ? kFilledDepth : "depth");
+        .bind("depth", primary_depth(v));
     bind_result(taa);
     if (v.display_lag) taa.set("DISPLAY_LAG", 1u);
   }

@@ -40,8 +40,8 @@ void add_reprojection(GraphSpec& g, const SvgfVariant& v, size_t index) {
   const std::string colour = s.history + "_colour", aux = s.history + "_aux";
   const bool demodulate = !s.modulator.empty() && !s.modulator.client_divided;
   // Features: the signal's own, the filled sparse G-buffer or the primary planes.
-  const std::string depth = s.features ? s.features->depth : v.sparse_gbuffer ? kFilledDepth : "depth";
-  const std::string normal = s.features ? s.features->normal : v.sparse_gbuffer ? kFilledNormal : "normal";
+  const std::string depth = s.features ? s.features->depth : primary_depth(v);
+  const std::string normal = s.features ? s.features->normal : primary_normal(v);
   const bool clip = v.clip && s.clip;
   if (clip) add_clip_prefilter(g, v, s, demodulate);
 

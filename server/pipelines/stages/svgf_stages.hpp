@@ -10,9 +10,6 @@
 
 namespace dn::pipelines::svgf {
 
-// gbuffer_fill.cpp: the sparse G-buffer's depth and normal filled from the
-// sampled pixels (sparse_gbuffer).
-void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config);
 // svgf_reproject.cpp: signal `index`'s reprojection (and history clipping):
 // its temporal colour in its illum buffer, its temporal moments and length.
 void add_reprojection(GraphSpec& g, const SvgfVariant& v, size_t index);

@@ -1,13 +1,18 @@
-#include "pipelines/stages/svgf_stages.hpp"
+#include "pipelines/progressive/gbuffer_fill.hpp"
 
 #include <algorithm>
 #include <string>
 
-#include "pipelines/stages/svgf_buffers.hpp"
-
-namespace dn::pipelines::svgf {
-
+namespace dn::pipelines {
 namespace {
+
+// The packed 3x3 pyramid of vec4(normal, depth) and its validity (uint), and
+// the filled planes (gbuffer_fill.pass sizes them).
+constexpr const char* kGbufferPyramid = "gbuffer_pyramid";
+constexpr const char* kGbufferValid = "gbuffer_valid";
+constexpr const char* kFilledDepth = "gbuffer_depth";
+constexpr const char* kFilledNormal = "gbuffer_normal";
+constexpr uint32_t kGbufferFactor = 3;
 
 // The number of levels above level 0 of the 3x3 pyramid: down to one pixel.
 uint32_t gbuffer_levels(const SessionConfig& config) {
@@ -19,9 +24,12 @@ uint32_t gbuffer_levels(const SessionConfig& config) {
 
 }  // namespace
 
-// gbuffer_fill: seed level 0 from the planes, pull to the coarsest level,
-// push back down; the push at level 0 writes the filled planes.
-void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config) {
+SignalFeatures add_gbuffer_fill(GraphSpec& g, const SessionConfig& config) {
+  const uint64_t elements = gpu::pyramid_pixels(g.width, g.height, kGbufferFactor);
+  g.add_scratch_elements(kGbufferPyramid, elements, 16);
+  g.add_scratch_elements(kGbufferValid, elements, 4);
+  g.add_scratch(kFilledDepth);
+  g.add_scratch(kFilledNormal);
   const uint32_t levels = gbuffer_levels(config);
   // The grid arguments of every gbuffer_fill pass: its level of the pyramid over the full size.
   auto over = [&](PassSpec& pass, gpu::Extent size, gpu::Extent source, uint32_t level) -> PassSpec& {
@@ -51,6 +59,7 @@ void add_gbuffer_fill(GraphSpec& g, const SessionConfig& config) {
     over(push, g.level(kGbufferFactor, l), g.level(kGbufferFactor, l + 1), l);
     if (l == 0) push.bind("filled_depth", kFilledDepth).bind("filled_normal", kFilledNormal);
   }
+  return {kFilledDepth, kFilledNormal};
 }
 
-}  // namespace dn::pipelines::svgf
+}  // namespace dn::pipelines
