@@ -272,7 +272,7 @@ variant_text() {
 }
 {
   echo "<!-- cycles-$scene:begin -->"
-  echo "### Scene \`$scene\` ($script)"
+  echo "#### Scene \`$scene\` ($script)"
   echo
   echo "Machine: $(nproc) cores of ${cpu:-unknown CPU}, device \`$device\`; Blender $blender_version; $(date -u +%Y-%m-%d)."
   echo "Command: \`bench/cycles.sh --scene $scene --variants $variants --spp-list $spp_list --ref-spp $ref_spp --frames $frames --size $size\`:"
@@ -294,7 +294,7 @@ variant_text() {
   for v in "${vars[@]}"; do
     for s in "${spps[@]}"; do
       echo
-      echo "#### \`$scene\`, input $s spp, $(variant_text "$v")"
+      echo "##### \`$scene\`, input $s spp, $(variant_text "$v")"
       echo
       cat "$out/$v-s$s/results.md"
     done
