@@ -134,7 +134,8 @@ struct GraphSpec {
 
   // The build-time check of the whole graph: buffer names unique, every
   // required binding bound, every bound buffer defined, Previous slots only
-  // on History buffers, aliases only over dead contents. Throws
+  // on History buffers, aliases only over dead contents, every buffer sized
+  // (size_from_bindings() ran). Throws
   // std::logic_error naming the pass and binding.
   void check() const;
 

@@ -173,6 +173,9 @@ void GraphSpec::check() const {
         throw std::logic_error("pipeline graph: buffer " + buffers[i].name + " defined twice");
     if (buffers[i].role == BufferRole::Shared && !buffers[i].shared)
       throw std::logic_error("pipeline graph: shared buffer " + buffers[i].name + " has no resource");
+    if (buffers[i].sized_by_bindings && buffers[i].bytes == 0)
+      throw std::logic_error("pipeline graph: buffer " + buffers[i].name +
+                             " is sized by its bindings, and size_from_bindings() has not run");
   }
   for (const BufferAlias& a : aliases) {
     if (!find(a.of) || std::any_of(aliases.begin(), aliases.end(), [&](const BufferAlias& o) { return o.name == a.of; }))

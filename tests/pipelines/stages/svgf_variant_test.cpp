@@ -73,6 +73,7 @@ pipelines::GraphSpec decreasing_graph(const pipelines::SessionConfig& config) {
   pipelines::add_svgf_buffers(g, v);
   g.add_output(config);
   pipelines::add_svgf_passes(g, config, v);
+  g.size_from_bindings();
   g.check();
   return g;
 }
