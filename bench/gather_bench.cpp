@@ -2,7 +2,8 @@
 //
 // On lavapipe every data-dependent storage-buffer word is a per-lane scalar
 // load with a bounds check, which is what the a-trous and variance passes
-// cost (docs/pipelines.md, "Speed on lavapipe"). Texel fetches go through
+// cost (docs/results.md, "Interactive on two cores: what llvmpipe spends time
+// on"). Texel fetches go through
 // the sampler's gather instead. Every pixel of a WxH vec4 grid sums its 5x5
 // neighbourhood (clamped): shaders/bench_gather_buffer.comp from the storage
 // buffer, bench_gather_texel.comp through an RGBA32F uniform texel buffer
