@@ -21,8 +21,10 @@ struct Variants {
 const std::map<std::string, Variants>& variants_by_pipeline() {
   static const std::map<std::string, Variants> table = [] {
     std::map<std::string, Variants> t;
-    for (const auto& p : pipelines::available_pipelines())
-      t[p.name] = {pipelines::input_forms(p).size(), pipelines::kernel_variants(p).kernels};
+    for (const auto& p : pipelines::available_pipelines()) {
+      const pipelines::KernelVariants v = pipelines::kernel_variants(p);
+      t[p.name] = {v.forms, v.kernels};
+    }
     return t;
   }();
   return table;

@@ -1,9 +1,10 @@
 #include "pipelines/input_forms.hpp"
 
 #include <algorithm>
-#include <map>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pipelines/graph.hpp"
 
@@ -50,15 +51,39 @@ uint64_t extra_samples(uint64_t signals, uint32_t k) {
   return mask;
 }
 
-// Every (shader, specialization) of a prepared graph.
-std::set<std::string> kernels_of(const GraphSpec& graph) {
-  std::set<std::string> out;
-  for (const PassSpec& pass : graph.passes) {
-    std::string key(pass.shader());
-    for (const auto& c : kernel_desc(pass, 64).spec_constants) key += " " + std::to_string(c.id) + "=" + std::to_string(c.value);
-    out.insert(std::move(key));
-  }
+// A kernel: a shader with one specialization.
+using Kernel = std::pair<std::string_view, std::vector<gpu::SpecConstant>>;
+
+std::set<Kernel> kernels_of(const GraphSpec& graph) {
+  std::set<Kernel> out;
+  for (const PassSpec& pass : graph.passes) out.insert({pass.shader(), kernel_desc(pass, 64).spec_constants});
   return out;
+}
+
+// Every form prepare() accepts, each with its prepared graph (prepared once).
+std::vector<std::pair<uint64_t, PreparedPipeline>> prepared_forms(const PipelineDescription& p) {
+  const uint64_t base = p.required_channels & ~kSignals;
+  const bool reads_extras = p.name != "passthrough";
+  std::vector<uint64_t> extras;  // optional channels read one by one
+  for (ChannelId id : {ChannelId::Emission, ChannelId::Roughness, ChannelId::ReflectionFootprint, ChannelId::SampleCount})
+    if (reads_extras && (p.optional_channels & protocol::channel_bit(id))) extras.push_back(protocol::channel_bit(id));
+  if (reads_extras && (p.optional_channels & kStatistics) == kStatistics) extras.push_back(kStatistics);
+  const bool takes_samples = reads_extras && (p.optional_channels & extra_samples(bits({ChannelId::Radiance}), 1)) != 0;
+
+  std::vector<std::pair<uint64_t, PreparedPipeline>> forms;
+  for (uint64_t signals : signal_forms(p))
+    for (uint64_t subset = 0; subset < (uint64_t{1} << extras.size()); ++subset) {
+      uint64_t form = base | signals;
+      for (size_t i = 0; i < extras.size(); ++i)
+        if (subset & (uint64_t{1} << i)) form |= extras[i];
+      for (uint32_t k = 0; k <= (takes_samples && extra_samples(signals, 1) ? protocol::kMaxExtraSamples : 0); ++k) {
+        const uint64_t with_samples = form | extra_samples(signals, k);
+        if (((with_samples & ~(p.required_channels | p.optional_channels))) != 0) continue;
+        auto prepared = prepare(form_config(p, with_samples, 64, 64));
+        if (auto* ok = std::get_if<PreparedPipeline>(&prepared)) forms.emplace_back(with_samples, std::move(*ok));
+      }
+    }
+  return forms;
 }
 
 }  // namespace
@@ -74,44 +99,23 @@ SessionConfig form_config(const PipelineDescription& pipeline, uint64_t form, ui
 }
 
 std::vector<uint64_t> input_forms(const PipelineDescription& p) {
-  const uint64_t base = p.required_channels & ~kSignals;
-  const bool reads_extras = p.name != "passthrough";
-  std::vector<uint64_t> extras;  // optional channels read one by one
-  for (ChannelId id : {ChannelId::Emission, ChannelId::Roughness, ChannelId::ReflectionFootprint, ChannelId::SampleCount})
-    if (reads_extras && (p.optional_channels & protocol::channel_bit(id))) extras.push_back(protocol::channel_bit(id));
-  if (reads_extras && (p.optional_channels & kStatistics) == kStatistics) extras.push_back(kStatistics);
-  const bool takes_samples = reads_extras && (p.optional_channels & extra_samples(bits({ChannelId::Radiance}), 1)) != 0;
-
   std::vector<uint64_t> forms;
-  for (uint64_t signals : signal_forms(p))
-    for (uint64_t subset = 0; subset < (uint64_t{1} << extras.size()); ++subset) {
-      uint64_t form = base | signals;
-      for (size_t i = 0; i < extras.size(); ++i)
-        if (subset & (uint64_t{1} << i)) form |= extras[i];
-      for (uint32_t k = 0; k <= (takes_samples && extra_samples(signals, 1) ? protocol::kMaxExtraSamples : 0); ++k) {
-        const uint64_t with_samples = form | extra_samples(signals, k);
-        if (((with_samples & ~(p.required_channels | p.optional_channels))) != 0) continue;
-        if (std::holds_alternative<PreparedPipeline>(prepare(form_config(p, with_samples, 64, 64))))
-          forms.push_back(with_samples);
-      }
-    }
+  for (const auto& [form, prepared] : prepared_forms(p)) forms.push_back(form);
   return forms;
 }
 
 KernelVariants kernel_variants(const PipelineDescription& pipeline) {
-  std::vector<std::pair<uint64_t, std::set<std::string>>> forms;
-  for (uint64_t form : input_forms(pipeline)) {
-    const auto prepared = prepare(form_config(pipeline, form, 64, 64));
-    forms.emplace_back(form, kernels_of(std::get<PreparedPipeline>(prepared).graph()));
-  }
+  std::vector<std::pair<uint64_t, std::set<Kernel>>> forms;
+  for (const auto& [form, prepared] : prepared_forms(pipeline)) forms.emplace_back(form, kernels_of(prepared.graph()));
   // Greedy cover: the form adding most kernels not yet covered, first.
   KernelVariants out;
-  std::set<std::string> covered;
+  out.forms = forms.size();
+  std::set<Kernel> covered;
   for (;;) {
     size_t best = forms.size(), best_new = 0;
     for (size_t i = 0; i < forms.size(); ++i) {
       const size_t fresh = static_cast<size_t>(std::count_if(forms[i].second.begin(), forms[i].second.end(),
-                                                             [&](const std::string& k) { return !covered.count(k); }));
+                                                             [&](const Kernel& k) { return !covered.count(k); }));
       if (fresh > best_new) best = i, best_new = fresh;
     }
     if (best == forms.size()) break;

@@ -27,6 +27,7 @@ SessionConfig form_config(const PipelineDescription& pipeline, uint64_t form, ui
 // defaults, and a smallest-first set of forms whose graphs hold all of them
 // (what the warm-up runs).
 struct KernelVariants {
+  size_t forms = 0;  // input_forms(pipeline).size()
   size_t kernels = 0;
   std::vector<uint64_t> covering_forms;
 };
