@@ -524,7 +524,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   std::vector<uint8_t> output;
   for (int t = 0; t < o.frames; ++t) {
     EncodedFrame f = make_frame(config, t, o.sample_period);
-    std::vector<dn::protocol::PassTiming> timings;
+    std::vector<dn::pipelines::PassTiming> timings;
     pipe->process(dn::pipelines::frame_input_or_throw(f.frame, config), true, output, timings);
     if (t == 0)
       for (const auto& tm : timings)

@@ -32,7 +32,7 @@ const std::map<std::string, Variants>& variants_by_pipeline() {
 
 }  // namespace
 
-void ServerCounters::add_frame_timings(const std::vector<protocol::PassTiming>& timings) {
+void ServerCounters::add_frame_timings(const std::vector<pipelines::PassTiming>& timings) {
   for (const auto& t : timings) {
     auto& sum = pass_timings[t.name];
     sum.total_ms += t.milliseconds;

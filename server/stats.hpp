@@ -44,7 +44,7 @@ struct ServerCounters {
     double first_run_ms = 0;  // of total_ms, frames on a private device (PipelineBuilder::run_off_queue)
   } builds;
 
-  void add_frame_timings(const std::vector<protocol::PassTiming>& timings);
+  void add_frame_timings(const std::vector<pipelines::PassTiming>& timings);
   void add_build(const BuiltPipeline& built);
 };
 

@@ -4,7 +4,7 @@
 
 namespace dn::server {
 
-void FrameTimes::add(const std::string& pipeline, uint64_t pixels, const std::vector<protocol::PassTiming>& timings,
+void FrameTimes::add(const std::string& pipeline, uint64_t pixels, const std::vector<pipelines::PassTiming>& timings,
                      Clock::time_point finished) {
   double ms = 0;
   for (const auto& t : timings) ms += t.milliseconds;

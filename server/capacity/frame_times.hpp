@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "dn/protocol/messages.hpp"
+#include "server/pipelines/pipeline.hpp"
 
 namespace dn::server {
 
@@ -22,7 +22,7 @@ class FrameTimes {
   static constexpr std::chrono::seconds kBusyWindow{10};     // the busy fraction's window
 
   // One finished frame: its timings (upload, every pass, download) summed.
-  void add(const std::string& pipeline, uint64_t pixels, const std::vector<protocol::PassTiming>& timings,
+  void add(const std::string& pipeline, uint64_t pixels, const std::vector<pipelines::PassTiming>& timings,
            Clock::time_point finished = Clock::now());
 
   // Median of frame milliseconds / megapixels over the pipeline's last

@@ -188,7 +188,7 @@ GraphPipeline::~GraphPipeline() {
 }
 
 void GraphPipeline::process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
-                            std::vector<protocol::PassTiming>& timings) {
+                            std::vector<pipelines::PassTiming>& timings) {
   std::lock_guard lock(mutex_);
   try {
     run(frame, want_output, output, timings);
@@ -202,7 +202,7 @@ void GraphPipeline::process(const FrameInput& frame, bool want_output, std::vect
 }
 
 void GraphPipeline::run(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
-                        std::vector<protocol::PassTiming>& timings) {
+                        std::vector<pipelines::PassTiming>& timings) {
   if (context_.lost()) throw gpu::VulkanError(VK_ERROR_DEVICE_LOST, "process");
 
   // Upload: planes are copied into their (mapped or staging) buffers as fp32.
@@ -330,7 +330,7 @@ void GraphPipeline::run(const FrameInput& frame, bool want_output, std::vector<u
   constants_staged_ = false;  // the device copy is made
 }
 
-std::optional<protocol::SampleCounts> GraphPipeline::samples() const {
+std::optional<pipelines::SampleCounts> GraphPipeline::samples() const {
   for (const auto& n : nodes_)
     if (n.spec->role == BufferRole::Readback && n.spec->name == kSampleSummary && !n.read.empty())
       return decode_sample_summary(n.read);

@@ -165,8 +165,8 @@ class GraphPipeline final : public Pipeline {
   uint64_t transient_bytes() const override { return transient_bytes_; }
   const SessionConfig& config() const override { return config_; }
   void process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
-               std::vector<protocol::PassTiming>& timings) override;
-  std::optional<protocol::SampleCounts> samples() const override;
+               std::vector<pipelines::PassTiming>& timings) override;
+  std::optional<pipelines::SampleCounts> samples() const override;
 
   const GraphSpec& spec() const { return *spec_; }
 
@@ -202,7 +202,7 @@ class GraphPipeline final : public Pipeline {
   };
 
   void run(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
-           std::vector<protocol::PassTiming>& timings);
+           std::vector<pipelines::PassTiming>& timings);
   Node& node(const std::string& name);
   const gpu::Buffer& bound(const BindingRef& ref, uint32_t parity);
   void record_captures(VkCommandBuffer cmd, const Pass& pass, uint32_t parity);

@@ -51,6 +51,20 @@ struct ConfigError {
   std::string message;  // names the value and what was expected
 };
 
+// One device pass's time in a frame, or a host stage's ("upload", "download").
+struct PassTiming {
+  std::string name;
+  double milliseconds = 0.0;
+};
+
+// How many input frames a frame's output rests on per pixel: the least and
+// the lower median over the frame.
+struct SampleCounts {
+  uint32_t min = 0;
+  uint32_t median = 0;
+  bool operator==(const SampleCounts&) const = default;
+};
+
 struct GraphSpec;   // pipelines/graph.hpp
 struct FrameInput;  // pipelines/frame_input.hpp
 
@@ -97,11 +111,11 @@ class Pipeline {
   // output format) when want_output is true, and appends one timing per
   // device pass plus the host stages "upload" and "download".
   virtual void process(const FrameInput& frame, bool want_output, std::vector<uint8_t>& output,
-                       std::vector<protocol::PassTiming>& timings) = 0;
+                       std::vector<PassTiming>& timings) = 0;
   // After process(): how many input frames the last frame's output rests on
   // per pixel, over the frame (RESULT.samples); nullopt for a pipeline that
   // keeps no count.
-  virtual std::optional<protocol::SampleCounts> samples() const { return std::nullopt; }
+  virtual std::optional<SampleCounts> samples() const { return std::nullopt; }
 };
 
 // Every pipeline this build offers, in a stable order.

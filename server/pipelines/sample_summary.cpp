@@ -44,14 +44,13 @@ uint32_t sample_bin_floor(uint32_t bin) {
   return (16 + sub) << (octave - 4);
 }
 
-std::optional<protocol::SampleCounts> decode_sample_summary(std::span<const uint8_t> bytes) {
+std::optional<SampleCounts> decode_sample_summary(std::span<const uint8_t> bytes) {
   std::vector<uint32_t> words(1 + kSampleBins, 0);
   std::memcpy(words.data(), bytes.data(), std::min(bytes.size(), words.size() * 4));
   uint64_t pixels = 0;
   for (uint32_t b = 0; b < kSampleBins; ++b) pixels += words[1 + b];
   if (pixels == 0) return std::nullopt;
-  protocol::SampleCounts counts;
-  counts.counted = true;
+  SampleCounts counts;
   counts.min = 0xffffffffu - words[0];
   // The lower median: the bin holding pixel (pixels + 1) / 2 in count order.
   const uint64_t half = (pixels + 1) / 2;

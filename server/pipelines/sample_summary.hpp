@@ -33,6 +33,6 @@ inline constexpr uint64_t kSampleSummaryBytes = 4 * (1 + uint64_t{kSampleBins});
 
 // The counts from the buffer's bytes (4 * (1 + kSampleBins)); nullopt when
 // no pixel was counted.
-std::optional<protocol::SampleCounts> decode_sample_summary(std::span<const uint8_t> bytes);
+std::optional<pipelines::SampleCounts> decode_sample_summary(std::span<const uint8_t> bytes);
 
 }  // namespace dn::pipelines

@@ -13,6 +13,12 @@ std::shared_ptr<const std::vector<uint8_t>> encode_shared(const protocol::Messag
   return bytes;
 }
 
+// RESULT.samples: counted false where the pipeline keeps no count.
+protocol::SampleCounts result_samples(const std::optional<pipelines::SampleCounts>& samples) {
+  if (!samples) return {};
+  return protocol::SampleCounts{true, samples->min, samples->median};
+}
+
 }  // namespace
 
 bool FrameJob::anyone_wants_output() const {
@@ -40,12 +46,12 @@ FrameDone encode_replies(uint64_t session_id, protocol::Format output_format, co
     protocol::Result result;
     result.session_id = session_id;
     result.frame_index = job.frame.info.frame_index;
-    result.timings = done.timings;
+    for (const pipelines::PassTiming& t : done.timings) result.timings.push_back({t.name, t.milliseconds});
     if (with_output) result.planes = {plane};
     if (form.input)
       for (const protocol::PlaneView& p : job.frame.planes)
         if (p.id == protocol::ChannelId::Radiance) result.planes.push_back(p);
-    if (form.samples) result.samples = outcome.samples ? *outcome.samples : protocol::SampleCounts{};  // counted false: no count
+    if (form.samples) result.samples = result_samples(outcome.samples);
     return encode_shared(result, job.request_id);
   };
   for (size_t i = 0; i < job.watcher_forms.size(); ++i)

@@ -40,8 +40,8 @@ struct FrameJob {
 // What the session's pipeline made of one frame.
 struct FrameOutcome {
   std::vector<uint8_t> output;  // in the session's output format; empty when nobody wants it
-  std::optional<protocol::SampleCounts> samples;
-  std::vector<protocol::PassTiming> timings;
+  std::optional<pipelines::SampleCounts> samples;
+  std::vector<pipelines::PassTiming> timings;
   std::optional<std::string> error;  // the device failed: why
 };
 
@@ -53,7 +53,7 @@ struct FrameDone {
   std::shared_ptr<const std::vector<uint8_t>> owner_message;  // encoded RESULT or ERROR
   // Encoded RESULTs with the output, by ResultForm::index(), where wanted.
   std::array<std::shared_ptr<const std::vector<uint8_t>>, 4> watcher_messages;
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   bool failed = false;
 };
 

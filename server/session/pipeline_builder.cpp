@@ -39,7 +39,7 @@ void run_one_frame(pipelines::Pipeline& pipeline, const pipelines::SessionConfig
     input.planes.push_back(planes.back());
   }
   std::vector<uint8_t> output;
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   pipeline.process(input, false, output, timings);
 }
 

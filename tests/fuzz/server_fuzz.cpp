@@ -107,7 +107,7 @@ class HostPipeline : public pipelines::Pipeline {
   uint64_t device_bytes() const override { return bytes_; }
   const pipelines::SessionConfig& config() const override { return config_; }
   void process(const pipelines::FrameInput&, bool want_output, std::vector<uint8_t>& output,
-               std::vector<PassTiming>& timings) override {
+               std::vector<pipelines::PassTiming>& timings) override {
     if (frames_++ % 11 == 5) throw pipelines::DeviceFailure("fuzz: simulated device loss");
     if (want_output)
       output.assign(uint64_t{config_.width} * config_.height * 3 * bytes_per_component(config_.output_format), 0x3c);

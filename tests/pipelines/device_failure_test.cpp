@@ -24,7 +24,7 @@ TEST(DeviceFailure, LostDeviceFailsFramesFastWithTheResultName) {
     test::HostFrame f;
     f.add(ChannelId::Radiance, Format::F32, std::vector<float>(8 * 4 * 3, 1.0f));
     std::vector<uint8_t> out;
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     test::process(*pipe, f.view(), true, out, timings);
 
     context.mark_lost();

@@ -78,7 +78,7 @@ struct HostFrame {
 // Runs `frame` through `pipeline` as a session does: its planes checked by
 // frame_input() (std::invalid_argument when they do not fit the session).
 inline void process(pipelines::Pipeline& pipeline, const protocol::Frame& frame, bool want_output,
-                    std::vector<uint8_t>& output, std::vector<protocol::PassTiming>& timings) {
+                    std::vector<uint8_t>& output, std::vector<pipelines::PassTiming>& timings) {
   pipeline.process(pipelines::frame_input_or_throw(frame, pipeline.config()), want_output, output, timings);
 }
 

@@ -277,7 +277,7 @@ TEST_P(GoldenTest, OutputIsBitIdentical) {
   for (int t = 0; t < kFrames; ++t) {
     const test::HostFrame f = host_frame(c, t);
     std::vector<uint8_t> out;
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     test::process(*pipe, f.view(), true, out, timings);
     hash = fnv1a(hash, out.data(), out.size());
     if (t == 0)

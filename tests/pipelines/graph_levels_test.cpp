@@ -114,7 +114,7 @@ TEST_F(GraphLevelsTest, PyramidAtReducedResolutionsMatchesCpuReference) {
     frame.add(ChannelId::Radiance, Format::F32, radiance);
     pipelines::GraphPipeline pipe(ctx(), config, g);
     std::vector<uint8_t> output;
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     test::process(pipe, frame.view(), true, output, timings);
     const std::vector<float> got = test::decode_output(output, Format::F32);
     const std::vector<double> want = reference(radiance, c);

@@ -31,7 +31,7 @@ inline PassTimes time_passes(pipelines::Pipeline& pipe, const std::vector<HostFr
   PassTimes t;
   std::vector<uint8_t> out;
   for (int f = 0; f < warmup + frames; ++f) {
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     test::process(pipe, inputs[size_t(f) % inputs.size()].view(), true, out, timings);
     if (f < warmup) continue;
     double sum = 0;

@@ -40,7 +40,7 @@ TEST_F(StagingTest, AccumulateAndPassthroughMatchTheDirectPath) {
       f.add(ChannelId::Depth, in, s.depth);
       f.add(ChannelId::Motion, in, s.motion);
       std::vector<uint8_t> a, b;
-      std::vector<protocol::PassTiming> ta, tb;
+      std::vector<pipelines::PassTiming> ta, tb;
       test::process(*direct, f.view(), true, a, ta);
       test::process(*staging, f.view(), t != 2, b, tb);  // one frame without download
       if (t != 2) {

@@ -125,9 +125,9 @@ inline test::SvgfFrame reference_frame(const test::HostFrame& f, int w, int h, b
 }
 
 inline std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, Format out = Format::F32,
-                       std::vector<protocol::PassTiming>* timings = nullptr) {
+                       std::vector<pipelines::PassTiming>* timings = nullptr) {
   std::vector<uint8_t> bytes;
-  std::vector<protocol::PassTiming> t;
+  std::vector<pipelines::PassTiming> t;
   test::process(p, f.view(), true, bytes, timings ? *timings : t);
   return test::decode_output(bytes, out);
 }

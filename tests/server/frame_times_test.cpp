@@ -9,7 +9,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::vector<protocol::PassTiming> frame(double upload, double pass, double download) {
+std::vector<pipelines::PassTiming> frame(double upload, double pass, double download) {
   return {{"upload", upload}, {"pass", pass}, {"download", download}};
 }
 

@@ -53,9 +53,9 @@ test::ReferenceFrame reference_frame(const test::HostFrame& f, int w, int h) {
   return r;
 }
 
-std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, std::vector<protocol::PassTiming>* timings = nullptr) {
+std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f, std::vector<pipelines::PassTiming>* timings = nullptr) {
   std::vector<uint8_t> out;
-  std::vector<protocol::PassTiming> t;
+  std::vector<pipelines::PassTiming> t;
   test::process(p, f.view(), true, out, timings ? *timings : t);
   return out.empty() ? std::vector<float>{} : test::decode_output(out, Format::F32);
 }
@@ -94,7 +94,7 @@ TEST_P(AccumulateReferenceTest, MatchesCpuReferenceOverFrames) {
     const uint32_t flags = t == 6 ? protocol::kFrameReset : 0u;
     const test::HostFrame f = host_frame(scene.frame(t), v.w, v.h, v.in, v.conv, flags, t);
     std::vector<uint8_t> bytes;
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     test::process(*pipe, f.view(), true, bytes, timings);
     ASSERT_EQ(bytes.size(), size_t(v.w) * v.h * 3 * protocol::bytes_per_component(v.out));
     const std::vector<float> got = test::decode_output(bytes, v.out);
@@ -344,7 +344,7 @@ TEST_F(AccumulateTest, SkippingOutputKeepsHistory) {
     const auto f = host_frame(scene.frame(t), w, h, Format::F32, MotionConvention::PixelsToPrevious, 0, t);
     last_a = run(*a, f);
     std::vector<uint8_t> out;
-    std::vector<protocol::PassTiming> timings;
+    std::vector<pipelines::PassTiming> timings;
     const bool want = t == 4;
     test::process(*b, f.view(), want, out, timings);
     EXPECT_EQ(out.empty(), !want);
@@ -360,7 +360,7 @@ TEST_F(AccumulateTest, SkippingOutputKeepsHistory) {
 TEST_F(AccumulateTest, TimingsNameUploadPassesAndDownload) {
   auto pipe = pipelines::create(ctx(), test::accumulate_config(32, 32));
   test::PanningScene scene(32, 32, 3, 1, 1, 0, 0.1f);
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   run(*pipe, host_frame(scene.frame(0), 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, 0), &timings);
   ASSERT_EQ(timings.size(), 4u);
   EXPECT_EQ(timings[0].name, "upload");

@@ -23,14 +23,14 @@ using test::Format;
 class PassthroughTest : public test::GpuTest {
  protected:
   std::vector<uint8_t> run(uint32_t w, uint32_t h, Format in, Format out, const std::vector<float>& radiance,
-                           std::vector<protocol::PassTiming>* timings = nullptr) {
+                           std::vector<pipelines::PassTiming>* timings = nullptr) {
     auto config = test::make_config("passthrough", w, h, {{ChannelId::Radiance, in}}, out);
     EXPECT_FALSE(pipelines::validate(config).has_value());
     auto pipe = pipelines::create(ctx(), config);
     test::HostFrame f;
     f.add(ChannelId::Radiance, in, radiance);
     std::vector<uint8_t> bytes;
-    std::vector<protocol::PassTiming> t;
+    std::vector<pipelines::PassTiming> t;
     test::process(*pipe, f.view(), true, bytes, timings ? *timings : t);
     return bytes;
   }
@@ -125,7 +125,7 @@ TEST_F(PassthroughTest, ReportsTimingsAndSkipsDownloadWhenAsked) {
   test::HostFrame f;
   f.add(ChannelId::Radiance, Format::F32, std::vector<float>(16 * 16 * 3, 0.5f));
   std::vector<uint8_t> out;
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   test::process(*pipe, f.view(), false, out, timings);
   EXPECT_TRUE(out.empty());
   ASSERT_EQ(timings.size(), 3u);
@@ -139,7 +139,7 @@ TEST_F(PassthroughTest, BadFrameThrowsAndThePipelineKeepsWorking) {
   auto config = test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, Format::F32}});
   auto pipe = pipelines::create(ctx(), config);
   std::vector<uint8_t> out;
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   test::HostFrame wrong_size;
   wrong_size.add(ChannelId::Radiance, Format::F32, std::vector<float>(8 * 8 * 3 - 1, 1.0f));
   EXPECT_THROW(test::process(*pipe, wrong_size.view(), true, out, timings), std::invalid_argument);

@@ -618,7 +618,7 @@ TEST_F(SvgfTest, OutputScalesWithInput) {
 TEST_F(SvgfTest, TimingsNameEveryPass) {
   auto pipe = pipelines::create(ctx(), svgf_config(32, 32));
   SvgfSceneGen scene(32, 32, 3, 1, 1, 0, 0.1f);
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   run(*pipe, host_frame(scene.frame(0), 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, false),
       Format::F32, &timings);
   std::vector<std::string> names;
@@ -886,7 +886,7 @@ TEST_F(SvgfTest, SplitTimingsNameEveryPass) {
   auto pipe = pipelines::create(ctx(), svgf_split_config(32, 32, Format::F32, Format::F32, {{"atrous_iterations", 2}}));
   SvgfSceneGen scene(32, 32, 3, 1, 1, 0, 0.1f);
   const SvgfScene s = scene.frame(0);
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   run(*pipe, host_frame(s, 32, 32, Format::F32, MotionConvention::PixelsToPrevious, 0, false, &s.radiance), Format::F32,
       &timings);
   std::vector<std::string> names;
@@ -1008,7 +1008,7 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
 uint64_t round_up4_bytes(uint64_t b) { return (b + 3) / 4 * 4; }
 
 std::vector<std::string> pass_names(pipelines::Pipeline& p, const test::HostFrame& f) {
-  std::vector<protocol::PassTiming> timings;
+  std::vector<pipelines::PassTiming> timings;
   std::vector<uint8_t> bytes;
   test::process(p, f.view(), true, bytes, timings);
   std::vector<std::string> names;
