@@ -10,6 +10,7 @@
 #include "frames.hpp"
 #include "pipelines/definitions.hpp"
 #include "pipelines/graph.hpp"
+#include "pipelines/input_forms.hpp"
 
 namespace dn {
 namespace {
@@ -211,28 +212,23 @@ TEST(GraphSpec, BuffersAreSizedByTheirBindingsRules) {
   }
 }
 
-// Every pipeline builds a graph whose buffers its bindings size and that passes check().
-TEST(GraphSpec, EveryPipelineBuildsACheckedGraph) {
+// Every pipeline, in every input form it accepts (input_forms.hpp), builds a
+// graph whose buffers its bindings size and that passes check().
+TEST(GraphSpec, EveryPipelineBuildsACheckedGraphInEveryInputForm) {
   for (const auto& def : pipelines::definitions()) {
     SCOPED_TRACE(def.description.name);
-    std::vector<protocol::ChannelDecl> channels;
-    // fp16 planes, except the sample statistics stat takes in fp32 only.
-    for (const auto& c : protocol::kChannels)
-      if (def.description.required_channels & protocol::channel_bit(c.id))
-        channels.push_back({c.id, protocol::is_sample_statistic(c.id) ? Format::F32 : Format::F16});
-    if (def.description.name == "svgf" || def.description.name == "progressive")
-      channels.push_back({ChannelId::Radiance, Format::F32});
-    if (def.description.name == "progressive") channels.push_back({ChannelId::SampleCount, Format::F16});  // the mask
-    // Split pipelines (specular required) take the diffuse part in either form.
-    if (def.description.required_channels & protocol::channel_bit(ChannelId::Specular))
-      channels.push_back({ChannelId::DiffuseLighting, Format::F32});
-    const auto config = test::make_config(def.description.name, 33, 17, channels, Format::F16);
-    ASSERT_FALSE(pipelines::validate(config).has_value()) << pipelines::validate(config)->message;
-    EXPECT_NO_THROW({
-      pipelines::GraphSpec g = def.build(config);
-      g.size_from_bindings();
-      g.check();
-    });
+    const auto forms = pipelines::input_forms(def.description);
+    EXPECT_FALSE(forms.empty());
+    for (uint64_t form : forms) {
+      SCOPED_TRACE(form);
+      const auto config = pipelines::form_config(def.description, form, 33, 17);
+      ASSERT_FALSE(pipelines::validate(config).has_value()) << pipelines::validate(config)->message;
+      EXPECT_NO_THROW({
+        pipelines::GraphSpec g = def.build(config);
+        g.size_from_bindings();
+        g.check();
+      });
+    }
   }
 }
 

@@ -2,6 +2,7 @@
 // accounting and the device-limit check.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -30,127 +31,25 @@ void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const 
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
 
-TEST(Pipelines, AvailableListsPassthroughAccumulateSvgfSvgfFbReflectStatStatTemporalAndProgressive) {
-  const auto& all = pipelines::available_pipelines();
-  ASSERT_EQ(all.size(), 8u);
-  // The extra samples (ids 33-50, docs/protocol.md §7.6) are optional for svgf, svgf-fb and reflect (not progressive).
-  uint64_t extra_samples = 0;
-  for (uint32_t id = 33; id <= 50; ++id) extra_samples |= protocol::channel_bit(static_cast<ChannelId>(id));
-  EXPECT_EQ(all[2].name, "svgf");
-  EXPECT_EQ(all[2].required_channels, protocol::channel_bit(ChannelId::Albedo) |
-                                          protocol::channel_bit(ChannelId::Normal) |
-                                          protocol::channel_bit(ChannelId::Depth) |
-                                          protocol::channel_bit(ChannelId::Motion));
-  // Radiance, or the split pair in either form (the either/or rule is checked by validate()).
-  EXPECT_EQ(all[2].optional_channels,
-            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Diffuse) |
-                protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::DiffuseLighting) |
-                protocol::channel_bit(ChannelId::SpecularLighting) | protocol::channel_bit(ChannelId::SpecularAlbedo) |
-                protocol::channel_bit(ChannelId::Emission) | protocol::channel_bit(ChannelId::Roughness) |
-                extra_samples);
-  std::vector<std::string> svgf_names;
-  for (const auto& p : all[2].parameters) svgf_names.push_back(p.name);
-  EXPECT_EQ(svgf_names, (std::vector<std::string>{"alpha_colour", "alpha_moments", "max_history", "atrous_iterations",
-                                                  "feedback_tap", "phi_colour", "phi_normal", "phi_depth", "taa_alpha",
-                                                  "taa_static_alpha", "clip_roughness", "variance_of_mean", "harm_guard",
-                                                  "keep_unexplained", "converge_still", "luminance_ramp",
-                                                  "propagate_variance"}));
-  // svgf-fb: split lighting with F0 and roughness (diffuse in either form); svgf's parameters.
-  EXPECT_EQ(all[3].name, "svgf-fb");
-  EXPECT_EQ(all[3].required_channels,
-            protocol::channel_bit(ChannelId::Specular) | protocol::channel_bit(ChannelId::Albedo) | protocol::channel_bit(ChannelId::SpecularF0) |
-                protocol::channel_bit(ChannelId::Roughness) | protocol::channel_bit(ChannelId::Normal) |
-                protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
-  EXPECT_EQ(all[3].optional_channels, protocol::channel_bit(ChannelId::Diffuse) |
-                                          protocol::channel_bit(ChannelId::DiffuseLighting) |
-                                          protocol::channel_bit(ChannelId::Emission) | extra_samples);
-  std::vector<std::string> fb_names;
-  for (const auto& p : all[3].parameters) fb_names.push_back(p.name);
-  EXPECT_EQ(fb_names, svgf_names);
-  // reflect: svgf-fb's channels plus position and the reflection features
-  // (footprint not yet: nothing reads it); svgf's parameters and its classes.
-  EXPECT_EQ(all[4].name, "reflect");
-  uint64_t features = protocol::channel_bit(ChannelId::Position);
-  for (ChannelId id : {ChannelId::ReflectionPosition, ChannelId::ReflectionAlbedo, ChannelId::ReflectionNormal,
-                       ChannelId::ReflectionDepth, ChannelId::ReflectionDirection, ChannelId::ReflectionDistance})
-    features |= protocol::channel_bit(id);
-  EXPECT_EQ(all[4].required_channels, all[3].required_channels | features);
-  EXPECT_EQ(all[4].optional_channels,
-            all[3].optional_channels | protocol::channel_bit(ChannelId::ReflectionFootprint));
-  std::vector<std::string> reflect_names;
-  for (const auto& p : all[4].parameters) reflect_names.push_back(p.name);
-  std::vector<std::string> expected = svgf_names;
-  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular", "virtual_start",
-                                  "mirror_match_threshold", "footprint_omega",
-                                  "firefly_median"});
-  EXPECT_EQ(reflect_names, expected);
-  EXPECT_EQ(all[0].name, "passthrough");
-  EXPECT_EQ(all[0].required_channels, protocol::channel_bit(ChannelId::Radiance));
-  EXPECT_TRUE(all[0].parameters.empty());
-  EXPECT_EQ(all[1].name, "accumulate");
-  EXPECT_EQ(all[1].required_channels,
-            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Normal) |
-                protocol::channel_bit(ChannelId::Depth) | protocol::channel_bit(ChannelId::Motion));
-  std::vector<std::string> names;
-  for (const auto& p : all[1].parameters) {
-    names.push_back(p.name);
-    EXPECT_LE(p.min_value, p.default_value) << p.name;
-    EXPECT_LE(p.default_value, p.max_value) << p.name;
-    EXPECT_FALSE(p.description.empty()) << p.name;
+// The registry: every DN_PIPELINE(family, id) row of pipelines.def is
+// offered, in row order, named by its id with '-' for '_' (each family's
+// description is checked by tests/pipelines/<family>/*_description_test.cpp).
+TEST(Pipelines, AvailableAreTheRowsOfPipelinesDef) {
+  std::ifstream in(DN_PIPELINES_DEF);
+  ASSERT_TRUE(in) << "cannot open " << DN_PIPELINES_DEF;
+  std::vector<std::string> rows;
+  const std::regex row(R"(^DN_PIPELINE\([a-z0-9_]+, *([a-z0-9_]+)\))");
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (!std::regex_search(line, m, row)) continue;
+    std::string name = m[1];
+    std::replace(name.begin(), name.end(), '_', '-');
+    rows.push_back(name);
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"alpha_min", "max_history", "depth_tolerance", "normal_threshold"}));
-  // stat: the raw mean, the guides and the four sample statistics (docs/protocol.md §7.7), nothing optional.
-  EXPECT_EQ(all[5].name, "stat");
-  EXPECT_EQ(all[5].required_channels,
-            protocol::channel_bit(ChannelId::Radiance) | protocol::channel_bit(ChannelId::Albedo) |
-                protocol::channel_bit(ChannelId::Normal) | protocol::channel_bit(ChannelId::StatCount) |
-                protocol::channel_bit(ChannelId::StatMean) | protocol::channel_bit(ChannelId::StatM2) |
-                protocol::channel_bit(ChannelId::StatM3));
-  EXPECT_EQ(all[5].optional_channels, 0u);
-  std::vector<std::string> stat_names;
-  for (const auto& p : all[5].parameters) stat_names.push_back(p.name);
-  EXPECT_EQ(stat_names, (std::vector<std::string>{"alpha", "radius", "sigma_spatial", "sigma_albedo", "sigma_normal",
-                                                  "variance_floor", "membership", "asymmetric", "membership_falloff", "demodulated",
-                                                  "pool_single", "spatial_shrink_from"}));
-  // stat-temporal: stat's channels plus depth and motion (reprojection), the
-  // four statistics optional (without them the radiance is one sample per
-  // frame); stat's parameters and its own.
-  EXPECT_EQ(all[6].name, "stat-temporal");
-  const uint64_t statistics = protocol::channel_bit(ChannelId::StatCount) | protocol::channel_bit(ChannelId::StatMean) |
-                              protocol::channel_bit(ChannelId::StatM2) | protocol::channel_bit(ChannelId::StatM3);
-  EXPECT_EQ(all[6].required_channels, (all[5].required_channels & ~statistics) |
-                                          protocol::channel_bit(ChannelId::Depth) |
-                                          protocol::channel_bit(ChannelId::Motion));
-  EXPECT_EQ(all[6].optional_channels, statistics);
-  std::vector<std::string> temporal_names;
-  for (const auto& p : all[6].parameters) temporal_names.push_back(p.name);
-  stat_names.insert(stat_names.end(), {"still_alpha", "history_alpha", "fading"});
-  EXPECT_EQ(temporal_names, stat_names);
-  // progressive: svgf's channels without roughness and extra samples, plus
-  // sample_count; svgf's parameters with paper 004's defaults, and its own.
-  EXPECT_EQ(all[7].name, "progressive");
-  EXPECT_EQ(all[7].required_channels, all[2].required_channels);
-  EXPECT_EQ(all[7].optional_channels,
-            (all[2].optional_channels & ~(protocol::channel_bit(ChannelId::Roughness) | extra_samples)) |
-                protocol::channel_bit(ChannelId::SampleCount));
-  std::vector<std::string> progressive_names;
-  for (const auto& p : all[7].parameters) progressive_names.push_back(p.name);
-  expected = svgf_names;
-  expected.insert(expected.end(),
-                  {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance", "luminance_min_age",
-                   "luminance_ramp_in", "display_lag", "sparse_gbuffer"});
-  EXPECT_EQ(progressive_names, expected);
-  auto default_of = [](const pipelines::PipelineDescription& d, const std::string& name) {
-    for (const auto& p : d.parameters)
-      if (p.name == name) return p.default_value;
-    return -1.0;
-  };
-  EXPECT_EQ(default_of(all[7], "alpha_colour"), 0.1);
-  EXPECT_EQ(default_of(all[7], "atrous_iterations"), 5.0);
-  EXPECT_EQ(default_of(all[7], "phi_normal"), 64.0);
-  EXPECT_EQ(default_of(all[7], "clip_roughness"), 0.0);
-  EXPECT_EQ(default_of(all[2], "alpha_colour"), 0.05);  // svgf's own are untouched
-  EXPECT_EQ(default_of(all[2], "atrous_iterations"), 4.0);
+  EXPECT_GE(rows.size(), 2u);  // passthrough and accumulate at least: the transport and temporal baselines
+  std::vector<std::string> offered;
+  for (const auto& d : pipelines::available_pipelines()) offered.push_back(d.name);
+  EXPECT_EQ(offered, rows);
 }
 
 TEST(Pipelines, ParameterDefaultsAreTheSpecifiedOnes) {
