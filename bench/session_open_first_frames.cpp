@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "dn/client/client.hpp"
+#include "pipelines/input_forms.hpp"
 
 namespace {
 
@@ -23,43 +24,26 @@ using dn::protocol::ChannelId;
 using dn::protocol::Format;
 
 struct Form {
-  std::string pipeline, name;
+  std::string pipeline, name;  // name: the channels beyond the pipeline's required ones
   std::vector<ChannelId> channels;
 };
 
+// The server's own list (pipelines/input_forms.hpp): the forms its warm-up
+// covers are exactly the ones opened here.
 std::vector<Form> input_forms() {
-  using C = ChannelId;
-  const std::vector<C> gbuffer = {C::Albedo, C::Normal, C::Depth, C::Motion};
-  const std::vector<std::pair<std::string, std::vector<C>>> svgf_signals = {
-      {"radiance", {C::Radiance}},
-      {"diffuse+specular", {C::Diffuse, C::Specular}},
-      {"diffuse+specular_lighting", {C::Diffuse, C::SpecularLighting, C::SpecularAlbedo}},
-      {"diffuse_lighting+specular", {C::DiffuseLighting, C::Specular}},
-      {"diffuse_lighting+specular_lighting", {C::DiffuseLighting, C::SpecularLighting, C::SpecularAlbedo}}};
-  const std::vector<C> fb_extra = {C::SpecularF0, C::Roughness};
-  const std::vector<C> reflection = {C::Position,        C::ReflectionPosition, C::ReflectionAlbedo,
-                                     C::ReflectionNormal, C::ReflectionDepth,   C::ReflectionDirection,
-                                     C::ReflectionDistance};
-  const std::vector<C> statistics = {C::Radiance, C::Albedo, C::Normal, C::StatCount, C::StatMean, C::StatM2, C::StatM3};
-  auto join = [](std::initializer_list<std::vector<C>> parts) {
-    std::vector<C> out;
-    for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
-    return out;
-  };
-  std::vector<Form> forms = {{"passthrough", "radiance", {C::Radiance}},
-                             {"accumulate", "radiance", {C::Radiance, C::Normal, C::Depth, C::Motion}},
-                             {"stat", "statistics", statistics},
-                             {"stat-temporal", "statistics", join({statistics, {C::Depth, C::Motion}})}};
-  for (const auto& [name, s] : svgf_signals) {
-    forms.push_back({"svgf", name, join({s, gbuffer})});
-    forms.push_back({"progressive", name, join({s, gbuffer})});
-    forms.push_back({"progressive", name + "+sample_count", join({s, gbuffer, {C::SampleCount}})});
-  }
-  for (int i : {1, 3}) {  // the split forms svgf-fb and reflect take
-    forms.push_back({"svgf-fb", svgf_signals[i].first, join({svgf_signals[i].second, gbuffer, fb_extra})});
-    forms.push_back(
-        {"reflect", svgf_signals[i].first, join({svgf_signals[i].second, gbuffer, fb_extra, reflection})});
-  }
+  std::vector<Form> forms;
+  for (const dn::pipelines::PipelineDescription& p : dn::pipelines::available_pipelines())
+    for (uint64_t mask : dn::pipelines::input_forms(p)) {
+      Form form{p.name, "", {}};
+      for (const auto& c : dn::protocol::kChannels) {
+        if (!(mask & dn::protocol::channel_bit(c.id))) continue;
+        form.channels.push_back(c.id);
+        if (!(p.required_channels & dn::protocol::channel_bit(c.id)))
+          form.name += (form.name.empty() ? "" : "+") + std::string(c.name);
+      }
+      if (form.name.empty()) form.name = "required channels";
+      forms.push_back(std::move(form));
+    }
   return forms;
 }
 
