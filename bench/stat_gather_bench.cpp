@@ -1,6 +1,6 @@
 // stat's disc gather with plain loads against a shared-memory tile (the
 // server keeps what measures faster), on the device the server would choose (--device to pick
-// another). Both run shaders/bench_stat_gather.comp (the membership test and
+// another). Both run server/pipelines/stat/bench_stat_gather.comp (the membership test and
 // base weight of stat_filter, stat_gather.glsl) in 8x8 workgroups over the
 // same fp32 data: a smooth field seen through 16 samples per pixel with a
 // hard edge, so that about as many taps fail the test as on rendered frames.

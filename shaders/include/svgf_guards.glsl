@@ -18,9 +18,9 @@ const float DN_SVGF_LUMINANCE_EPS = 1e-20;
 const float DN_SVGF_NO_DATA = -1.0;
 
 // The floor of a chain's temporal blend weight: svgf's alpha_colour, or
-// reflect's alpha_specular on its specular chain (SPECULAR_ALPHA, a
+// alpha_specular (group specular) on reflect's specular chain (SPECULAR_ALPHA, a
 // specialization constant of svgf_reproject and svgf_variance).
-#define DN_SVGF_ALPHA_OF(specular) ((specular) ? DN_PARAM_VALUE(reflect, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
+#define DN_SVGF_ALPHA_OF(is_specular) ((is_specular) ? DN_PARAM_VALUE(specular, alpha_specular) : DN_PARAM_VALUE(svgf, alpha_colour))
 #define DN_SVGF_ALPHA_COLOUR DN_SVGF_ALPHA_OF(SPECULAR_ALPHA)
 
 // What a sample's luminance variance is divided by to steer the a-trous

@@ -85,7 +85,7 @@ PipelineDefinition progressive_definition() {
   d.description.optional_channels =
       (svgf.optional_channels & ~(protocol::channel_bit(ChannelId::Roughness) | extra_sample_channel_bits())) |
       protocol::channel_bit(ChannelId::SampleCount);
-  d.parameter_groups = {"svgf", "progressive"};
+  d.parameter_groups = {"svgf", "atrous", "progressive"};
   // Paper 004's constants (§4.2-4.5): a = 0.1 for colour and moments, 5
   // a-trous passes, sigma_N 64, the final blend's fixed ratio 0.1; no clipping.
   d.parameter_defaults = {{"alpha_colour", 0.1},     {"alpha_moments", 0.1}, {"atrous_iterations", 5},

@@ -157,7 +157,7 @@ PipelineDefinition reflect_definition() {
                                      protocol::channel_bit(ChannelId::DiffuseLighting) |
                                      protocol::channel_bit(ChannelId::Emission) |
                                      protocol::channel_bit(ChannelId::ReflectionFootprint) | extra_sample_channel_bits();
-  d.parameter_groups = {"svgf", "reflect"};
+  d.parameter_groups = {"svgf", "specular", "reflect"};
   d.description.parameters = parameters_of(d.parameter_groups);
   d.shared_resources = {kFbLutResource};
   d.build = build;

@@ -109,10 +109,10 @@ void main() {
   float phi_c = DN_PARAM_VALUE(svgf, phi_colour);
   float phi_z = DN_PARAM_VALUE(svgf, phi_depth) * float(STEP);
   bool propagate = DN_PARAM_VALUE(svgf, propagate_variance) != 0.0;
-  float sigma_l = DN_PARAM_VALUE(progressive, sigma_luminance);
-  float eps_l = DN_PARAM_VALUE(progressive, epsilon_luminance);
-  float min_age = DN_PARAM_VALUE(progressive, luminance_min_age);
-  float ramp_in = DN_PARAM_VALUE(progressive, luminance_ramp_in);
+  float sigma_l = DN_PARAM_VALUE(atrous, sigma_luminance);
+  float eps_l = DN_PARAM_VALUE(atrous, epsilon_luminance);
+  float min_age = DN_PARAM_VALUE(atrous, luminance_min_age);
+  float ramp_in = DN_PARAM_VALUE(atrous, luminance_ramp_in);
 
   // Block pixels' centre data: per guide g at [g * B * B + k] (geometry),
   // per signal s at [s * B * B + k] (colour and weights).

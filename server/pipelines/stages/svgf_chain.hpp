@@ -80,7 +80,7 @@ struct SvgfSignal {
   bool subtract_emission = false;  // the signal includes emission (radiance): filter it without
   bool clip = false;               // its history is clipped (highlights and reflections: radiance, specular)
   bool reads_history = true;       // false: filtered from the current frame alone (a NoSpecReproj baseline)
-  bool specular_alpha = false;     // blends with reflect's alpha_specular, not svgf's alpha_colour
+  bool specular_alpha = false;     // blends with alpha_specular (group specular), not svgf's alpha_colour
   // Set: an fp32 buffer of per-pixel sigma (0: none) that adds a Gaussian on
   // the a-trous tap offsets, in steps (reflect's Eq. 6; SPATIAL_BANDWIDTH).
   std::string spatial_bandwidth;

@@ -260,7 +260,7 @@ float taa_weight(uint p, vec2 mv, bool kept) {
 // ghosting); 0 without a usable TAA history. prev_s: the previous state at
 // the reprojection's heaviest tap.
 float display_lag(uint p, bool valid, float weight, vec2 mv, float prev_s) {
-  if (colour_history_at(p).a < DN_PARAM_VALUE(progressive, luminance_min_age)) return -1.0;
+  if (colour_history_at(p).a < DN_PARAM_VALUE(atrous, luminance_min_age)) return -1.0;
   if (!valid) return 0.0;
   return (prev_s < 0.0 ? 1.0 : prev_s * (1.0 - weight)) * dn_stillness(mv);
 }

@@ -22,8 +22,9 @@ TEST(ProgressiveDescription, SvgfsChannelsPlusSampleCount) {
 TEST(ProgressiveDescription, SvgfsParametersWithPaper004sDefaultsAndItsOwn) {
   const auto& progressive = test::description("progressive");
   std::vector<std::string> expected = test::kSvgfParameterNames;
-  expected.insert(expected.end(), {"step_order", "luminance_form", "sigma_luminance", "epsilon_luminance",
-                                   "luminance_min_age", "luminance_ramp_in", "display_lag", "sparse_gbuffer"});
+  // The stages' atrous group (the luminance weight's other forms), then its own.
+  expected.insert(expected.end(), {"sigma_luminance", "epsilon_luminance", "luminance_min_age", "luminance_ramp_in",
+                                   "step_order", "luminance_form", "display_lag", "sparse_gbuffer"});
   EXPECT_EQ(test::parameter_names(progressive), expected);
   EXPECT_EQ(test::default_of(progressive, "alpha_colour"), 0.1);
   EXPECT_EQ(test::default_of(progressive, "atrous_iterations"), 5.0);

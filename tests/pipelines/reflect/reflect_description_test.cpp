@@ -16,7 +16,8 @@ TEST(ReflectDescription, SvgfFbsChannelsPlusTheReflectionFeatures) {
   EXPECT_EQ(reflect.required_channels, fb.required_channels | features);
   EXPECT_EQ(reflect.optional_channels, fb.optional_channels | bits({ChannelId::ReflectionFootprint}));
   std::vector<std::string> expected = test::kSvgfParameterNames;
-  expected.insert(expected.end(), {"mirror_roughness", "glossy_roughness", "specular_history", "alpha_specular",
+  // The stages' specular group (the specular chain's blend floor), then its own.
+  expected.insert(expected.end(), {"alpha_specular", "mirror_roughness", "glossy_roughness", "specular_history",
                                    "virtual_start", "mirror_match_threshold", "footprint_omega", "firefly_median"});
   EXPECT_EQ(test::parameter_names(reflect), expected);
 }
