@@ -44,11 +44,11 @@ TEST(GraphSpec, UnknownShaderBindingOrConstantNameIsRejected) {
 }
 
 // Grid arguments by name: each lands in the push-constant word its row in
-// the .pass file numbers (gbuffer_fill: level, factor, width0, height0), of
+// the .pass file numbers (pyramid_probe: level, factor, width0, height0), of
 // its declared type; an unknown name, the other type or no grid is refused.
 TEST(GraphSpec, GridArgumentsAreSetByNameInTheirDeclaredSlot) {
   pipelines::GraphSpec g = passthrough_graph();
-  auto& pass = g.add_pass("fill", "gbuffer_fill");
+  auto& pass = g.add_pass("fill", "pyramid_probe");
   EXPECT_THROW(pass.arg("level", 1u), std::logic_error);  // before over_grid
   pass.over_grid({9, 3}, {9, 3});
   pass.arg("height0", 7u).arg("level", 2u).arg("width0", 5u);
@@ -64,27 +64,28 @@ TEST(GraphSpec, GridArgumentsAreSetByNameInTheirDeclaredSlot) {
   EXPECT_THROW(tile.arg("sigma", 1u), std::logic_error);  // a float
 }
 
-// Modes by name (gbuffer_fill: seed, pull, push): mode() sets MODE to the
-// mode's value and makes its needs required; MODE itself cannot be set, and
-// a pass of a shader with modes must select one.
+// Modes by name (svgf_clip_prefilter: current, horizontal, vertical): mode()
+// sets MODE to the mode's value and makes its needs required; MODE itself
+// cannot be set, and a pass of a shader with modes must select one.
 TEST(GraphSpec, ModesAreSelectedByNameAndRequireTheirBindings) {
   pipelines::GraphSpec g = passthrough_graph();
-  for (const char* name : {"pyramid", "valid", "depth", "normal", "sample_count"}) g.add_scratch(name, 16);
-  auto& seed = g.add_pass("seed", "gbuffer_fill");
-  seed.bind("pyramid", "pyramid").bind("valid", "valid");
-  EXPECT_THROW(seed.set("MODE", 0u), std::logic_error);
-  EXPECT_THROW(seed.mode("sow"), std::logic_error);
+  for (const char* name : {"current", "partial", "depth_plane"}) g.add_scratch(name, 16);
+  auto& current = g.add_pass("current", "svgf_clip_prefilter");
+  current.bind("dst", "current").set("DEMODULATE", false);
+  EXPECT_THROW(current.set("MODE", 0u), std::logic_error);
+  EXPECT_THROW(current.mode("diagonal"), std::logic_error);
   EXPECT_THROW(g.check(), std::logic_error);  // no mode selected
-  seed.mode("seed");
-  EXPECT_EQ(seed.unbound_required(), (std::vector<std::string_view>{"depth", "normal", "sample_count"}));
+  current.mode("current");
+  EXPECT_EQ(current.unbound_required(), (std::vector<std::string_view>{"signal", "depth"}));
   EXPECT_THROW(g.check(), std::logic_error);
-  seed.bind("depth", "depth").bind("normal", "normal").bind("sample_count", "sample_count");
-  auto& pull = g.add_pass("pull", "gbuffer_fill");
-  pull.bind("pyramid", "pyramid").bind("valid", "valid").mode("pull");
-  EXPECT_TRUE(pull.unbound_required().empty());  // pull needs no plane
+  current.bind("signal", "radiance").bind("depth", "depth_plane");
+  auto& horizontal = g.add_pass("horizontal", "svgf_clip_prefilter");
+  horizontal.bind("dst", "partial").mode("horizontal");
+  EXPECT_EQ(horizontal.unbound_required(), (std::vector<std::string_view>{"src"}));  // no plane: only src
+  horizontal.bind("src", "current");
   EXPECT_NO_THROW(g.check());
-  const uint32_t mode_id = pull.declaration().constant("MODE")->id;
-  const auto constants = pull.specialization(8);
+  const uint32_t mode_id = horizontal.declaration().constant("MODE")->id;
+  const auto constants = horizontal.specialization(8);
   const auto mode = std::find_if(constants.begin(), constants.end(), [&](const auto& c) { return c.id == mode_id; });
   ASSERT_NE(mode, constants.end());
   EXPECT_EQ(mode->value, 1u);  // the second mode
