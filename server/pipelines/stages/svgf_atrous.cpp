@@ -1,56 +1,61 @@
 #include "pipelines/stages/svgf_stages.hpp"
 
-#include <algorithm>
-
-#include "pipelines/stages/svgf_buffers.hpp"
+#include <utility>
 
 namespace dn::pipelines::svgf {
 
-using protocol::ChannelId;
+namespace {
+
+// The register block: one invocation filters kBlock^2 pixels (svgf_atrous.comp's BLOCK).
+constexpr uint32_t kBlock = 4;
+
+}  // namespace
 
 // Every signal in the same passes (the joint chain: the guide's loads and
 // geometric weights shared).
-std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, const SvgfVariant& v) {
-  std::vector<SignalBuffers> buffers;
-  for (size_t i = 0; i < v.signals.size(); ++i) buffers.push_back(signal_buffers(v, i));
-  const bool two = v.signals.size() > 1;
-  const SvgfSignal& last = v.signals.back();
-  const uint32_t tap = std::min(v.feedback_tap, v.iterations ? v.iterations - 1 : 0u);
-  for (uint32_t i = 0; i < v.iterations; ++i) {
-    const uint32_t level = step_level(v.steps, i, v.iterations);
+std::vector<std::string> add_atrous(GraphSpec& g, const SessionConfig& config, const AtrousStage& stage) {
+  std::vector<SignalChain> ping = stage.signals;  // illum and other swap after every iteration
+  const SignalChain& first = ping[0];
+  const bool two = ping.size() > 1;
+  const uint32_t iterations = static_cast<uint32_t>(stage.levels.size());
+  for (uint32_t i = 0; i < iterations; ++i) {
+    const uint32_t level = stage.levels[i];
+    const bool feedback = i == stage.feedback_tap;
     PassSpec& atrous = g.add_pass("svgf_atrous_" + std::to_string(i), "svgf_atrous");
-    atrous.bind("guide", buffers[0].guide)
-        .bind("src", buffers[0].illum)
-        .bind("dst", buffers[0].other)
-        .bind("temporal", buffers[0].temporal)
+    atrous.bind("guide", first.guide)
+        .bind("src", first.illum)
+        .bind("dst", first.other)
+        .bind("temporal", first.temporal)
         .set("STEP", 1u << level)
-        .set("FEEDBACK", i == tap)
-        .set("BLOCK", kAtrousBlock)
-        .set("CLASS_EDGES", last.motion == MotionSource::Reflection)
-        .set("KERNEL_RADIUS", v.kernel == AtrousKernel::B3_5x5 ? 2u : 1u)
-        .set("LUMINANCE_VARIANCE", v.luminance_weight == LuminanceWeight::Variance)
-        .set("AGE_GATED_LUMINANCE", v.young_variance == YoungVariance::LuminanceOff)
-        .set("DISPLAY_FILL", v.validity_mask.has_value() && i + 1 == v.iterations)
-        .set("SIGNALS", static_cast<uint32_t>(v.signals.size()))
-        .set("NORMAL_POWER", static_cast<uint32_t>(v.normal_power))
-        .set("LUMINANCE_RAMP", v.luminance_ramp);
-    if (i == tap) atrous.bind("colour_history", v.signals[0].history + "_colour");
+        .set("FEEDBACK", feedback)
+        .set("BLOCK", kBlock)
+        .set("CLASS_EDGES", stage.class_edges)
+        .set("KERNEL_RADIUS", stage.kernel_radius)
+        .set("LUMINANCE_VARIANCE", stage.luminance_variance)
+        .set("AGE_GATED_LUMINANCE", stage.age_gated_luminance)
+        .set("DISPLAY_FILL", stage.display_fill && i + 1 == iterations)
+        .set("SIGNALS", static_cast<uint32_t>(ping.size()))
+        .set("NORMAL_POWER", static_cast<uint32_t>(stage.normal_power))
+        .set("LUMINANCE_RAMP", stage.luminance_ramp);
+    if (feedback) atrous.bind("colour_history", first.colour_history);
     if (two) {
-      atrous.bind("src2", buffers[1].illum).bind("dst2", buffers[1].other);
-      if (i == tap) atrous.bind("colour_history2", v.signals[1].history + "_colour");
-      bind_second_geometry(atrous, buffers[0], buffers[1]);
+      const SignalChain& second = ping[1];
+      atrous.bind("src2", second.illum).bind("dst2", second.other);
+      if (feedback) atrous.bind("colour_history2", second.colour_history);
+      bind_second_geometry(atrous, first, second);
     }
-    if (i == tap && v.validity_mask) bind_validity_mask(atrous);
-    if (!last.spatial_bandwidth.empty()) atrous.bind("bandwidth", last.spatial_bandwidth).set("SPATIAL_BANDWIDTH", 1u);
-    // Grid of server/pipelines/stages/svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
-    const uint64_t step = uint64_t{1} << level, span = step * kAtrousBlock;
+    if (feedback && !stage.validity_mask.empty()) bind_validity_mask(atrous, stage.validity_mask);
+    if (!stage.bandwidth.empty()) atrous.bind("bandwidth", stage.bandwidth).set("SPATIAL_BANDWIDTH", 1u);
+    // Grid of svgf_atrous.comp: (ceil(W / span) * step) x (ceil(H / span) * step), span = step * block.
+    const uint64_t step = uint64_t{1} << level, span = step * kBlock;
     atrous.invocations = ((config.width + span - 1) / span * step) * ((config.height + span - 1) / span * step);
-    for (SignalBuffers& b : buffers) std::swap(b.illum, b.other);
-    if (i == 0 && v.harm_guard)
-      for (size_t s = 0; s < buffers.size(); ++s) buffers[s].other = s == 0 ? kIllumE : kIllumF;
+    for (size_t s = 0; s < ping.size(); ++s) {
+      std::swap(ping[s].illum, ping[s].other);
+      if (i == 0 && !stage.guard_partners.empty()) ping[s].other = stage.guard_partners[s];
+    }
   }
   std::vector<std::string> results;
-  for (const SignalBuffers& b : buffers) results.push_back(b.illum);
+  for (const SignalChain& s : ping) results.push_back(s.illum);
   return results;
 }
 

@@ -10,7 +10,8 @@
 // variant descriptions (svgf.cpp, svgf_fb.cpp); builders never compare
 // pipeline names. Fields the shaders do not support yet are part of the
 // description and rejected by check_supported() with a message naming them.
-// Each stage is its own file (svgf_stages.hpp); this builder composes them.
+// add_svgf_passes translates the variant into the stages of svgf_stages.hpp,
+// each a function over named buffers, and calls them in order.
 #pragma once
 
 #include <cstdint>
