@@ -56,7 +56,7 @@ struct ReprojectStage {
   SignalChain signal;
   bool write_guide = true;      // false: it reads the first signal's
   bool read_history = true;     // false: filtered from the current frame alone
-  bool specular_alpha = false;  // the blend's floor is reflect's alpha_specular
+  bool specular_alpha = false;  // the blend's floor is alpha_specular (group specular)
   std::string surface_still;    // its still mean goes on while this one (its surface's) does
   std::optional<ClipBox> clip;
   std::string validity_mask;    // unsampled pixels keep their history (MASKED)
@@ -119,7 +119,7 @@ struct RemodulateStage {
   // Pulls each signal toward its own temporal mean (its illum), with
   // converge_still (its still_mean) toward a still pixel's running mean.
   bool harm_guard = false;
-  bool specular_alpha = false;         // the second signal's floor is reflect's alpha_specular
+  bool specular_alpha = false;         // the second signal's floor is alpha_specular (group specular)
 };
 void add_remodulate(GraphSpec& g, const RemodulateStage& stage);
 
