@@ -89,6 +89,8 @@ struct GraphSpec {
   Parameters parameters;
 
   static constexpr uint64_t kConstantBytes = sizeof(FrameConstants);
+  // The Output plane's buffer, as add_output() names it.
+  static constexpr const char* kOutput = "output";
 
   // Device bytes a session needs: every buffer (History twice) plus the
   // constants buffer; of which transient_bytes() are Scratch, leased per frame.

@@ -69,7 +69,7 @@ void GraphSpec::add_input(const SessionConfig& config, protocol::ChannelId chann
 void GraphSpec::add_output(const SessionConfig& config) {
   const auto* info = protocol::find_channel(protocol::ChannelId::Output);
   BufferSpec b;
-  b.name = "output";
+  b.name = kOutput;
   b.role = BufferRole::Output;
   b.channel = protocol::ChannelId::Output;
   b.format = config.output_format;

@@ -27,7 +27,7 @@ GraphSpec build(const SessionConfig& config) {
       .bind("prev_geometry", "history_geometry", Slot::Previous)
       .bind("cur_colour", "history_colour", Slot::Current)
       .bind("cur_geometry", "history_geometry", Slot::Current)
-      .bind("result", "output");
+      .bind("result", GraphSpec::kOutput);
   add_sample_summary(g, "history_colour");
   return g;
 }

@@ -17,7 +17,7 @@ GraphSpec build(const SessionConfig& config) {
   g.add_output(config);
   g.add_pass("passthrough", "passthrough")
       .bind("radiance", "radiance")
-      .bind("result", "output");
+      .bind("result", GraphSpec::kOutput);
   return g;
 }
 

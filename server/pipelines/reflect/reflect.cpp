@@ -126,7 +126,7 @@ GraphSpec build(const SessionConfig& config) {
     median.bind("src", kDisplay)
         .bind("features", kFeatures)
         .bind("depth", "depth")
-        .bind("result", v.extra_samples ? kSupersampleDisplay : "output");
+        .bind("result", v.extra_samples ? kSupersampleDisplay : GraphSpec::kOutput);
     if (v.emission)
       median.bind("emission", "emission")
           .set("HAS_EMISSION", 1u);

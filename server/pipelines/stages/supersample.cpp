@@ -135,7 +135,7 @@ void add_supersample_resolve(GraphSpec& g, const SessionConfig& config, const st
   g.add_pass("supersample_resolve", "supersample_resolve")
       .bind("src", display)
       .bind("assignment", kAssignment)
-      .bind("result", "output")
+      .bind("result", GraphSpec::kOutput)
       .set("SAMPLES", extra_samples(config))
       .pixels_per_invocation = 2;
 }

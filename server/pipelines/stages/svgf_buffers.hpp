@@ -12,14 +12,13 @@
 
 namespace dn::pipelines::svgf {
 
-// The planes the chain reads (add_svgf_inputs) and the Output plane.
+// The planes the chain reads (add_svgf_inputs); the Output plane is GraphSpec::kOutput.
 inline constexpr const char* kNormalPlane = "normal";
 inline constexpr const char* kDepthPlane = "depth";
 inline constexpr const char* kMotionPlane = "motion";
 inline constexpr const char* kEmissionPlane = "emission";
 inline constexpr const char* kRoughnessPlane = "roughness";
 inline constexpr const char* kSampleCountPlane = "sample_count";
-inline constexpr const char* kOutputPlane = "output";
 
 // With emission and converge_still: a still pixel's running mean of its
 // emission and its change test, read and rewritten at p by svgf_remodulate.

@@ -22,7 +22,7 @@ namespace {
 // Output, the resolve's frame with extra samples, or the caller's display.
 FrameTarget frame_target(const SvgfVariant& v) {
   if (!v.display.empty()) return {v.display, true};
-  return {v.extra_samples ? kSupersampleDisplay : kOutputPlane, false};
+  return {v.extra_samples ? kSupersampleDisplay : GraphSpec::kOutput, false};
 }
 
 std::string validity_mask(const SvgfVariant& v) { return v.validity_mask ? kSampleCountPlane : ""; }

@@ -97,7 +97,7 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
       .bind("albedo", "albedo")
       .bind("normal", "normal")
       .bind("t_squared", "stat_t_squared")
-      .bind("result", "output")
+      .bind("result", GraphSpec::kOutput)
       .set("TABLE_SIZE", kStatTableSize)
       .set("DEMODULATED", demodulated);
   if (demodulated) filter.bind("modulation", kStatModulation);
