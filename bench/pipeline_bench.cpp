@@ -49,7 +49,7 @@
 #include "gpu/timestamps.hpp"
 #include "online_stats.hpp"
 #include "half.hpp"
-#include "pipelines/frame_input.hpp"
+#include "session/frame_planes.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace {
@@ -65,7 +65,7 @@ struct Options {
   int frames = 12;
   int warmup = 2;
   int copy_reps = 10;
-  std::vector<dn::protocol::Parameter> parameters;  // --param NAME=VALUE, for every pipeline benched
+  std::vector<dn::pipelines::ParameterValue> parameters;  // --param NAME=VALUE, for every pipeline benched
   int sample_period = 1;  // --spp 1/k: a sample_count plane, each pixel sampled once in k frames
 };
 
@@ -352,9 +352,9 @@ EncodedFrame make_frame(const dn::pipelines::SessionConfig& config, int t, int s
 // reflect: diffuse or diffuse_lighting, one is needed); optional split
 // lighting and emission would add passes to svgf, so they are left out there
 // and the svgf row stays comparable.
-std::vector<dn::protocol::ChannelDecl> channels_for(const dn::pipelines::PipelineDescription& desc, Format format,
+std::vector<dn::pipelines::InputChannel> channels_for(const dn::pipelines::PipelineDescription& desc, Format format,
                                                      int sample_period) {
-  std::vector<dn::protocol::ChannelDecl> out;
+  std::vector<dn::pipelines::InputChannel> out;
   // The sample statistics are fp32 only (docs/protocol.md §7.7).
   for (const auto& c : dn::protocol::kChannels)
     if (desc.required_channels & dn::protocol::channel_bit(c.id))
@@ -525,7 +525,7 @@ Row bench_one(dn::gpu::Context& context, CopyFloor& copy, const Options& o,
   for (int t = 0; t < o.frames; ++t) {
     EncodedFrame f = make_frame(config, t, o.sample_period);
     std::vector<dn::pipelines::PassTiming> timings;
-    pipe->process(dn::pipelines::frame_input_or_throw(f.frame, config), true, output, timings);
+    pipe->process(dn::server::frame_planes_or_throw(f.frame, config), true, output, timings);
     if (t == 0)
       for (const auto& tm : timings)
         if (tm.name != "upload" && tm.name != "download") row.first_frame_ms += tm.milliseconds;

@@ -1,7 +1,7 @@
-// IEEE 754 binary16 <-> binary32, bit-exact, independent of the FPU rounding mode.
+// IEEE 754 binary16 <-> binary32 (dn/protocol/half.hpp).
 #include <bit>
 
-#include "dn/protocol/codec.hpp"
+#include "dn/protocol/half.hpp"
 
 namespace dn::protocol {
 

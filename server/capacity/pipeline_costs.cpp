@@ -10,7 +10,7 @@ namespace {
 // Two sizes far apart, of different aspect, that every pipeline accepts.
 constexpr uint32_t kSmallW = 64, kSmallH = 32, kLargeW = 1024, kLargeH = 512;
 
-// The channel index a refusal's field names ("OPEN_SESSION.channels[3].id"), if any.
+// The channel index a refusal's field names ("channels[3].id"), if any.
 std::optional<size_t> named_channel(const std::string& field) {
   const std::string key = "channels[";
   const size_t at = field.find(key);

@@ -61,7 +61,7 @@ void check_defaults(const std::vector<const ParameterDef*>& rows, const Paramete
   }
 }
 
-double value_of(const ParameterDef& row, const std::vector<protocol::Parameter>& values,
+double value_of(const ParameterDef& row, const std::vector<ParameterValue>& values,
                 const ParameterDefaults& defaults) {
   double v = info_of(row, defaults).default_value;
   for (const auto& p : values)
@@ -79,7 +79,7 @@ std::vector<ParameterInfo> parameters_of(ParameterGroups groups, const Parameter
   return out;
 }
 
-Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values,
+Parameters parameter_block(ParameterGroups groups, const std::vector<ParameterValue>& values,
                            const ParameterDefaults& defaults) {
   Parameters out;
   for (const ParameterDef* row : rows_of(groups))
@@ -87,7 +87,7 @@ Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::P
   return out;
 }
 
-std::vector<float> resolve_parameters(std::string_view pipeline, const std::vector<protocol::Parameter>& values) {
+std::vector<float> resolve_parameters(std::string_view pipeline, const std::vector<ParameterValue>& values) {
   std::vector<float> out;
   const PipelineDefinition* def = find_definition(pipeline);
   if (!def) return out;

@@ -38,7 +38,7 @@ using ParameterGroups = std::span<const std::string_view>;
 // A pipeline's own defaults for rows of the groups it takes
 // (PipelineDefinition::parameter_defaults): progressive runs svgf's rows with
 // paper 004's constants. Each replaces the row's default for that pipeline only.
-using ParameterDefaults = std::vector<protocol::Parameter>;
+using ParameterDefaults = std::vector<ParameterValue>;
 
 // The parameters of these groups: group by group, each in table order, with
 // `defaults` applied. Throws std::logic_error for a group with no row, a name
@@ -49,11 +49,11 @@ std::vector<ParameterInfo> parameters_of(ParameterGroups groups, const Parameter
 // The constants block's parameters for a session taking `groups`: defaults
 // (the pipeline's own where it has one), overridden by `values` (which passed
 // validate()); other groups' rows 0.
-Parameters parameter_block(ParameterGroups groups, const std::vector<protocol::Parameter>& values,
+Parameters parameter_block(ParameterGroups groups, const std::vector<ParameterValue>& values,
                            const ParameterDefaults& defaults = {});
 
 // The values a session of `pipeline` runs with, in the order of its
 // PipelineDescription::parameters (empty for an unknown pipeline).
-std::vector<float> resolve_parameters(std::string_view pipeline, const std::vector<protocol::Parameter>& values);
+std::vector<float> resolve_parameters(std::string_view pipeline, const std::vector<ParameterValue>& values);
 
 }  // namespace dn::pipelines

@@ -1,6 +1,9 @@
 // The contract between a session and the device work of its pipeline.
 // The session layer validates frames against the declared channels; a
 // pipeline validates its own configuration and runs frames on the device.
+// Of the protocol only the channel table (dn/protocol/channels.hpp: which
+// per-pixel data exists, its components and storage) is shared; messages,
+// error codes and wire fields stop at the session.
 #pragma once
 
 #include <cstdint>
@@ -11,7 +14,7 @@
 #include <variant>
 #include <vector>
 
-#include "dn/protocol/messages.hpp"
+#include "dn/protocol/channels.hpp"
 
 namespace dn::gpu {
 class Context;
@@ -36,18 +39,35 @@ struct PipelineDescription {
   std::vector<ParameterInfo> parameters;
 };
 
+// One per-pixel input of a session: which channel, stored how in its planes.
+struct InputChannel {
+  protocol::ChannelId id = protocol::ChannelId::Radiance;
+  protocol::Format format = protocol::Format::F32;
+  bool operator==(const InputChannel&) const = default;
+};
+
+// A tunable set for the session, by the name a pipeline's description lists.
+struct ParameterValue {
+  std::string name;
+  double value = 0.0;
+  bool operator==(const ParameterValue&) const = default;
+};
+
 struct SessionConfig {
   uint32_t width = 0;
   uint32_t height = 0;
   std::string pipeline;
   protocol::Format output_format = protocol::Format::F32;
-  std::vector<protocol::ChannelDecl> channels;
-  std::vector<protocol::Parameter> parameters;
+  std::vector<InputChannel> channels;
+  std::vector<ParameterValue> parameters;
 };
 
+// What kind of mistake a refused configuration holds.
+enum class ConfigProblem { UnknownPipeline, MissingChannel, InvalidChannel, InvalidParameter, LimitExceeded };
+
 struct ConfigError {
-  protocol::ErrorCode code = protocol::ErrorCode::InvalidParameter;
-  std::string field;    // e.g. "OPEN_SESSION.parameters[0].value"
+  ConfigProblem problem = ConfigProblem::InvalidParameter;
+  std::string field;    // the SessionConfig field, e.g. "parameters[0].value", "channels[2].format"
   std::string message;  // names the value and what was expected
 };
 
@@ -106,7 +126,7 @@ class Pipeline {
   uint64_t persistent_bytes() const { return device_bytes() - transient_bytes(); }
   // The session this pipeline serves.
   virtual const SessionConfig& config() const = 0;
-  // Runs one frame (its planes checked by frame_input(), frame_input.hpp).
+  // Runs one frame (its planes checked by the session, frame_input.hpp).
   // Fills `output` with the Output plane (width*height*3 in the session's
   // output format) when want_output is true, and appends one timing per
   // device pass plus the host stages "upload" and "download".

@@ -30,8 +30,8 @@ std::string format_number(double v) {
   return buf;
 }
 
-ConfigError error(protocol::ErrorCode code, std::string field, std::string message) {
-  return ConfigError{code, std::move(field), std::move(message)};
+ConfigError error(ConfigProblem problem, std::string field, std::string message) {
+  return ConfigError{problem, std::move(field), std::move(message)};
 }
 
 }  // namespace
@@ -88,7 +88,7 @@ std::optional<ConfigError> limit_error(const SessionConfig& config, const GraphS
                                        const gpu::DeviceLimits& limits) {
   const BufferSpec* big = graph.largest_binding();
   if (big && big->bytes > limits.max_storage_buffer_range)
-    return error(protocol::ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+    return error(ConfigProblem::LimitExceeded, "width",
                  "resolution " + std::to_string(config.width) + "x" + std::to_string(config.height) + " needs " +
                      std::to_string(big->bytes) + " bytes in one device buffer (" + big->name +
                      "); the device allows " + std::to_string(limits.max_storage_buffer_range));
@@ -143,55 +143,55 @@ namespace {
 
 // Everything validate() checks except the device limits.
 std::optional<ConfigError> validate_config(const SessionConfig& config) {
-  using protocol::ErrorCode;
+  
   const PipelineDefinition* def = find_definition(config.pipeline);
   if (!def) {
     std::string names;
     for (const auto& d : definitions()) names += (names.empty() ? "" : ", ") + d.description.name;
-    return error(ErrorCode::UnknownPipeline, "OPEN_SESSION.pipeline",
+    return error(ConfigProblem::UnknownPipeline, "pipeline",
                  "unknown pipeline \"" + config.pipeline + "\"; available: " + names);
   }
   const PipelineDescription& desc = def->description;
 
   if (config.width == 0)
-    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.width", "width must be at least 1");
+    return error(ConfigProblem::InvalidParameter, "width", "width must be at least 1");
   if (config.height == 0)
-    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.height", "height must be at least 1");
+    return error(ConfigProblem::InvalidParameter, "height", "height must be at least 1");
   if (config.width > kMaxDimension)
-    return error(ErrorCode::LimitExceeded, "OPEN_SESSION.width",
+    return error(ConfigProblem::LimitExceeded, "width",
                  "width " + std::to_string(config.width) + " exceeds " + std::to_string(kMaxDimension));
   if (config.height > kMaxDimension)
-    return error(ErrorCode::LimitExceeded, "OPEN_SESSION.height",
+    return error(ConfigProblem::LimitExceeded, "height",
                  "height " + std::to_string(config.height) + " exceeds " + std::to_string(kMaxDimension));
   if (config.output_format != protocol::Format::F16 && config.output_format != protocol::Format::F32)
-    return error(ErrorCode::InvalidParameter, "OPEN_SESSION.output_format",
+    return error(ConfigProblem::InvalidParameter, "output_format",
                  "output format " + std::to_string(static_cast<int>(config.output_format)) +
                      " is neither f16 (1) nor f32 (2)");
 
   uint64_t declared = 0;
   for (size_t i = 0; i < config.channels.size(); ++i) {
     const auto& ch = config.channels[i];
-    const std::string field = "OPEN_SESSION.channels[" + std::to_string(i) + "]";
+    const std::string field = "channels[" + std::to_string(i) + "]";
     const auto* info = protocol::find_channel(ch.id);
     if (!info || ch.id == protocol::ChannelId::Output)
-      return error(ErrorCode::InvalidChannel, field + ".id",
+      return error(ConfigProblem::InvalidChannel, field + ".id",
                    "channel id " + std::to_string(static_cast<int>(ch.id)) + " is not an input channel");
     if (ch.format != protocol::Format::F16 && ch.format != protocol::Format::F32)
-      return error(ErrorCode::InvalidChannel, field + ".format",
+      return error(ConfigProblem::InvalidChannel, field + ".format",
                    "channel " + std::string(info->name) + " has format " +
                        std::to_string(static_cast<int>(ch.format)) + ", expected f16 (1) or f32 (2)");
     const uint64_t bit = protocol::channel_bit(ch.id);
     if (declared & bit)
-      return error(ErrorCode::InvalidChannel, field + ".id",
+      return error(ConfigProblem::InvalidChannel, field + ".id",
                    "channel " + std::string(info->name) + " is declared twice");
     if (!((desc.required_channels | desc.optional_channels) & bit))
-      return error(ErrorCode::InvalidChannel, field + ".id",
+      return error(ConfigProblem::InvalidChannel, field + ".id",
                    "pipeline " + desc.name + " does not use channel " + std::string(info->name) +
                        "; it takes: " + channel_list(desc.required_channels | desc.optional_channels));
     declared |= bit;
   }
   if (const uint64_t missing = desc.required_channels & ~declared)
-    return error(ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return error(ConfigProblem::MissingChannel, "channels",
                  "pipeline " + desc.name + " requires channel(s) " + channel_list(missing));
   if (def->check_channels)
     if (auto err = def->check_channels(config)) return err;
@@ -199,25 +199,25 @@ std::optional<ConfigError> validate_config(const SessionConfig& config) {
   std::set<std::string> seen;
   for (size_t i = 0; i < config.parameters.size(); ++i) {
     const auto& p = config.parameters[i];
-    const std::string field = "OPEN_SESSION.parameters[" + std::to_string(i) + "]";
+    const std::string field = "parameters[" + std::to_string(i) + "]";
     const ParameterInfo* info = nullptr;
     for (const auto& candidate : desc.parameters)
       if (candidate.name == p.name) info = &candidate;
     if (!info) {
       std::string names;
       for (const auto& candidate : desc.parameters) names += (names.empty() ? "" : ", ") + candidate.name;
-      return error(ErrorCode::InvalidParameter, field + ".name",
+      return error(ConfigProblem::InvalidParameter, field + ".name",
                    "pipeline " + desc.name + " has no parameter \"" + p.name +
                        "\"; it has: " + (names.empty() ? "none" : names));
     }
     if (!seen.insert(p.name).second)
-      return error(ErrorCode::InvalidParameter, field + ".name", "parameter " + p.name + " is given twice");
+      return error(ConfigProblem::InvalidParameter, field + ".name", "parameter " + p.name + " is given twice");
     if (!std::isfinite(p.value) || p.value < info->min_value || p.value > info->max_value)
-      return error(ErrorCode::InvalidParameter, field + ".value",
+      return error(ConfigProblem::InvalidParameter, field + ".value",
                    p.name + " = " + format_number(p.value) + " is outside [" + format_number(info->min_value) + ", " +
                        format_number(info->max_value) + "]");
     if (info->integer && p.value != std::floor(p.value))
-      return error(ErrorCode::InvalidParameter, field + ".value",
+      return error(ConfigProblem::InvalidParameter, field + ".value",
                    p.name + " = " + format_number(p.value) + " must be an integer");
   }
 

@@ -8,7 +8,6 @@
 #include <span>
 #include <string>
 
-#include "dn/protocol/messages.hpp"
 #include "pipelines/graph.hpp"
 
 namespace dn::pipelines {

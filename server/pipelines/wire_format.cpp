@@ -1,6 +1,6 @@
 #include "pipelines/wire_format.hpp"
 
-#include "dn/protocol/codec.hpp"
+#include "dn/protocol/half.hpp"
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>

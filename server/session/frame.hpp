@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "dn/protocol/messages.hpp"
-#include "pipelines/frame_input.hpp"
+#include "session/frame_planes.hpp"
 
 namespace dn::server {
 

@@ -6,6 +6,7 @@
 #include "server/log.hpp"
 #include "server/session/service.hpp"
 #include "server/session/watch_key.hpp"
+#include "server/session/wire_config.hpp"
 
 namespace dn::server {
 
@@ -55,9 +56,9 @@ void SessionService::on_open_session(net::Connection& c, const protocol::Header&
                       "flag SHARE_INPUT shares the 'radiance' plane with watchers, and this session declares none");
 
   // Validation builds the pass graph (pure data, no device work); the builder reuses it.
-  auto prepared = pipelines::prepare({m.width, m.height, m.pipeline, m.output_format, m.channels, m.parameters});
+  auto prepared = pipelines::prepare(session_config(m));
   if (auto* err = std::get_if<pipelines::ConfigError>(&prepared))
-    return error(c, h.request_id, err->code, err->field, err->message);
+    return error(c, h.request_id, error_code(err->problem), open_session_field(err->field), err->message);
   const pipelines::PreparedPipeline& ready = std::get<pipelines::PreparedPipeline>(prepared);
   const pipelines::SessionConfig& config = ready.config();
 
@@ -132,7 +133,7 @@ void SessionService::on_pipeline_built(BuiltPipeline&& built) {
                              {"build_ms", built.build_ms},
                              {"compile_ms", built.compile_ms}});
   protocol::Session reply{id, config.width, config.height, config.pipeline, config.output_format,
-                         session->device_bytes(), false, config.channels};
+                         session->device_bytes(), false, channel_decls(config)};
   // A 1.5 client cannot carry the key: its session can be watched by no one.
   if (c->negotiated_minor >= protocol::kWatchKeyMinor) reply.watch_key = session->watch_key();
   if (c->negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
@@ -192,7 +193,7 @@ void SessionService::on_attach(net::Connection& c, const protocol::Header& h, co
   log::info("session.attach", {{"conn", c.id()}, {"session", s.id()}});
   // The watcher already holds the key; the reply does not repeat it.
   protocol::Session reply{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true,
-                          cfg.channels};
+                          channel_decls(cfg)};
   reply.watch_key = std::string();
   if (c.negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
   connections_.send(c, reply, h.request_id);

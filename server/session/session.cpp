@@ -41,8 +41,8 @@ std::variant<pipelines::FrameInput, protocol::Error> Session::check_frame(const 
     return make_error(ErrorCode::OutOfOrder, "FRAME.frame_index",
                       "frame_index " + std::to_string(frame.info.frame_index) + " is not above the last frame " +
                           std::to_string(*last_frame_index) + " of session " + std::to_string(id_));
-  auto input = pipelines::frame_input(frame, config_);
-  if (auto* problem = std::get_if<pipelines::PlaneProblem>(&input))
+  auto input = frame_planes(frame, config_);
+  if (auto* problem = std::get_if<PlaneProblem>(&input))
     return make_error(problem->missing ? ErrorCode::MissingChannel : ErrorCode::InvalidChannel, problem->field,
                       "session " + std::to_string(id_) + ": " + problem->message);
   return std::get<pipelines::FrameInput>(std::move(input));

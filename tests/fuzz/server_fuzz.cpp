@@ -59,7 +59,7 @@
 #include "dn/protocol/codec.hpp"
 #include "server/gpu/context.hpp"
 #include "server/log.hpp"
-#include "server/pipelines/frame_input.hpp"
+#include "server/session/frame_planes.hpp"
 #include "server/pipelines/pipeline.hpp"
 #include "server/server.hpp"
 

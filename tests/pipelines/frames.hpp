@@ -11,7 +11,7 @@
 #include "dn/protocol/channels.hpp"
 #include "dn/protocol/messages.hpp"
 #include "half.hpp"
-#include "pipelines/frame_input.hpp"
+#include "session/frame_planes.hpp"
 #include "pipelines/pipeline.hpp"
 
 namespace dn::test {
@@ -79,13 +79,13 @@ struct HostFrame {
 // frame_input() (std::invalid_argument when they do not fit the session).
 inline void process(pipelines::Pipeline& pipeline, const protocol::Frame& frame, bool want_output,
                     std::vector<uint8_t>& output, std::vector<pipelines::PassTiming>& timings) {
-  pipeline.process(pipelines::frame_input_or_throw(frame, pipeline.config()), want_output, output, timings);
+  pipeline.process(server::frame_planes_or_throw(frame, pipeline.config()), want_output, output, timings);
 }
 
 inline pipelines::SessionConfig make_config(const std::string& pipeline, uint32_t w, uint32_t h,
-                                            std::vector<protocol::ChannelDecl> channels,
+                                            std::vector<pipelines::InputChannel> channels,
                                             Format output = Format::F32,
-                                            std::vector<protocol::Parameter> parameters = {}) {
+                                            std::vector<pipelines::ParameterValue> parameters = {}) {
   pipelines::SessionConfig c;
   c.pipeline = pipeline;
   c.width = w;
@@ -98,7 +98,7 @@ inline pipelines::SessionConfig make_config(const std::string& pipeline, uint32_
 
 inline pipelines::SessionConfig accumulate_config(uint32_t w, uint32_t h, Format inputs = Format::F32,
                                                   Format output = Format::F32,
-                                                  std::vector<protocol::Parameter> parameters = {}) {
+                                                  std::vector<pipelines::ParameterValue> parameters = {}) {
   return make_config("accumulate", w, h,
                      {{ChannelId::Radiance, inputs}, {ChannelId::Normal, inputs}, {ChannelId::Depth, inputs},
                       {ChannelId::Motion, inputs}},

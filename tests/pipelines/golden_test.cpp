@@ -54,7 +54,7 @@ struct Case {
   std::vector<ChannelId> channels;
   Format inputs = Format::F32;
   Format output = Format::F32;
-  std::vector<protocol::Parameter> parameters;
+  std::vector<pipelines::ParameterValue> parameters;
   MotionConvention motion = MotionConvention::PixelsToPrevious;
 };
 
@@ -202,7 +202,7 @@ std::vector<Case> cases() {
   const std::vector<C> acc = {C::Radiance, C::Normal, C::Depth, C::Motion};
   const auto F16 = Format::F16;
   const auto F32 = Format::F32;
-  const std::vector<protocol::Parameter> paper = {{"atrous_iterations", 5}, {"feedback_tap", 0}};
+  const std::vector<pipelines::ParameterValue> paper = {{"atrous_iterations", 5}, {"feedback_tap", 0}};
   return {
       {"passthrough_f32", "passthrough", {C::Radiance}, F32, F32, {}},
       {"passthrough_f16_in_extra_channels", "passthrough", {C::Radiance, C::Albedo, C::Normal, C::Depth}, F16, F32, {}},
@@ -263,7 +263,7 @@ class GoldenTest : public test::GpuTest, public testing::WithParamInterface<Case
 
 TEST_P(GoldenTest, OutputIsBitIdentical) {
   const Case& c = GetParam();
-  std::vector<protocol::ChannelDecl> decls;
+  std::vector<pipelines::InputChannel> decls;
   for (ChannelId id : c.channels) decls.push_back({id, c.inputs});
   const auto config = test::make_config(c.pipeline, kWidth, kHeight, decls, c.output, c.parameters);
   // The server's path: prepare once, create from the prepared graph.

@@ -49,7 +49,7 @@ class FireflyTest : public test::GpuTest {};
 
 TEST_P(HighlightTest, StaysInItsFootprint) {
   const auto& [motion, split] = GetParam();
-  std::vector<protocol::ChannelDecl> decls;
+  std::vector<pipelines::InputChannel> decls;
   if (split) decls = {{ChannelId::Diffuse, Format::F32}, {ChannelId::Specular, Format::F32}};
   else decls = {{ChannelId::Radiance, Format::F32}};
   for (ChannelId id : {ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion, ChannelId::Roughness})
@@ -115,7 +115,7 @@ TEST_P(HighlightTest, StaysInItsFootprint) {
 // passing through as its own zero-variance sample; the 3x3 highlight of the
 // tests above is kept. Radiance mode, roughness 1 (no history clipping).
 TEST_F(FireflyTest, IsFilteredWhereAHighlightIsKept) {
-  std::vector<protocol::ChannelDecl> decls = {{ChannelId::Radiance, Format::F32}};
+  std::vector<pipelines::InputChannel> decls = {{ChannelId::Radiance, Format::F32}};
   for (ChannelId id : {ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion})
     decls.push_back({id, Format::F32});
   auto pipe = pipelines::create(ctx(), test::make_config("svgf", kW, kH, decls));
@@ -152,8 +152,8 @@ TEST_F(FireflyTest, IsFilteredWhereAHighlightIsKept) {
 struct StillFlicker {
   double change = 0.0, mean = 0.0;
 };
-StillFlicker still_camera_flicker(gpu::Context& ctx, const std::vector<protocol::Parameter>& params, float roughness) {
-  std::vector<protocol::ChannelDecl> decls = {{ChannelId::Radiance, Format::F32}};
+StillFlicker still_camera_flicker(gpu::Context& ctx, const std::vector<pipelines::ParameterValue>& params, float roughness) {
+  std::vector<pipelines::InputChannel> decls = {{ChannelId::Radiance, Format::F32}};
   for (ChannelId id : {ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth, ChannelId::Motion, ChannelId::Roughness})
     decls.push_back({id, Format::F32});
   auto pipe = pipelines::create(ctx, test::make_config("svgf", kW, kH, decls, Format::F32, params));

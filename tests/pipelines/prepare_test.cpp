@@ -60,7 +60,7 @@ TEST(Prepare, ReturnsTheErrorValidateReturns) {
     const auto got = pipelines::prepare(config);
     ASSERT_TRUE(std::holds_alternative<pipelines::ConfigError>(got));
     const auto& err = std::get<pipelines::ConfigError>(got);
-    EXPECT_EQ(err.code, want->code);
+    EXPECT_EQ(err.problem, want->problem);
     EXPECT_EQ(err.field, want->field);
     EXPECT_EQ(err.message, want->message);
   }

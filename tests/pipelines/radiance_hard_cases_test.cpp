@@ -106,7 +106,7 @@ double converted(float v, Format output) {
 bool same_value(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
 
 // converge_still 0 where the pipeline has the parameter (see the header).
-std::vector<protocol::Parameter> without_still_mean(const std::string& pipeline) {
+std::vector<pipelines::ParameterValue> without_still_mean(const std::string& pipeline) {
   for (const auto& p : pipelines::available_pipelines())
     if (p.name == pipeline)
       for (const auto& info : p.parameters)

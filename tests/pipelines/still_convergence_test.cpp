@@ -39,13 +39,13 @@ constexpr int kWidth = 48, kHeight = 16, kEdge = 24, kFrames = 32;
 double truth(int pixel) { return 0.5 * (pixel % kWidth < kEdge ? 1.0 : 0.25); }
 
 // The session's channels: what the pipeline takes, all fp32.
-std::vector<protocol::ChannelDecl> channels_of(const std::string& pipeline) {
+std::vector<pipelines::InputChannel> channels_of(const std::string& pipeline) {
   std::vector<ChannelId> ids = {ChannelId::Radiance, ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth,
                                 ChannelId::Motion};
   if (pipeline == "svgf-fb")
     ids = {ChannelId::Diffuse,   ChannelId::Specular, ChannelId::Albedo, ChannelId::SpecularF0,
            ChannelId::Roughness, ChannelId::Normal,   ChannelId::Depth,  ChannelId::Motion};
-  std::vector<protocol::ChannelDecl> out;
+  std::vector<pipelines::InputChannel> out;
   for (ChannelId id : ids) out.push_back({id, Format::F32});
   return out;
 }
@@ -84,7 +84,7 @@ constexpr float kFireflyGain = 50.0f;
 
 // The output's RMSE against the truth after each of `frames` still frames;
 // mean_rmse: the plain running mean's.
-std::vector<double> still_rmse(gpu::Context& ctx, const std::string& pipeline, std::vector<protocol::Parameter> params,
+std::vector<double> still_rmse(gpu::Context& ctx, const std::string& pipeline, std::vector<pipelines::ParameterValue> params,
                                int frames, std::vector<double>& mean_rmse, StillRegion region = {}) {
   const int n = kWidth * kHeight;
   auto pipe = pipelines::create(ctx, test::make_config(pipeline, kWidth, kHeight, channels_of(pipeline), Format::F32,

@@ -17,8 +17,8 @@ using test::ChannelId;
 using test::Format;
 
 inline pipelines::SessionConfig svgf_config(int w, int h, Format in = Format::F32, Format out = Format::F32,
-                                     std::vector<protocol::Parameter> params = {}, bool emission = false) {
-  std::vector<protocol::ChannelDecl> channels = {{ChannelId::Radiance, in}, {ChannelId::Albedo, in},
+                                     std::vector<pipelines::ParameterValue> params = {}, bool emission = false) {
+  std::vector<pipelines::InputChannel> channels = {{ChannelId::Radiance, in}, {ChannelId::Albedo, in},
                                                  {ChannelId::Normal, in},   {ChannelId::Depth, in},
                                                  {ChannelId::Motion, in}};
   if (emission) channels.push_back({ChannelId::Emission, in});
@@ -27,7 +27,7 @@ inline pipelines::SessionConfig svgf_config(int w, int h, Format in = Format::F3
 
 // Split mode: Diffuse + Specular instead of Radiance.
 inline pipelines::SessionConfig svgf_split_config(int w, int h, Format in = Format::F32, Format out = Format::F32,
-                                           std::vector<protocol::Parameter> params = {}, bool emission = false) {
+                                           std::vector<pipelines::ParameterValue> params = {}, bool emission = false) {
   auto c = svgf_config(w, h, in, out, std::move(params), emission);
   c.channels[0] = {ChannelId::Diffuse, in};
   c.channels.insert(c.channels.begin() + 1, {ChannelId::Specular, in});

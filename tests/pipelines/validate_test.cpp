@@ -18,15 +18,15 @@
 namespace dn {
 namespace {
 
-using protocol::ErrorCode;
+using pipelines::ConfigProblem;
 using test::ChannelId;
 using test::Format;
 
-void expect_error(const pipelines::SessionConfig& config, ErrorCode code, const std::string& field,
+void expect_error(const pipelines::SessionConfig& config, ConfigProblem code, const std::string& field,
                   const std::string& message_part) {
   const auto err = pipelines::validate(config);
   ASSERT_TRUE(err.has_value()) << "accepted: " << field;
-  EXPECT_EQ(err->code, code) << err->message;
+  EXPECT_EQ(err->problem, code) << err->message;
   EXPECT_EQ(err->field, field) << err->message;
   EXPECT_NE(err->message.find(message_part), std::string::npos) << err->message;
 }
@@ -75,30 +75,30 @@ TEST(Validate, AcceptsValidConfigurations) {
 TEST(Validate, RejectsUnknownPipeline) {
   auto c = test::accumulate_config(8, 8);
   c.pipeline = "svgf-next";
-  expect_error(c, ErrorCode::UnknownPipeline, "OPEN_SESSION.pipeline", "svgf-next");
+  expect_error(c, ConfigProblem::UnknownPipeline, "pipeline", "svgf-next");
 }
 
 TEST(Validate, RejectsBadResolutionAndOutputFormat) {
-  expect_error(test::accumulate_config(0, 8), ErrorCode::InvalidParameter, "OPEN_SESSION.width", "width");
-  expect_error(test::accumulate_config(8, 0), ErrorCode::InvalidParameter, "OPEN_SESSION.height", "height");
-  expect_error(test::accumulate_config(20000, 8), ErrorCode::LimitExceeded, "OPEN_SESSION.width", "20000");
+  expect_error(test::accumulate_config(0, 8), ConfigProblem::InvalidParameter, "width", "width");
+  expect_error(test::accumulate_config(8, 0), ConfigProblem::InvalidParameter, "height", "height");
+  expect_error(test::accumulate_config(20000, 8), ConfigProblem::LimitExceeded, "width", "20000");
   auto c = test::accumulate_config(8, 8);
   c.output_format = static_cast<Format>(7);
-  expect_error(c, ErrorCode::InvalidParameter, "OPEN_SESSION.output_format", "7");
+  expect_error(c, ConfigProblem::InvalidParameter, "output_format", "7");
 }
 
 TEST(Validate, RejectsMissingRequiredChannel) {
   auto c = test::accumulate_config(8, 8);
   c.channels.erase(c.channels.begin() + 1);  // normal
-  expect_error(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "normal");
-  expect_error(test::make_config("passthrough", 8, 8, {}), ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+  expect_error(c, ConfigProblem::MissingChannel, "channels", "normal");
+  expect_error(test::make_config("passthrough", 8, 8, {}), ConfigProblem::MissingChannel, "channels",
                "radiance");
 }
 
 // stat-temporal takes the four statistics planes or none: some of them is a
 // renderer that lost a pass, not one without statistics.
 TEST(Validate, StatTemporalTakesAllStatisticsOrNone) {
-  std::vector<protocol::ChannelDecl> base = {{ChannelId::Radiance, Format::F32}, {ChannelId::Albedo, Format::F32},
+  std::vector<pipelines::InputChannel> base = {{ChannelId::Radiance, Format::F32}, {ChannelId::Albedo, Format::F32},
                                              {ChannelId::Normal, Format::F32},   {ChannelId::Depth, Format::F32},
                                              {ChannelId::Motion, Format::F32}};
   EXPECT_FALSE(pipelines::validate(test::make_config("stat-temporal", 8, 8, base)).has_value());
@@ -108,11 +108,11 @@ TEST(Validate, StatTemporalTakesAllStatisticsOrNone) {
   EXPECT_FALSE(pipelines::validate(test::make_config("stat-temporal", 8, 8, all)).has_value());
   auto some = all;
   some.pop_back();  // stat_m3
-  expect_error(test::make_config("stat-temporal", 8, 8, some), ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+  expect_error(test::make_config("stat-temporal", 8, 8, some), ConfigProblem::MissingChannel, "channels",
                "all four of stat_count");
   // stat needs them: one frame's single sample has no variance to test.
-  expect_error(test::make_config("stat", 8, 8, {base[0], base[1], base[2]}), ErrorCode::MissingChannel,
-               "OPEN_SESSION.channels", "stat_count");
+  expect_error(test::make_config("stat", 8, 8, {base[0], base[1], base[2]}), ConfigProblem::MissingChannel,
+               "channels", "stat_count");
 }
 
 TEST(Validate, RejectsUnusedDuplicateAndMalformedChannels) {
@@ -121,38 +121,38 @@ TEST(Validate, RejectsUnusedDuplicateAndMalformedChannels) {
                              {{ChannelId::Radiance, Format::F32}, {ChannelId::Albedo, Format::F32},
                               {ChannelId::Normal, Format::F32}, {ChannelId::Depth, Format::F32},
                               {ChannelId::Motion, Format::F32}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[1].id", "albedo");
+  expect_error(c, ConfigProblem::InvalidChannel, "channels[1].id", "albedo");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, Format::F32}, {ChannelId::Radiance, Format::F16}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[1].id", "twice");
+  expect_error(c, ConfigProblem::InvalidChannel, "channels[1].id", "twice");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Output, Format::F32}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "32");
+  expect_error(c, ConfigProblem::InvalidChannel, "channels[0].id", "32");
   c = test::make_config("passthrough", 8, 8, {{static_cast<ChannelId>(55), Format::F32}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].id", "55");
+  expect_error(c, ConfigProblem::InvalidChannel, "channels[0].id", "55");
   c = test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, static_cast<Format>(3)}});
-  expect_error(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[0].format", "radiance");
+  expect_error(c, ConfigProblem::InvalidChannel, "channels[0].format", "radiance");
 }
 
 TEST(Validate, RejectsUnknownParameter) {
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"alpha_min", 0.1}, {"phi_colour", 10}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[1].name", "phi_colour");
+               ConfigProblem::InvalidParameter, "parameters[1].name", "phi_colour");
   expect_error(test::make_config("passthrough", 8, 8, {{ChannelId::Radiance, Format::F32}}, Format::F32,
                                  {{"alpha_min", 0.1}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[0].name", "alpha_min");
+               ConfigProblem::InvalidParameter, "parameters[0].name", "alpha_min");
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"alpha_min", 0.1}, {"alpha_min", 0.2}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[1].name", "twice");
+               ConfigProblem::InvalidParameter, "parameters[1].name", "twice");
 }
 
 TEST(Validate, RejectsOutOfRangeAndNonIntegralParameters) {
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"alpha_min", 1.5}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[0].value", "alpha_min");
+               ConfigProblem::InvalidParameter, "parameters[0].value", "alpha_min");
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"depth_tolerance", 0.2}, {"max_history", 0}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[1].value", "max_history");
+               ConfigProblem::InvalidParameter, "parameters[1].value", "max_history");
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"max_history", 7.5}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[0].value", "integer");
+               ConfigProblem::InvalidParameter, "parameters[0].value", "integer");
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"normal_threshold", NAN}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[0].value", "normal_threshold");
+               ConfigProblem::InvalidParameter, "parameters[0].value", "normal_threshold");
   expect_error(test::accumulate_config(8, 8, Format::F32, Format::F32, {{"normal_threshold", -1.01}}),
-               ErrorCode::InvalidParameter, "OPEN_SESSION.parameters[0].value", "-1.01");
+               ConfigProblem::InvalidParameter, "parameters[0].value", "-1.01");
 }
 
 // The largest accumulate binding is a 16-byte-per-pixel history buffer.
@@ -162,8 +162,8 @@ TEST(Validate, RespectsTheStorageBindingLimit) {
   EXPECT_FALSE(pipelines::check_device_limits(test::accumulate_config(3840, 2160), lavapipe).has_value());
   const auto err = pipelines::check_device_limits(test::accumulate_config(4096, 4096), lavapipe);
   ASSERT_TRUE(err.has_value());
-  EXPECT_EQ(err->code, ErrorCode::LimitExceeded);
-  EXPECT_EQ(err->field, "OPEN_SESSION.width");
+  EXPECT_EQ(err->problem, ConfigProblem::LimitExceeded);
+  EXPECT_EQ(err->field, "width");
   EXPECT_NE(err->message.find("history_colour"), std::string::npos) << err->message;
   EXPECT_EQ(pipelines::largest_binding(test::accumulate_config(4096, 4096)).bytes, uint64_t{4096} * 4096 * 16);
   // validate() uses the current device limits (at least the Vulkan minimum of 128 MiB).

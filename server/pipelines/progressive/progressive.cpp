@@ -56,14 +56,14 @@ std::optional<ConfigError> check_channels(const SessionConfig& config) {
   // svgf's history clipping reads every neighbour's current sample, which
   // fewer than one sample per pixel does not have: refused, not ignored.
   for (size_t i = 0; i < config.parameters.size(); ++i) {
-    const protocol::Parameter& p = config.parameters[i];
-    const std::string field = "OPEN_SESSION.parameters[" + std::to_string(i) + "].value";
+    const ParameterValue& p = config.parameters[i];
+    const std::string field = "parameters[" + std::to_string(i) + "].value";
     if (p.name == "clip_roughness" && p.value != 0.0)
-      return ConfigError{protocol::ErrorCode::InvalidParameter, field,
+      return ConfigError{ConfigProblem::InvalidParameter, field,
                          "progressive does not clip histories: clip_roughness must be 0"};
     // Which pixels lack a G-buffer is what sample_count says.
     if (p.name == "sparse_gbuffer" && p.value != 0.0 && !has_channel(config, ChannelId::SampleCount))
-      return ConfigError{protocol::ErrorCode::InvalidParameter, field,
+      return ConfigError{ConfigProblem::InvalidParameter, field,
                          "sparse_gbuffer needs the sample_count channel (which pixels have a G-buffer)"};
   }
   return check_split_channels(config, "progressive", /*radiance_allowed=*/true);

@@ -6,7 +6,7 @@ namespace dn::pipelines {
 namespace {
 
 using protocol::ChannelId;
-using protocol::ErrorCode;
+
 
 // Index of the channel in the declaration, or -1.
 int index_of(const SessionConfig& config, ChannelId id) {
@@ -19,7 +19,7 @@ std::string name(ChannelId id) { return std::string(protocol::find_channel(id)->
 
 // "channels[i].id" of the later of two declared channels (the one that conflicts).
 std::string later_field(int a, int b) {
-  return "OPEN_SESSION.channels[" + std::to_string(std::max(a, b)) + "].id";
+  return "channels[" + std::to_string(std::max(a, b)) + "].id";
 }
 
 }  // namespace
@@ -70,35 +70,35 @@ std::optional<ConfigError> check_split_channels(const SessionConfig& config, con
   const int specular_albedo = index_of(config, ChannelId::SpecularAlbedo);
   const std::string who = "pipeline " + pipeline;
   if (diffuse >= 0 && diffuse_l >= 0)
-    return ConfigError{ErrorCode::InvalidChannel, later_field(diffuse, diffuse_l),
+    return ConfigError{ConfigProblem::InvalidChannel, later_field(diffuse, diffuse_l),
                        who + " takes diffuse or diffuse_lighting (one form per signal), not both"};
   if (specular >= 0 && specular_l >= 0)
-    return ConfigError{ErrorCode::InvalidChannel, later_field(specular, specular_l),
+    return ConfigError{ConfigProblem::InvalidChannel, later_field(specular, specular_l),
                        who + " takes specular or specular_lighting (one form per signal), not both"};
   const int d = std::max(diffuse, diffuse_l), s = std::max(specular, specular_l);
   if (radiance >= 0 && (d >= 0 || s >= 0)) {
     const int other = d >= 0 ? d : s;
-    return ConfigError{ErrorCode::InvalidChannel, later_field(radiance, other),
+    return ConfigError{ConfigProblem::InvalidChannel, later_field(radiance, other),
                        who + " takes either radiance or diffuse + specular (each in radiance or lighting form), "
                              "not both (radiance and " + name(config.channels[other].id) + " declared)"};
   }
   if (d >= 0 && s < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return ConfigError{ConfigProblem::MissingChannel, "channels",
                        who + " requires channel specular or specular_lighting together with " +
                            name(config.channels[d].id)};
   if (s >= 0 && d < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return ConfigError{ConfigProblem::MissingChannel, "channels",
                        who + " requires channel diffuse or diffuse_lighting together with " +
                            name(config.channels[s].id)};
   if (specular_l >= 0 && specular_albedo < 0)
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return ConfigError{ConfigProblem::MissingChannel, "channels",
                        who + " requires channel specular_albedo with specular_lighting (its modulator)"};
   if (specular_albedo >= 0 && s < 0)
-    return ConfigError{ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(specular_albedo) + "].id",
+    return ConfigError{ConfigProblem::InvalidChannel, "channels[" + std::to_string(specular_albedo) + "].id",
                        who + " uses specular_albedo only as the modulator of specular or specular_lighting, and "
                              "neither is declared"};
   if (d < 0 && (!radiance_allowed || radiance < 0))
-    return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return ConfigError{ConfigProblem::MissingChannel, "channels",
                        who + (radiance_allowed ? " requires channel radiance, or diffuse and specular (either form)"
                                                : " requires diffuse and specular (either form)")};
   return check_extra_samples(config);

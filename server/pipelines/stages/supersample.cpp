@@ -4,7 +4,7 @@ namespace dn::pipelines {
 namespace {
 
 using protocol::ChannelId;
-using protocol::ErrorCode;
+
 using protocol::SampleField;
 using protocol::sample_channel;
 
@@ -54,30 +54,30 @@ std::optional<ConfigError> check_extra_samples(const SessionConfig& config) {
       continue;
     }
     if (gap)
-      return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+      return ConfigError{ConfigProblem::MissingChannel, "channels",
                          sample + " is declared without extra sample " + std::to_string(j - 1) +
                              " (samples are numbered 1, 2, 3 without a gap)"};
     if (lighting)
-      return ConfigError{ErrorCode::InvalidChannel, "OPEN_SESSION.channels",
+      return ConfigError{ConfigProblem::InvalidChannel, "channels",
                          "extra samples carry radiance: send diffuse and specular, not the lighting forms, with them"};
     std::vector<SampleField> needed = {SampleField::Normal, SampleField::Depth, SampleField::Offset};
     if (radiance) needed.push_back(SampleField::Radiance);
     else needed.insert(needed.end(), {SampleField::Diffuse, SampleField::Specular});
     for (SampleField f : needed)
       if (!has_channel(config, sample_channel(j, f)))
-        return ConfigError{ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+        return ConfigError{ConfigProblem::MissingChannel, "channels",
                            sample + " requires channel " + name(sample_channel(j, f))};
     for (SampleField f : {SampleField::Radiance, SampleField::Diffuse, SampleField::Specular}) {
       const bool sent = radiance ? f == SampleField::Radiance : f != SampleField::Radiance;
       if (!sent && has_channel(config, sample_channel(j, f)))
-        return ConfigError{ErrorCode::InvalidChannel, "OPEN_SESSION.channels",
+        return ConfigError{ConfigProblem::InvalidChannel, "channels",
                            "channel " + name(sample_channel(j, f)) + " does not match the session's signals (" +
                                (radiance ? "radiance" : "diffuse + specular") + ")"};
     }
     for (uint32_t f = 0; f < 6 && j > 1; ++f) {
       const ChannelId id = sample_channel(j, static_cast<SampleField>(f)), first = sample_channel(1, static_cast<SampleField>(f));
       if (has_channel(config, id) && channel_format(config, id) != channel_format(config, first))
-        return ConfigError{ErrorCode::InvalidChannel, "OPEN_SESSION.channels",
+        return ConfigError{ConfigProblem::InvalidChannel, "channels",
                            "channel " + name(id) + " must have the format of " + name(first) +
                                " (the extra samples' planes of one kind share a format)"};
     }

@@ -40,7 +40,7 @@ uint64_t stat_channels() {
 
 bool declares_statistics(const SessionConfig& config) {
   uint64_t declared = 0;
-  for (const protocol::ChannelDecl& c : config.channels) declared |= protocol::channel_bit(c.id);
+  for (const InputChannel& c : config.channels) declared |= protocol::channel_bit(c.id);
   return (declared & statistics_channels()) == statistics_channels();
 }
 
@@ -107,9 +107,9 @@ void add_stat_filter(GraphSpec& g, const SessionConfig& config, const StatSource
 // (docs/protocol.md §7.7): fp32 only.
 std::optional<ConfigError> check_statistics(const SessionConfig& config) {
   for (size_t i = 0; i < config.channels.size(); ++i) {
-    const protocol::ChannelDecl& c = config.channels[i];
+    const InputChannel& c = config.channels[i];
     if (protocol::is_sample_statistic(c.id) && c.format != protocol::Format::F32)
-      return ConfigError{protocol::ErrorCode::InvalidChannel, "OPEN_SESSION.channels[" + std::to_string(i) + "].format",
+      return ConfigError{ConfigProblem::InvalidChannel, "channels[" + std::to_string(i) + "].format",
                          config.pipeline + " takes " + std::string(protocol::find_channel(c.id)->name) +
                              " in fp32 only (the sums of squared and cubed deviations overflow fp16)"};
   }
@@ -119,9 +119,9 @@ std::optional<ConfigError> check_statistics(const SessionConfig& config) {
 std::optional<ConfigError> check_optional_statistics(const SessionConfig& config) {
   if (auto err = check_statistics(config)) return err;
   bool some = false;
-  for (const protocol::ChannelDecl& c : config.channels) some = some || protocol::is_sample_statistic(c.id);
+  for (const InputChannel& c : config.channels) some = some || protocol::is_sample_statistic(c.id);
   if (some && !declares_statistics(config))
-    return ConfigError{protocol::ErrorCode::MissingChannel, "OPEN_SESSION.channels",
+    return ConfigError{ConfigProblem::MissingChannel, "channels",
                        config.pipeline +
                            " takes all four of stat_count, stat_mean, stat_m2 and stat_m3 or none of them (without "
                            "them each frame's radiance is one sample per pixel)"};

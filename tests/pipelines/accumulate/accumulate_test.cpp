@@ -65,7 +65,7 @@ struct Variant {
   int w, h;
   Format in, out;
   MotionConvention conv;
-  std::vector<protocol::Parameter> params;
+  std::vector<pipelines::ParameterValue> params;
 };
 
 void PrintTo(const Variant& v, std::ostream* os) { *os << v.name; }

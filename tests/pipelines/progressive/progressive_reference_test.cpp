@@ -27,10 +27,10 @@ using namespace svgf_inputs;
 
 // svgf's channels (split: diffuse + specular) for the progressive pipeline,
 // plus a fp32 sample_count plane when masked.
-pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::Parameter> params, bool emission,
+pipelines::SessionConfig progressive_config(int w, int h, std::vector<pipelines::ParameterValue> params, bool emission,
                                             bool split, bool mask) {
   const Format in = Format::F32;
-  std::vector<protocol::ChannelDecl> channels;
+  std::vector<pipelines::InputChannel> channels;
   if (split) {
     channels = {{ChannelId::Diffuse, in}, {ChannelId::Specular, in}};
   } else {
@@ -48,7 +48,7 @@ pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::
 // `sparse` (a sample_count plane) paper 004's regime, without it SVGF's
 // young-pixel estimate and step order (the age gate and the display lag do
 // not apply).
-test::SvgfParams progressive_params(const std::vector<protocol::Parameter>& ps, bool sparse) {
+test::SvgfParams progressive_params(const std::vector<pipelines::ParameterValue>& ps, bool sparse) {
   test::SvgfParams p;
   p.alpha_colour = 0.1;
   p.alpha_moments = 0.1;
@@ -102,7 +102,7 @@ struct Variant {
   const char* name;
   bool split, emission;
   Mask mask;
-  std::vector<protocol::Parameter> params;
+  std::vector<pipelines::ParameterValue> params;
   float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
   int w = 64, h = 40;
   int frames = 8, reset_at = 5;  // reset_at -1: none

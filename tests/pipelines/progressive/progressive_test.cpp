@@ -48,9 +48,9 @@ struct FlatFrames {
   }
 };
 
-pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::Parameter> params = {},
+pipelines::SessionConfig progressive_config(int w, int h, std::vector<pipelines::ParameterValue> params = {},
                                             bool masked = false) {
-  std::vector<protocol::ChannelDecl> channels = {{ChannelId::Radiance, Format::F32},
+  std::vector<pipelines::InputChannel> channels = {{ChannelId::Radiance, Format::F32},
                                                  {ChannelId::Albedo, Format::F32},
                                                  {ChannelId::Normal, Format::F32},
                                                  {ChannelId::Depth, Format::F32},
@@ -64,7 +64,7 @@ pipelines::SessionConfig progressive_config(int w, int h, std::vector<protocol::
 float quarter_spp_count(int i, int w, int t) { return ((i % w) + 2 * (i / w) + t) % 4 == 0 ? 1.0f : 0.0f; }
 
 // Temporal accumulation alone: no a-trous iteration, no final blend.
-const std::vector<protocol::Parameter> kAccumulationOnly = {
+const std::vector<pipelines::ParameterValue> kAccumulationOnly = {
     {"atrous_iterations", 0}, {"taa_alpha", 0}, {"taa_static_alpha", 0}};
 
 // Grey radiance (luminance = the value: Rec. 709 weights sum to 1).
@@ -173,7 +173,7 @@ TEST_F(ProgressiveTest, StepEdgeWithoutVarianceIsKeptAndBlursWithoutTheLuminance
   FlatFrames scene{w, h};
   const std::vector<double> step = luminance_step(w, h);
   const std::vector<float> every_pixel(n, 1.0f);  // sample_count: paper 004's regime at 1 spp
-  auto edge_error = [&](std::vector<protocol::Parameter> params) {
+  auto edge_error = [&](std::vector<pipelines::ParameterValue> params) {
     params.push_back({"taa_alpha", 0});
     params.push_back({"taa_static_alpha", 0});
     params.push_back({"harm_guard", 0});  // the filter's own behaviour: the guard would keep the noise-free step
@@ -202,7 +202,7 @@ TEST_F(ProgressiveTest, TheDisplayFollowsTheHistorySwitchContinuously) {
   FlatFrames scene{w, h};
   const std::vector<double> step = luminance_step(w, h);
   const std::vector<float> every_pixel(n, 1.0f);  // sample_count: paper 004's regime at 1 spp
-  auto frames = [&](std::vector<protocol::Parameter> params) {
+  auto frames = [&](std::vector<pipelines::ParameterValue> params) {
     params.push_back({"harm_guard", 0});  // the filter's own blur: the guard would keep the noise-free step
     auto pipe = pipelines::create(ctx(), progressive_config(w, h, std::move(params), /*masked=*/true));
     std::vector<std::vector<float>> out;
@@ -540,7 +540,7 @@ std::vector<std::array<double, 4>> pull_push_reference(int w, int h, const std::
 // signals.
 TEST_F(ProgressiveTest, SplitWithZeroSpecularEqualsRadianceBelowOneSpp) {
   const int w = 48, h = 32, n = w * h;
-  const std::vector<protocol::Parameter> params = {{"atrous_iterations", 1}};
+  const std::vector<pipelines::ParameterValue> params = {{"atrous_iterations", 1}};
   auto radiance_config = progressive_config(w, h, params, /*masked=*/true);
   auto split_config = radiance_config;
   split_config.channels[0] = {ChannelId::Diffuse, Format::F32};
@@ -765,22 +765,22 @@ TEST(ProgressiveValidate, ChannelsAndParameters) {
   // Clipping is svgf's, not paper 004's: refused, not ignored.
   const auto clip = pipelines::validate(progressive_config(16, 16, {{"alpha_colour", 0.2}, {"clip_roughness", 0.5}}));
   ASSERT_TRUE(clip.has_value());
-  EXPECT_EQ(clip->code, protocol::ErrorCode::InvalidParameter);
-  EXPECT_EQ(clip->field, "OPEN_SESSION.parameters[1].value");
+  EXPECT_EQ(clip->problem, pipelines::ConfigProblem::InvalidParameter);
+  EXPECT_EQ(clip->field, "parameters[1].value");
   EXPECT_NE(clip->message.find("clip_roughness"), std::string::npos) << clip->message;
   auto rough = progressive_config(16, 16);
   rough.channels.push_back({ChannelId::Roughness, Format::F32});
   const auto e = pipelines::validate(rough);
   ASSERT_TRUE(e.has_value());
-  EXPECT_EQ(e->code, protocol::ErrorCode::InvalidChannel);
+  EXPECT_EQ(e->problem, pipelines::ConfigProblem::InvalidChannel);
   const auto sparse = pipelines::validate(progressive_config(16, 16, {{"sparse_gbuffer", 1}}));
   ASSERT_TRUE(sparse.has_value());
-  EXPECT_EQ(sparse->code, protocol::ErrorCode::InvalidParameter);
+  EXPECT_EQ(sparse->problem, pipelines::ConfigProblem::InvalidParameter);
   EXPECT_NE(sparse->message.find("sample_count"), std::string::npos) << sparse->message;
   EXPECT_FALSE(pipelines::validate(progressive_config(16, 16, {{"sparse_gbuffer", 1}}, true)).has_value());
   const auto bad_order = pipelines::validate(progressive_config(16, 16, {{"step_order", 3}}));
   ASSERT_TRUE(bad_order.has_value());
-  EXPECT_EQ(bad_order->code, protocol::ErrorCode::InvalidParameter);
+  EXPECT_EQ(bad_order->problem, pipelines::ConfigProblem::InvalidParameter);
 }
 
 }  // namespace

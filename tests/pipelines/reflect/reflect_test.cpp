@@ -70,8 +70,8 @@ const std::vector<float>& plane(const render::FrameBuffers& fb, ChannelId id) {
   }
 }
 
-pipelines::SessionConfig reflect_config(int w, int h, std::vector<protocol::Parameter> params = {}) {
-  std::vector<protocol::ChannelDecl> channels;
+pipelines::SessionConfig reflect_config(int w, int h, std::vector<pipelines::ParameterValue> params = {}) {
+  std::vector<pipelines::InputChannel> channels;
   for (ChannelId id : kChannels) channels.push_back({id, Format::F32});
   return test::make_config("reflect", w, h, channels, Format::F32, std::move(params));
 }
@@ -183,7 +183,7 @@ struct CapturedRun {
   }
 };
 CapturedRun run_captured(gpu::Context& ctx, const std::vector<const Rendered*>& frames,
-                         std::vector<protocol::Parameter> params = {}) {
+                         std::vector<pipelines::ParameterValue> params = {}) {
   CapturedRun r;
   r.pipe = pipelines::create(ctx, reflect_config(frames.front()->fb.width, frames.front()->fb.height, std::move(params)));
   r.graph = dynamic_cast<pipelines::GraphPipeline*>(r.pipe.get());
@@ -692,7 +692,7 @@ TEST_P(ReflectMedianTest, FireflyMedianChangesTheDisplayedFrameOnly) {
     std::map<std::string, std::vector<uint8_t>> history;
   };
   auto run_with = [&](double median) {
-    std::vector<protocol::Parameter> params = {{"firefly_median", median}};
+    std::vector<pipelines::ParameterValue> params = {{"firefly_median", median}};
     if (!taa) params.push_back({"taa_static_alpha", 0.0});
     const CapturedRun captured = run_captured(ctx(), pointers(seq), params);
     const pipelines::GraphPipeline* graph = captured.graph;
@@ -814,7 +814,7 @@ struct StillMeansKept {
 };
 StillMeansKept still_means_kept(gpu::Context& context, int frames,
                                 const std::function<void(render::FrameBuffers&, int)>& change,
-                                std::vector<protocol::Parameter> params,
+                                std::vector<pipelines::ParameterValue> params,
                                 const std::function<bool(Class, const float*)>& counts) {
   const int w = 96, h = 54, scene_id = 6;
   const auto scene = render::build_scene(scene_id);

@@ -52,8 +52,8 @@ struct SsFrame {
       s.offset.assign(2 * px, 0.0f);
     }
   }
-  std::vector<protocol::ChannelDecl> channels(bool with_samples) const {
-    std::vector<protocol::ChannelDecl> c = {{ChannelId::Radiance, format}, {ChannelId::Albedo, format},
+  std::vector<pipelines::InputChannel> channels(bool with_samples) const {
+    std::vector<pipelines::InputChannel> c = {{ChannelId::Radiance, format}, {ChannelId::Albedo, format},
                                             {ChannelId::Normal, format},   {ChannelId::Depth, format},
                                             {ChannelId::Motion, format}};
     for (int j = 1; with_samples && j <= n; ++j)
@@ -318,34 +318,34 @@ TEST_F(SupersampleTest, SubPixelEdgeIsResolvedInProportion) {
 
 TEST(SupersampleValidate, SessionRules) {
   const SsFrame f(16, 16, 2);
-  auto expect = [](pipelines::SessionConfig c, protocol::ErrorCode code, const std::string& text) {
+  auto expect = [](pipelines::SessionConfig c, pipelines::ConfigProblem code, const std::string& text) {
     const auto err = pipelines::validate(c);
     ASSERT_TRUE(err.has_value()) << text;
-    EXPECT_EQ(err->code, code) << err->message;
+    EXPECT_EQ(err->problem, code) << err->message;
     EXPECT_NE(err->message.find(text), std::string::npos) << err->message;
   };
   EXPECT_FALSE(pipelines::validate(test::make_config("svgf", 16, 16, f.channels(true))).has_value());
   {  // a sample without its offset
     auto c = test::make_config("svgf", 16, 16, f.channels(true));
     c.channels.pop_back();
-    expect(c, protocol::ErrorCode::MissingChannel, "sample2_offset");
+    expect(c, pipelines::ConfigProblem::MissingChannel, "sample2_offset");
   }
   {  // sample 2 without sample 1
     auto c = test::make_config("svgf", 16, 16, f.channels(false));
     for (SampleField k : {SampleField::Radiance, SampleField::Normal, SampleField::Depth, SampleField::Offset})
       c.channels.push_back({sample_channel(2, k), Format::F32});
-    expect(c, protocol::ErrorCode::MissingChannel, "without extra sample 1");
+    expect(c, pipelines::ConfigProblem::MissingChannel, "without extra sample 1");
   }
   {  // split colours in a radiance session
     auto c = test::make_config("svgf", 16, 16, f.channels(true));
     c.channels.push_back({sample_channel(1, SampleField::Diffuse), Format::F32});
-    expect(c, protocol::ErrorCode::InvalidChannel, "sample1_diffuse");
+    expect(c, pipelines::ConfigProblem::InvalidChannel, "sample1_diffuse");
   }
   {  // one format per kind
     auto c = test::make_config("svgf", 16, 16, f.channels(true));
     for (auto& d : c.channels)
       if (d.id == sample_channel(2, SampleField::Depth)) d.format = Format::F16;
-    expect(c, protocol::ErrorCode::InvalidChannel, "sample2_depth");
+    expect(c, pipelines::ConfigProblem::InvalidChannel, "sample2_depth");
   }
   {  // lighting forms
     auto c = test::make_config("svgf", 16, 16,
@@ -355,7 +355,7 @@ TEST(SupersampleValidate, SessionRules) {
     for (SampleField k : {SampleField::Diffuse, SampleField::Specular, SampleField::Normal, SampleField::Depth,
                           SampleField::Offset})
       c.channels.push_back({sample_channel(1, k), Format::F32});
-    expect(c, protocol::ErrorCode::InvalidChannel, "lighting forms");
+    expect(c, pipelines::ConfigProblem::InvalidChannel, "lighting forms");
   }
   {  // accumulate takes none
     auto c = test::make_config("accumulate", 16, 16, f.channels(true));

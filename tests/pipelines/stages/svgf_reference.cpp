@@ -72,7 +72,7 @@ double distance3(const double* a, const double* b) {
 
 }  // namespace
 
-void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& values) {
+void apply_parameters(SvgfParams& p, const std::vector<pipelines::ParameterValue>& values) {
   for (const auto& q : values) {
     if (q.name == "alpha_colour") p.alpha_colour = q.value;
     if (q.name == "alpha_moments") p.alpha_moments = q.value;

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "dn/protocol/messages.hpp"
+#include "pipelines/pipeline.hpp"
 
 namespace dn::test {
 
@@ -46,7 +46,7 @@ inline constexpr double kSvgfNoData = -1.0;
 
 // Session parameters (the svgf and progressive groups, by name) into the
 // reference's: each named one replaces the field's current value.
-void apply_parameters(SvgfParams& p, const std::vector<protocol::Parameter>& values);
+void apply_parameters(SvgfParams& p, const std::vector<pipelines::ParameterValue>& values);
 
 // One frame of inputs, decoded to doubles (NaN/Inf kept as sent); motion in
 // pixels towards the previous frame. emission empty when the session has none.

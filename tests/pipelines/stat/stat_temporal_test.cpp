@@ -86,8 +86,8 @@ test::StatTemporalFrame scene_frame(const SceneSpec& s, int k, uint32_t seed) {
 }
 
 // with_statistics false: the radiance is each frame's one sample per pixel.
-std::vector<protocol::ChannelDecl> channels(bool with_statistics = true) {
-  std::vector<protocol::ChannelDecl> c = {{ChannelId::Radiance, Format::F32},
+std::vector<pipelines::InputChannel> channels(bool with_statistics = true) {
+  std::vector<pipelines::InputChannel> c = {{ChannelId::Radiance, Format::F32},
                                           {ChannelId::Albedo, Format::F32},
                                           {ChannelId::Normal, Format::F32},
                                           {ChannelId::Depth, Format::F32},
@@ -127,7 +127,7 @@ struct Session {
   pipelines::GraphPipeline* graph = nullptr;
 };
 
-Session make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params = {{"radius", 4}},
+Session make(gpu::Context& ctx, int w, int h, std::vector<pipelines::ParameterValue> params = {{"radius", 4}},
              bool with_statistics = true) {
   auto config = test::make_config("stat-temporal", w, h, channels(with_statistics), Format::F32, std::move(params));
   EXPECT_FALSE(pipelines::validate(config).has_value());
@@ -828,7 +828,7 @@ TEST_F(StatTemporalTest, FramesWithoutDataKeepTheHistory) {
 
 TEST(StatTemporalValidate, NeedsDepthMotionAndFp32Statistics) {
   auto without = [](ChannelId id) {
-    std::vector<protocol::ChannelDecl> c;
+    std::vector<pipelines::InputChannel> c;
     for (const auto& d : channels())
       if (d.id != id) c.push_back(d);
     return c;
@@ -836,14 +836,14 @@ TEST(StatTemporalValidate, NeedsDepthMotionAndFp32Statistics) {
   for (ChannelId id : {ChannelId::Depth, ChannelId::Motion, ChannelId::StatM3}) {
     const auto err = pipelines::validate(test::make_config("stat-temporal", 16, 16, without(id)));
     ASSERT_TRUE(err.has_value());
-    EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+    EXPECT_EQ(err->problem, pipelines::ConfigProblem::MissingChannel);
   }
   auto half = channels();
   for (auto& c : half)
     if (c.id == ChannelId::StatMean) c.format = Format::F16;
   const auto err = pipelines::validate(test::make_config("stat-temporal", 16, 16, half));
   ASSERT_TRUE(err.has_value());
-  EXPECT_EQ(err->code, protocol::ErrorCode::InvalidChannel);
+  EXPECT_EQ(err->problem, pipelines::ConfigProblem::InvalidChannel);
   EXPECT_NE(err->message.find("stat-temporal takes stat_mean in fp32 only"), std::string::npos) << err->message;
 }
 

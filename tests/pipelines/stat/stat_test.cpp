@@ -63,7 +63,7 @@ test::StatFrame shadow_frame(int w, int h, int spp, uint32_t seed, float scale =
   return f;
 }
 
-std::vector<protocol::ChannelDecl> stat_channels(Format guides = Format::F32) {
+std::vector<pipelines::InputChannel> stat_channels(Format guides = Format::F32) {
   return {{ChannelId::Radiance, guides}, {ChannelId::Albedo, guides},   {ChannelId::Normal, guides},
           {ChannelId::StatCount, Format::F32}, {ChannelId::StatMean, Format::F32}, {ChannelId::StatM2, Format::F32},
           {ChannelId::StatM3, Format::F32}};
@@ -95,7 +95,7 @@ std::vector<float> t_squared(double alpha) {
   return t;
 }
 
-std::unique_ptr<pipelines::Pipeline> make(gpu::Context& ctx, int w, int h, std::vector<protocol::Parameter> params,
+std::unique_ptr<pipelines::Pipeline> make(gpu::Context& ctx, int w, int h, std::vector<pipelines::ParameterValue> params,
                                           Format guides = Format::F32, Format out = Format::F32) {
   auto config = test::make_config("stat", w, h, stat_channels(guides), out, std::move(params));
   EXPECT_FALSE(pipelines::validate(config).has_value());
@@ -103,9 +103,9 @@ std::unique_ptr<pipelines::Pipeline> make(gpu::Context& ctx, int w, int h, std::
 }
 
 // Paper 003's setting, which a session gets only by asking for it.
-const std::vector<protocol::Parameter> kPaper = {{"alpha", 0.005}, {"membership_falloff", 0}};
+const std::vector<pipelines::ParameterValue> kPaper = {{"alpha", 0.005}, {"membership_falloff", 0}};
 
-std::vector<protocol::Parameter> with_paper(std::vector<protocol::Parameter> params) {
+std::vector<pipelines::ParameterValue> with_paper(std::vector<pipelines::ParameterValue> params) {
   params.insert(params.end(), kPaper.begin(), kPaper.end());
   return params;
 }
@@ -114,7 +114,7 @@ struct Variant {
   const char* name;
   int w, h;
   Format guides;
-  std::vector<protocol::Parameter> params;
+  std::vector<pipelines::ParameterValue> params;
   test::StatParams ref;
 };
 
@@ -144,7 +144,7 @@ TEST_F(StatTest, MatchesCpuReference) {
   paper_asym.radius = 6;
   paper_asym.sigma_spatial = 3.0;
   paper_asym.asymmetric = true;
-  const std::vector<protocol::Parameter> p6 = {{"radius", 6}, {"sigma_spatial", 3}};
+  const std::vector<pipelines::ParameterValue> p6 = {{"radius", 6}, {"sigma_spatial", 3}};
   const Variant variants[] = {
       {"defaults", 48, 32, Format::F32, {}, defaults},
       {"paper", 48, 32, Format::F32, kPaper, paper},
@@ -238,8 +238,8 @@ TEST_F(StatTest, DemodulatedStatisticsAverageAcrossTexture) {
     }
     return f;
   };
-  const std::vector<protocol::Parameter> base = with_paper({{"radius", 6}, {"sigma_spatial", 3}, {"sigma_albedo", 10}});
-  std::vector<protocol::Parameter> with = base;
+  const std::vector<pipelines::ParameterValue> base = with_paper({{"radius", 6}, {"sigma_spatial", 3}, {"sigma_albedo", 10}});
+  std::vector<pipelines::ParameterValue> with = base;
   with.push_back({"demodulated", 1});
   const test::StatFrame plain_frame = frame(false), demodulated_frame = frame(true);
   const auto plain = svgf_inputs::run(*make(ctx(), w, h, base), host_frame(plain_frame));
@@ -455,8 +455,8 @@ TEST_F(StatTest, NonFiniteGuidesNeverReachTheOutput) {
     f.albedo[3 * (12 * w + 20) + 1] = inf;
     f.albedo[3 * (20 * w + 30) + 2] = -inf;
     f.normal[3 * (8 * w + 14) + 2] = nan;
-    for (const auto& params : {std::vector<protocol::Parameter>{{"demodulated", demodulated ? 1.0 : 0.0}},
-                               std::vector<protocol::Parameter>{{"radius", 6}, {"sigma_spatial", 3},
+    for (const auto& params : {std::vector<pipelines::ParameterValue>{{"demodulated", demodulated ? 1.0 : 0.0}},
+                               std::vector<pipelines::ParameterValue>{{"radius", 6}, {"sigma_spatial", 3},
                                                                 {"demodulated", demodulated ? 1.0 : 0.0}}}) {
       const auto got = svgf_inputs::run(*make(ctx(), w, h, params), host_frame(f));
       size_t bad = 0;
@@ -504,14 +504,14 @@ TEST(StatValidate, StatisticsOnlyInFp32) {
       if (c.id == id) c.format = Format::F16;
     const auto err = pipelines::validate(test::make_config("stat", 16, 16, channels));
     ASSERT_TRUE(err.has_value());
-    EXPECT_EQ(err->code, protocol::ErrorCode::InvalidChannel);
+    EXPECT_EQ(err->problem, pipelines::ConfigProblem::InvalidChannel);
     EXPECT_NE(err->message.find(protocol::find_channel(id)->name), std::string::npos) << err->message;
   }
   auto missing = stat_channels();
   missing.pop_back();
   const auto err = pipelines::validate(test::make_config("stat", 16, 16, missing));
   ASSERT_TRUE(err.has_value());
-  EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+  EXPECT_EQ(err->problem, pipelines::ConfigProblem::MissingChannel);
 }
 
 }  // namespace

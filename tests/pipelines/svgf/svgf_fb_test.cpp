@@ -40,9 +40,9 @@ std::array<float, 16> to_array(const glm::mat4& m) {
   return a;
 }
 
-pipelines::SessionConfig fb_config(int w, int h, std::vector<protocol::Parameter> params = {},
+pipelines::SessionConfig fb_config(int w, int h, std::vector<pipelines::ParameterValue> params = {},
                                    const std::string& pipeline = "svgf-fb") {
-  std::vector<protocol::ChannelDecl> channels = {
+  std::vector<pipelines::InputChannel> channels = {
       {ChannelId::Diffuse, Format::F32}, {ChannelId::Specular, Format::F32}, {ChannelId::Albedo, Format::F32},
       {ChannelId::Normal, Format::F32},  {ChannelId::Depth, Format::F32},    {ChannelId::Motion, Format::F32},
       {ChannelId::Emission, Format::F32}};
@@ -347,7 +347,7 @@ TEST(SvgfFbValidate, RequiresF0AndRoughnessAndSplitLighting) {
   EXPECT_FALSE(pipelines::validate(fb_config(32, 16)).has_value());
   for (ChannelId missing : {ChannelId::SpecularF0, ChannelId::Roughness, ChannelId::Specular}) {
     auto c = fb_config(32, 16);
-    std::erase_if(c.channels, [&](const protocol::ChannelDecl& d) { return d.id == missing; });
+    std::erase_if(c.channels, [&](const pipelines::InputChannel& d) { return d.id == missing; });
     const auto err = pipelines::validate(c);
     ASSERT_TRUE(err.has_value());
     EXPECT_NE(err->message.find(protocol::find_channel(missing)->name), std::string::npos) << err->message;

@@ -63,7 +63,7 @@ class PassComparison {
 // remodulate and the final output (after the TAA blend).
 template <typename FrameSource>
 void compare_every_pass(gpu::Context& ctx, const char* name, int w, int h, const test::SvgfParams& params,
-                        const std::vector<protocol::Parameter>& session_params, int frames, FrameSource source) {
+                        const std::vector<pipelines::ParameterValue>& session_params, int frames, FrameSource source) {
   auto config = svgf_config(w, h, Format::F32, Format::F32, session_params, true);
   ASSERT_FALSE(pipelines::validate(config).has_value());
   auto pipe = pipelines::create(ctx, config);

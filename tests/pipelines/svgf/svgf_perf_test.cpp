@@ -38,8 +38,8 @@ std::vector<test::HostFrame> svgf_inputs(int w, int h, Format in, bool split, bo
   return inputs;
 }
 
-std::vector<protocol::ChannelDecl> svgf_channels(Format in, bool split) {
-  std::vector<protocol::ChannelDecl> c;
+std::vector<pipelines::InputChannel> svgf_channels(Format in, bool split) {
+  std::vector<pipelines::InputChannel> c;
   if (split) {
     c = {{ChannelId::Diffuse, in}, {ChannelId::Specular, in}};
   } else {
@@ -50,7 +50,7 @@ std::vector<protocol::ChannelDecl> svgf_channels(Format in, bool split) {
 }
 
 void run(const std::string& label, int w, int h, Format in, bool split,
-         std::vector<protocol::Parameter> parameters = {}, bool moving = true) {
+         std::vector<pipelines::ParameterValue> parameters = {}, bool moving = true) {
   auto config = test::make_config("svgf", w, h, svgf_channels(in, split), in, std::move(parameters));
   auto pipe = pipelines::create(test::context(), config);
   const auto times = test::time_passes(*pipe, svgf_inputs(w, h, in, split, moving), kFrames);

@@ -32,7 +32,7 @@ struct Variant {
   Format in, out;
   MotionConvention conv;
   bool emission;
-  std::vector<protocol::Parameter> params;
+  std::vector<pipelines::ParameterValue> params;
   float vx = 1.37f, vy = -0.61f, motion_noise = 0.45f;  // the scene's motion (px per frame)
   int frames = 7, reset_at = 5;                           // reset_at -1: none
 };
@@ -241,7 +241,7 @@ TEST_F(SvgfTest, AStillViewDoesNotJumpWhenItsMeanTakesOver) {
 TEST_F(SvgfTest, AShadowFallingOnAStillViewRestartsItsMean) {
   const int w = 64, h = 32, n = w * h, before = 40, after = 60;
   Flat scene(w, h);
-  const std::vector<protocol::Parameter> params = {{"taa_static_alpha", 0}};
+  const std::vector<pipelines::ParameterValue> params = {{"taa_static_alpha", 0}};
   auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, params));
   test::SvgfParams p;
   test::apply_parameters(p, params);
@@ -663,7 +663,7 @@ TEST(SvgfValidate, ChannelsAndParameters) {
   c.channels.erase(c.channels.begin() + 1);
   const auto err = pipelines::validate(c);
   ASSERT_TRUE(err.has_value());
-  EXPECT_EQ(err->code, protocol::ErrorCode::MissingChannel);
+  EXPECT_EQ(err->problem, pipelines::ConfigProblem::MissingChannel);
   EXPECT_NE(err->message.find("albedo"), std::string::npos);
   EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 9}})).has_value());
   EXPECT_TRUE(pipelines::validate(svgf_config(16, 16, Format::F32, Format::F32, {{"atrous_iterations", 2.5}})).has_value());
@@ -686,7 +686,7 @@ TEST_F(SvgfTest, SplitMatchesCpuReferenceOverFrames) {
     int w, h;
     Format in, out;
     bool emission;
-    std::vector<protocol::Parameter> params;
+    std::vector<pipelines::ParameterValue> params;
     test::SvgfParams ref;
   };
   test::SvgfParams zero_iter;
@@ -846,7 +846,7 @@ TEST_F(SvgfTest, SplitPixelsWithoutASpecularLobeAddNoFilteredSpecular) {
 // ones, over frames with history.
 TEST_F(SvgfTest, JointChainKeepsTheSignalsApart) {
   const int w = 48, h = 32, iterations = 3;
-  const std::vector<protocol::Parameter> params = {{"atrous_iterations", iterations}};
+  const std::vector<pipelines::ParameterValue> params = {{"atrous_iterations", iterations}};
   auto a = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, params));
   auto b = pipelines::create(ctx(), svgf_split_config(w, h, Format::F32, Format::F32, params));
   auto* ga = dynamic_cast<pipelines::GraphPipeline*>(a.get());
@@ -916,45 +916,45 @@ TEST_F(SvgfTest, SplitDeviceBytesAreAsDocumented) {
 }
 
 TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
-  using protocol::ErrorCode;
+  using pipelines::ConfigProblem;
   EXPECT_FALSE(pipelines::validate(svgf_split_config(16, 16)).has_value());
   EXPECT_FALSE(pipelines::validate(svgf_split_config(16, 16, Format::F16, Format::F16, {}, true)).has_value());
-  auto expect = [](pipelines::SessionConfig c, ErrorCode code, const std::string& field, const std::string& part) {
+  auto expect = [](pipelines::SessionConfig c, ConfigProblem code, const std::string& field, const std::string& part) {
     const auto err = pipelines::validate(c);
     ASSERT_TRUE(err.has_value());
-    EXPECT_EQ(err->code, code);
+    EXPECT_EQ(err->problem, code);
     EXPECT_EQ(err->field, field);
     EXPECT_NE(err->message.find(part), std::string::npos) << err->message;
   };
   {  // radiance + diffuse + specular: the later of the clashing declarations is named
     auto c = svgf_split_config(16, 16);
     c.channels.push_back({ChannelId::Radiance, Format::F32});
-    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[6].id", "either radiance or diffuse + specular");
+    expect(c, ConfigProblem::InvalidChannel, "channels[6].id", "either radiance or diffuse + specular");
   }
   {  // radiance + specular
     auto c = svgf_config(16, 16);
     c.channels.push_back({ChannelId::Specular, Format::F32});
-    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "specular");
+    expect(c, ConfigProblem::InvalidChannel, "channels[5].id", "specular");
   }
   {  // radiance + diffuse
     auto c = svgf_config(16, 16);
     c.channels.push_back({ChannelId::Diffuse, Format::F32});
-    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "diffuse");
+    expect(c, ConfigProblem::InvalidChannel, "channels[5].id", "diffuse");
   }
   {  // diffuse alone
     auto c = svgf_split_config(16, 16);
     c.channels.erase(c.channels.begin() + 1);
-    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "specular");
+    expect(c, ConfigProblem::MissingChannel, "channels", "specular");
   }
   {  // specular alone
     auto c = svgf_split_config(16, 16);
     c.channels.erase(c.channels.begin());
-    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "diffuse");
+    expect(c, ConfigProblem::MissingChannel, "channels", "diffuse");
   }
   {  // no lighting channel at all
     auto c = svgf_config(16, 16);
     c.channels.erase(c.channels.begin());
-    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance, or diffuse and specular");
+    expect(c, ConfigProblem::MissingChannel, "channels", "radiance, or diffuse and specular");
   }
   // Lighting forms (docs/protocol.md §7.4): one form per signal, specular_lighting needs specular_albedo.
   auto lighting = [] {
@@ -968,17 +968,17 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
   {  // both forms of diffuse
     auto c = lighting();
     c.channels.push_back({ChannelId::Diffuse, Format::F32});
-    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[7].id", "diffuse or diffuse_lighting");
+    expect(c, ConfigProblem::InvalidChannel, "channels[7].id", "diffuse or diffuse_lighting");
   }
   {  // specular_lighting without its modulator
     auto c = lighting();
     c.channels.pop_back();
-    expect(c, ErrorCode::MissingChannel, "OPEN_SESSION.channels", "specular_albedo");
+    expect(c, ConfigProblem::MissingChannel, "channels", "specular_albedo");
   }
   {  // specular_albedo with radiance: nothing to modulate
     auto c = svgf_config(16, 16);
     c.channels.push_back({ChannelId::SpecularAlbedo, Format::F32});
-    expect(c, ErrorCode::InvalidChannel, "OPEN_SESSION.channels[5].id", "specular_albedo");
+    expect(c, ConfigProblem::InvalidChannel, "channels[5].id", "specular_albedo");
   }
   {  // svgf-fb computes its own specular modulator: specular_lighting is refused
     auto c = lighting();
@@ -988,7 +988,7 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
     c.channels.push_back({ChannelId::Roughness, Format::F32});
     const auto err = pipelines::validate(c);
     ASSERT_TRUE(err.has_value());
-    EXPECT_EQ(err->code, ErrorCode::InvalidChannel);
+    EXPECT_EQ(err->problem, ConfigProblem::InvalidChannel);
     EXPECT_NE(err->message.find("does not use channel specular_lighting"), std::string::npos) << err->message;
   }
   // Other pipelines keep their rules: passthrough takes diffuse + specular alongside radiance, and still
@@ -999,7 +999,7 @@ TEST(SvgfValidate, RadianceOrDiffuseAndSpecular) {
                                                       {ChannelId::Specular, Format::F32}}))
                    .has_value());
   expect(test::make_config("passthrough", 16, 16, {{ChannelId::Diffuse, Format::F32}, {ChannelId::Specular, Format::F32}}),
-         ErrorCode::MissingChannel, "OPEN_SESSION.channels", "radiance");
+         ConfigProblem::MissingChannel, "channels", "radiance");
 }
 
 
@@ -1116,7 +1116,7 @@ TEST_F(SvgfTest, TaaResetLeavesNoGhost) {
   Flat scene(w, h);
   std::vector<float> a(3 * n, 5.0f), b(3 * n);
   for (int i = 0; i < 3 * n; ++i) b[i] = 0.01f * (i % 17);
-  const std::vector<protocol::Parameter> taa = {{"taa_alpha", 0.1}};
+  const std::vector<pipelines::ParameterValue> taa = {{"taa_alpha", 0.1}};
   auto pipe = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, taa));
   for (int t = 0; t < 10; ++t) run(*pipe, scene.frame(a));
   auto fresh = pipelines::create(ctx(), svgf_config(w, h, Format::F32, Format::F32, taa));

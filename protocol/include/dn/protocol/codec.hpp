@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "dn/protocol/half.hpp"
 #include "dn/protocol/messages.hpp"
 
 namespace dn::protocol {
@@ -129,9 +130,5 @@ class MessageReader {
   size_t payload_filled_ = 0;
   DecodeError error_{};
 };
-
-// Half-precision helpers for the client and tests (the server never converts).
-uint16_t float_to_half(float value);
-float half_to_float(uint16_t bits);
 
 }  // namespace dn::protocol

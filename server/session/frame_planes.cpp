@@ -1,15 +1,14 @@
-#include "pipelines/frame_input.hpp"
+#include "session/frame_planes.hpp"
 
 #include <stdexcept>
 
-#include "dn/protocol/codec.hpp"
 
-namespace dn::pipelines {
+namespace dn::server {
 namespace {
 
 std::string format_name(protocol::Format f) { return f == protocol::Format::F16 ? "fp16" : "fp32"; }
 
-std::array<float, 2> motion_scale(protocol::MotionConvention convention, const SessionConfig& config) {
+std::array<float, 2> motion_scale(protocol::MotionConvention convention, const pipelines::SessionConfig& config) {
   switch (convention) {
     case protocol::MotionConvention::PixelsToPrevious:
       return {1.0f, 1.0f};
@@ -23,8 +22,8 @@ std::array<float, 2> motion_scale(protocol::MotionConvention convention, const S
 
 }  // namespace
 
-std::variant<FrameInput, PlaneProblem> frame_input(const protocol::Frame& frame, const SessionConfig& config) {
-  FrameInput input;
+std::variant<pipelines::FrameInput, PlaneProblem> frame_planes(const protocol::Frame& frame, const pipelines::SessionConfig& config) {
+  pipelines::FrameInput input;
   input.planes.resize(config.channels.size());
   std::vector<bool> seen(config.channels.size(), false);
   for (size_t i = 0; i < frame.planes.size(); ++i) {
@@ -65,10 +64,10 @@ std::variant<FrameInput, PlaneProblem> frame_input(const protocol::Frame& frame,
   return input;
 }
 
-FrameInput frame_input_or_throw(const protocol::Frame& frame, const SessionConfig& config) {
-  auto input = frame_input(frame, config);
+pipelines::FrameInput frame_planes_or_throw(const protocol::Frame& frame, const pipelines::SessionConfig& config) {
+  auto input = frame_planes(frame, config);
   if (auto* problem = std::get_if<PlaneProblem>(&input)) throw std::invalid_argument(problem->message);
-  return std::get<FrameInput>(std::move(input));
+  return std::get<pipelines::FrameInput>(std::move(input));
 }
 
-}  // namespace dn::pipelines
+}  // namespace dn::server

@@ -1,11 +1,11 @@
-// frame_input(): a FRAME's planes are checked once against the session (each
+// frame_planes(): a FRAME's planes are checked once against the session (each
 // declared channel exactly once, in its declared format, of its exact size)
 // and handed over in declaration order; the motion convention becomes one
 // scale to pixels towards the previous frame.
 #include <gtest/gtest.h>
 
 #include "frames.hpp"
-#include "pipelines/frame_input.hpp"
+#include "session/frame_planes.hpp"
 
 namespace dn {
 namespace {
@@ -28,15 +28,15 @@ test::HostFrame frame_3x2() {
   return f;
 }
 
-pipelines::PlaneProblem problem_of(const test::HostFrame& f) {
-  auto r = pipelines::frame_input(f.view(), config_3x2());
-  EXPECT_TRUE(std::holds_alternative<pipelines::PlaneProblem>(r));
-  return std::holds_alternative<pipelines::PlaneProblem>(r) ? std::get<pipelines::PlaneProblem>(r) : pipelines::PlaneProblem{};
+server::PlaneProblem problem_of(const test::HostFrame& f) {
+  auto r = server::frame_planes(f.view(), config_3x2());
+  EXPECT_TRUE(std::holds_alternative<server::PlaneProblem>(r));
+  return std::holds_alternative<server::PlaneProblem>(r) ? std::get<server::PlaneProblem>(r) : server::PlaneProblem{};
 }
 
-TEST(FrameInput, PlanesComeInDeclarationOrder) {
+TEST(FramePlanes, PlanesComeInDeclarationOrder) {
   const test::HostFrame f = frame_3x2();
-  const auto input = pipelines::frame_input_or_throw(f.view(), config_3x2());
+  const auto input = server::frame_planes_or_throw(f.view(), config_3x2());
   ASSERT_EQ(input.planes.size(), 4u);
   EXPECT_EQ(input.planes[0].data(), f.plane(ChannelId::Radiance).bytes.data());
   EXPECT_EQ(input.planes[1].data(), f.plane(ChannelId::Normal).bytes.data());
@@ -46,7 +46,7 @@ TEST(FrameInput, PlanesComeInDeclarationOrder) {
   EXPECT_FALSE(input.reset);
 }
 
-TEST(FrameInput, EachPlaneProblemIsNamed) {
+TEST(FramePlanes, EachPlaneProblemIsNamed) {
   test::HostFrame f = frame_3x2();
   f.add(ChannelId::Albedo, Format::F32, std::vector<float>(3 * 2 * 3, 1.0f));
   auto p = problem_of(f);
@@ -79,10 +79,10 @@ TEST(FrameInput, EachPlaneProblemIsNamed) {
   EXPECT_EQ(p.field, "FRAME.planes");
   EXPECT_NE(p.message.find("'motion' declared at OPEN_SESSION is missing"), std::string::npos) << p.message;
 
-  EXPECT_THROW(pipelines::frame_input_or_throw(f.view(), config_3x2()), std::invalid_argument);
+  EXPECT_THROW(server::frame_planes_or_throw(f.view(), config_3x2()), std::invalid_argument);
 }
 
-TEST(FrameInput, MotionConventionsBecomeOneScaleToPreviousPixels) {
+TEST(FramePlanes, MotionConventionsBecomeOneScaleToPreviousPixels) {
   test::HostFrame f = frame_3x2();
   const std::pair<protocol::MotionConvention, std::array<float, 2>> cases[] = {
       {protocol::MotionConvention::PixelsToPrevious, {1.0f, 1.0f}},
@@ -90,18 +90,18 @@ TEST(FrameInput, MotionConventionsBecomeOneScaleToPreviousPixels) {
       {protocol::MotionConvention::UvToPrevious, {3.0f, 2.0f}}};
   for (const auto& [convention, scale] : cases) {
     f.info.motion = convention;
-    EXPECT_EQ(pipelines::frame_input_or_throw(f.view(), config_3x2()).motion_to_previous_pixels, scale);
+    EXPECT_EQ(server::frame_planes_or_throw(f.view(), config_3x2()).motion_to_previous_pixels, scale);
   }
 }
 
-TEST(FrameInput, ResetAndCameraPassThrough) {
+TEST(FramePlanes, ResetAndCameraPassThrough) {
   test::HostFrame f = frame_3x2();
   f.info.flags = protocol::kFrameReset;
   for (int i = 0; i < 16; ++i) {
     f.info.view[i] = static_cast<float>(i);
     f.info.projection[i] = static_cast<float>(100 + i);
   }
-  const auto input = pipelines::frame_input_or_throw(f.view(), config_3x2());
+  const auto input = server::frame_planes_or_throw(f.view(), config_3x2());
   EXPECT_TRUE(input.reset);
   EXPECT_EQ(input.view, f.info.view);
   EXPECT_EQ(input.projection, f.info.projection);
