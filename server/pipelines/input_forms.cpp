@@ -64,9 +64,15 @@ std::set<Kernel> kernels_of(const GraphSpec& graph) {
 std::vector<std::pair<uint64_t, PreparedPipeline>> prepared_forms(const PipelineDescription& p) {
   const uint64_t base = p.required_channels & ~kSignals;
   const bool reads_extras = p.name != "passthrough";
-  std::vector<uint64_t> extras;  // optional channels read one by one
-  for (ChannelId id : {ChannelId::Emission, ChannelId::Roughness, ChannelId::ReflectionFootprint, ChannelId::SampleCount})
-    if (reads_extras && (p.optional_channels & protocol::channel_bit(id))) extras.push_back(protocol::channel_bit(id));
+  // Optional channels read one by one: all but the signals, the statistics
+  // (all four or none) and the extra samples (0 to 3 per signal form).
+  const uint64_t samples = extra_samples(bits({ChannelId::Radiance}), protocol::kMaxExtraSamples) |
+                           extra_samples(bits({ChannelId::Diffuse, ChannelId::Specular}), protocol::kMaxExtraSamples);
+  std::vector<uint64_t> extras;
+  for (const auto& c : protocol::kChannels) {
+    const uint64_t bit = protocol::channel_bit(c.id);
+    if (reads_extras && (p.optional_channels & bit) && !(bit & (kSignals | kStatistics | samples))) extras.push_back(bit);
+  }
   if (reads_extras && (p.optional_channels & kStatistics) == kStatistics) extras.push_back(kStatistics);
   const bool takes_samples = reads_extras && (p.optional_channels & extra_samples(bits({ChannelId::Radiance}), 1)) != 0;
 

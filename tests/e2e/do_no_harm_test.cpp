@@ -9,7 +9,11 @@
 // is still above the input's relMSE over these three young frames at 64x36;
 // the 128x72 ones below are not.) (progressive blurs a pixel without its
 // luminance weight until its history holds luminance_min_age samples, as
-// paper 004 does, so three frames are too few for it.)
+// paper 004 does, so three frames are too few for it.) image, one frame at a
+// time, with albedo and normal (and depth); from the colour alone its RMSE
+// on these 1-spp frames is 0.16 % above the input's (the mirrored light's
+// highlight is pulled towards its surroundings), its relMSE 0.62 times it:
+// not asserted here.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -61,7 +65,10 @@ TEST_F(DoNoHarm, CyclesFixturesComeOutCloserToTheReferenceThanTheyWentIn) {
   ServerProcess server;
   const char* split = "--channels diffuse_lighting,specular_lighting,specular_albedo,albedo,normal,depth,motion,emission";
   for (const Case& c : {Case{"nodd", "svgf", ""}, Case{"frame", "svgf", ""}, Case{"nodd", "svgf", split},
-                        Case{"frame", "svgf-fb", ""}, Case{"frame", "reflect", ""}}) {
+                        Case{"frame", "svgf-fb", ""}, Case{"frame", "reflect", ""},
+                        Case{"nodd", "image", "--channels radiance,albedo,normal"},
+                        Case{"frame", "image", "--channels radiance,albedo,normal"},
+                        Case{"frame", "image", "--channels radiance,albedo,normal,depth"}}) {
     SCOPED_TRACE(std::string(c.stem) + " " + c.pipeline + " " + c.params);
     const auto s = denoise(server, c, dir_);
     ASSERT_TRUE(s.count("input_rmse") && s.count("rmse")) << "dn denoise --summary lacks its columns";
@@ -77,14 +84,15 @@ TEST_F(DoNoHarm, CyclesFixturesComeOutCloserToTheReferenceThanTheyWentIn) {
 // mirror's highlight trail: relMSE 0.23 on the fifth frame, input 0.070.)
 TEST_F(DoNoHarm, FourSamplesPerPixelComeOutCloserThanTheyWentIn) {
   ServerProcess server;
-  for (const char* pipeline : {"svgf", "svgf-fb", "reflect", "progressive", "stat-temporal"}) {
-    for (const char* params : {"", "--warmup 4"}) {
+  for (const char* pipeline : {"svgf", "svgf-fb", "reflect", "progressive", "stat-temporal", "image"}) {
+    for (std::string params : {"", "--warmup 4"}) {
+      if (std::string(pipeline) == "image") params += " --channels radiance,albedo,normal,depth";
       SCOPED_TRACE(std::string(pipeline) + " " + params);
-      const auto s = denoise(server, Case{"wide_spp4", pipeline, params}, dir_, "wide_ref");
+      const auto s = denoise(server, Case{"wide_spp4", pipeline, params.c_str()}, dir_, "wide_ref");
       ASSERT_TRUE(s.count("input_rmse") && s.count("worse_rmse")) << "dn denoise --summary lacks its columns";
       EXPECT_LT(s.at("rmse"), s.at("input_rmse"));
       EXPECT_LT(s.at("relmse"), s.at("input_relmse"));
-      if (std::string(params) == "--warmup 4") EXPECT_EQ(s.at("worse_rmse") + s.at("worse_relmse"), 0.0);
+      if (params.find("--warmup 4") != std::string::npos) EXPECT_EQ(s.at("worse_rmse") + s.at("worse_relmse"), 0.0);
     }
   }
 }

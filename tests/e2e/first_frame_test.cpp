@@ -32,8 +32,8 @@ struct Form {
 // lighting form, the extras each pipeline requires, and each optional
 // channel the pipeline reads present or not: emission (svgf, svgf-fb,
 // reflect, progressive), roughness (svgf), reflection_footprint (reflect),
-// sample_count (progressive), the sample statistics (stat-temporal), and 0 to
-// 3 extra samples with radiance or diffuse + specular (svgf, svgf-fb, reflect).
+// sample_count (progressive), the sample statistics (stat-temporal), albedo,
+// normal and depth (image), and 0 to 3 extra samples with radiance or diffuse + specular (svgf, svgf-fb, reflect).
 std::vector<Form> input_forms() {
   using C = ChannelId;
   using F = protocol::SampleField;
@@ -87,6 +87,8 @@ std::vector<Form> input_forms() {
                              {"stat", join({stat_frame, statistics})},
                              {"stat-temporal", join({stat_frame, statistics, {C::Depth, C::Motion}})},
                              {"stat-temporal", join({stat_frame, {C::Depth, C::Motion}})}};
+  for (const auto& guides : with_subsets({C::Radiance}, {C::Albedo, C::Normal, C::Depth}))
+    forms.push_back({"image", guides});
   for (const auto& s : svgf_signals) {
     for (const auto& extras : with_subsets(join({s, gbuffer}), {C::Emission, C::Roughness}))
       for (const auto& samples : with_samples(s)) forms.push_back({"svgf", join({extras, samples})});

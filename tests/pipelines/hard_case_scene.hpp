@@ -70,6 +70,7 @@ inline const std::vector<PipelineKind>& kinds() {
        {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Sample1Radiance, C::Sample1Normal, C::Sample1Depth,
         C::Sample1Offset},
        {C::Sample1Normal, C::Sample1Depth, C::Sample1Offset}, false, {C::Radiance, C::Sample1Radiance}},
+      {"image", "image", {C::Radiance, C::Albedo, C::Normal, C::Depth}, {C::Albedo, C::Normal, C::Depth}, true},
       {"progressive", "progressive",
        {C::Radiance, C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::SampleCount},
        {C::Albedo, C::Normal, C::Depth, C::Motion, C::Emission, C::SampleCount}},
@@ -180,8 +181,8 @@ inline test::HostFrame frame(const PipelineKind& kind, Format planes, bool reset
 }
 
 inline std::unique_ptr<pipelines::Pipeline> open(const PipelineKind& kind, Format planes, Format output = Format::F32,
-                                                 std::vector<protocol::Parameter> params = {}) {
-  std::vector<protocol::ChannelDecl> channels;
+                                                 std::vector<pipelines::ParameterValue> params = {}) {
+  std::vector<pipelines::InputChannel> channels;
   for (ChannelId id : kind.declared) channels.push_back({id, format_of(id, planes)});
   return pipelines::create(test::context(),
                            test::make_config(kind.pipeline, kW, kH, channels, output, std::move(params)));
