@@ -36,7 +36,7 @@ std::pair<std::string, std::string> split_assignment(const std::string& text, co
 
 const Args::Spec* Args::find(const std::string& name) const {
   for (const auto& s : specs_)
-    if (s.name == name) return &s;
+    if (s.name == name || s.alias == "--" + name) return &s;
   return nullptr;
 }
 
@@ -57,6 +57,13 @@ void Args::parse(const std::vector<std::string>& argv) {
       for (const auto& s : specs_)
         if (!s.alias.empty() && s.alias == a) spec = &s;
       if (!spec) throw UsageError("unknown option '" + a + "' (see 'dn " + command_ + " --help')");
+    } else if (positionals_.size() < max_positionals_) {
+      positionals_.push_back(a);
+      continue;
+    } else if (max_positionals_ > 0) {
+      throw UsageError("unexpected argument '" + a + "': dn " + command_ + " takes " +
+                       (max_positionals_ == 1 ? "one " : std::to_string(max_positionals_) + " ") + positional_metavar_ +
+                       " and has '" + positionals_.back() + "' already (options take the form --name VALUE)");
     } else {
       throw UsageError("unexpected argument '" + a + "' (options take the form --name VALUE)");
     }

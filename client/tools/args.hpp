@@ -1,5 +1,6 @@
 // A small command-line parser for the dn tool: "--name value", "--name=value",
-// boolean flags, repeatable options and short aliases ("-r").
+// boolean flags, repeatable options, aliases ("-r", "--alb") and, for a
+// command that takes them, positional arguments.
 #pragma once
 
 #include <map>
@@ -20,7 +21,7 @@ class Args {
  public:
   struct Spec {
     std::string name;        // long name without "--"
-    std::string alias;       // short alias with "-", e.g. "-r"; may be empty
+    std::string alias;       // short alias "-r" or long alias "--alb"; may be empty
     bool takes_value = true;
     bool repeatable = false;
     std::string help;        // one line, printed by usage()
@@ -28,10 +29,16 @@ class Args {
   };
 
   Args(std::string command, std::vector<Spec> specs) : command_(std::move(command)), specs_(std::move(specs)) {}
+  // A command that takes up to `max` positional arguments, named `metavar` in messages.
+  Args(std::string command, std::vector<Spec> specs, std::string metavar, size_t max)
+      : command_(std::move(command)), specs_(std::move(specs)), positional_metavar_(std::move(metavar)),
+        max_positionals_(max) {}
 
   // Throws UsageError on unknown options, missing values, repeated
-  // non-repeatable options and positional arguments.
+  // non-repeatable options and positional arguments beyond the command's.
   void parse(const std::vector<std::string>& argv);
+
+  const std::vector<std::string>& positionals() const { return positionals_; }
 
   bool has(const std::string& name) const { return values_.count(name) != 0; }
   std::optional<std::string> get(const std::string& name) const;
@@ -50,6 +57,9 @@ class Args {
   std::string command_;
   std::vector<Spec> specs_;
   std::map<std::string, std::vector<std::string>> values_;
+  std::string positional_metavar_;
+  size_t max_positionals_ = 0;
+  std::vector<std::string> positionals_;
 };
 
 long long parse_int(const std::string& text, const std::string& what);

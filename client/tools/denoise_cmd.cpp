@@ -1,15 +1,19 @@
-// dn denoise: stream an EXR sequence through a server session, pipelined.
+// dn denoise: stream a frame sequence or one file (EXR with its channel
+// layout, or PFM / PNG colour with side files) through a server session, pipelined.
+#include <cctype>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <future>
 #include <map>
 #include <optional>
 
 #include "args.hpp"
 #include "camera_recovery.hpp"
+#include "colour_frames.hpp"
 #include "commands.hpp"
 #include "dn/client/client.hpp"
 #include "dn/client/watch_file.hpp"
@@ -24,6 +28,7 @@
 #include "reference_threshold.hpp"
 #include "reflection_features.hpp"
 #include "sequence_metrics.hpp"
+#include "side_files.hpp"
 #include "statistics_kind.hpp"
 #include "unexplained_note.hpp"
 
@@ -37,17 +42,23 @@ namespace {
 const std::vector<Args::Spec> kSpecs = {
     server_option(),
     {"pipeline", "", true, false, "denoising pipeline (svgf, svgf-fb, ...; see 'dn ping')", "NAME"},
-    {"input", "", true, false, "input EXR path pattern, e.g. 'in/frame_%04d.exr' or 'in/####.exr'", "PATTERN"},
+    {"input", "", true, false, "the input IN as an option (the positional IN is the same)", "IN"},
+    {"albedo", "--alb", true, false,
+     "albedo image, sent as the albedo channel: one file, or a pattern with the input's frame numbers "
+     "(.exr, .pfm, .png: sRGB)",
+     "FILE"},
+    {"normal", "--nrm", true, false, "normal image, sent as the normal channel, as --albedo (.png: v in [0,1] is 2v-1)",
+     "FILE"},
     {"start", "", true, false, "first frame number (default: the lowest number of an existing input file)", "N"},
     {"end", "", true, false,
      "last frame number, inclusive (default: the end of the run of existing files from --start)", "M"},
     {"step", "", true, false, "frame number step (default 1)", "S"},
     {"output", "-o", true, false,
-     "output path pattern; the format follows the extension: .exr (half unless --exr-float), .png (tone-mapped) "
-     "or .pfm (float)",
-     "PATTERN"},
+     "output file (a single-file IN) or pattern; the format follows the extension: .exr (half unless --exr-float), "
+     ".png (tone-mapped) or .pfm (float)",
+     "OUT"},
     {"png", "", true, false, "also write tone-mapped 8-bit PNGs to this pattern (.png)", "PATTERN"},
-    {"preset", "", true, false, "channel layout of the input: dnrender | cycles | auto (default auto)", "NAME"},
+    {"preset", "", true, false, "channel layout of an EXR input: dnrender | cycles | auto (default auto)", "NAME"},
     {"layer", "", true, false, "Cycles view layer name (default: detected from '<layer>.Combined.R')", "NAME"},
     {"channel", "", true, true, "map a protocol channel: NAME=LAYER | NAME=A+B | NAME=C1,C2,C3 [@cycles]", "MAP"},
     {"channels", "", true, false, "send exactly these protocol channels (comma-separated)", "LIST"},
@@ -82,11 +93,14 @@ const std::vector<Args::Spec> kSpecs = {
 };
 
 constexpr const char* kUsage =
-    "usage: dn denoise [--server URL] --pipeline NAME --input PATTERN [--start N] [--end M] [--output PATTERN]\n"
-    "                  [--png PATTERN] [--preset dnrender|cycles|auto] [--channel NAME=LAYER ...] [--fp16]\n"
-    "                  [--param NAME=VALUE ...] [-r PATTERN [--fail X]] [--in-flight K] [--token-file FILE]\n"
-    "                  [--camera FILE]\n"
+    "usage: dn denoise IN [-o OUT] --pipeline NAME [--server URL] [--albedo FILE] [--normal FILE]\n"
+    "                  [--start N] [--end M] [--png PATTERN] [--preset dnrender|cycles|auto]\n"
+    "                  [--channel NAME=LAYER ...] [--fp16] [--param NAME=VALUE ...] [-r PATTERN [--fail X]]\n"
+    "                  [--in-flight K] [--token-file FILE] [--camera FILE]\n"
     "\n"
+    "IN is one file or a frame pattern ('in/frame_%04d.exr', 'in/####.png'); a single file is one\n"
+    "frame and its OUT names one file. The format follows the extension: .exr (channels by --preset),\n"
+    ".pfm or .png (colour only; --albedo/--alb and --normal/--nrm add those channels).\n"
     "Without --start/--end the frames are the run of consecutive existing input files from the\n"
     "lowest number found. Every input and reference file is checked before anything is sent.\n"
     "Exit status: 0 success; 1 error (server, connection, files); 2 bad command line; 3 the\n"
@@ -131,6 +145,26 @@ struct Totals {
   double rmse = 0, relmse = 0, ssim = 0, temporal = 0;
 };
 
+// IN: positional, or --input as scripts written before it give it; exactly one.
+std::string input_argument(const Args& args) {
+  const auto& positional = args.positionals();
+  const auto option = args.get("input");
+  if (!positional.empty() && option)
+    throw UsageError("the input is given twice, '" + positional.front() + "' and --input '" + *option +
+                     "': give one");
+  if (positional.empty() && !option)
+    throw UsageError("missing the input: dn denoise IN -o OUT --pipeline NAME (IN a file or a frame pattern)");
+  return option ? *option : positional.front();
+}
+
+// .pfm and .png by extension (any case); anything else is read as EXR, as
+// every input was before PFM and PNG were taken.
+ImageFormat input_format_for(const std::string& input) {
+  std::string ext = std::filesystem::path(input).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".pfm" ? ImageFormat::Pfm : ext == ".png" ? ImageFormat::Png : ImageFormat::Exr;
+}
+
 // Device time of a frame: its passes, without the host-side upload and download stages.
 double device_pass_ms(const client::Result& r) {
   double ms = 0;
@@ -142,7 +176,7 @@ double device_pass_ms(const client::Result& r) {
 }  // namespace
 
 int run_denoise(const std::vector<std::string>& argv) {
-  Args args("denoise", kSpecs);
+  Args args("denoise", kSpecs, "IN", 1);
   args.parse(argv);
   if (args.has("help")) {
     std::printf("%s\noptions:\n%s", kUsage, args.usage().c_str());
@@ -158,7 +192,13 @@ int run_denoise(const std::vector<std::string>& argv) {
     throw UsageError(std::string("--preset: ") + e.what());
   }
   const std::string pipeline_name = args.require("pipeline");
-  const std::string input = args.require("input");
+  const std::string input = input_argument(args);
+  const ImageFormat input_format = input_format_for(input);
+  if (input_format != ImageFormat::Exr)
+    for (const char* exr_only : {"preset", "layer", "channel", "channels", "camera"})
+      if (args.has(exr_only))
+        throw UsageError(std::string("--") + exr_only + " applies to EXR input only; '" + input +
+                         "' gives the colour alone (add --albedo / --normal for those channels)");
   const auto output = args.get("output");
   const auto png = args.get("png");
   const auto reference = args.get("reference");
@@ -242,23 +282,43 @@ int run_denoise(const std::vector<std::string>& argv) {
     for (long long n = range.start; n <= range.end; n += step) frames.push_back(n);
   } else {
     if (end_given && *end_given != start_given.value_or(0))
-      throw UsageError("--input has no frame-number placeholder (%04d or ####)");
+      throw UsageError("the input '" + input + "' has no frame-number placeholder (%04d or ####)");
     frames.push_back(start_given.value_or(0));
+    // One file in, one file out: a pattern here would be filled with a frame number nobody gave.
+    for (const auto* opt : {&output, &png, &reference, &reference2})
+      if (*opt && has_frame_placeholder(**opt))
+        throw UsageError("'" + **opt + "' has a frame-number placeholder, but the input '" + input +
+                         "' is a single file: give one file");
   }
   for (const auto* opt : {&output, &png, &reference, &reference2})
     if (*opt && frames.size() > 1 && !has_frame_placeholder(**opt))
       throw UsageError("output/reference pattern '" + **opt + "' has no frame-number placeholder (%04d or ####)");
+  const std::vector<SideFile> sides = side_files_from(args, sequence);
+  for (const auto& s : sides)
+    for (const auto& o : overrides)
+      if (o.id == s.id)
+        throw UsageError(s.option + " and --channel " + std::string(protocol::find_channel(s.id)->name) +
+                         "=... both give the " + std::string(protocol::find_channel(s.id)->name) + " channel");
 
   // Every file the run reads, before anything is sent.
-  require_frame_files(frames, input, "--input");
+  require_frame_files(frames, input, args.has("input") ? "--input" : "input");
+  for (const auto& s : sides) require_frame_files(frames, s.pattern, s.option);
   if (reference) require_frame_files(frames, *reference, "-r/--reference");
   if (reference2) require_frame_files(frames, *reference2, "--reference2");
 
   // ---- first frame: size and channel layout ---------------------------------
   const std::string first_path = format_frame_path(input, frames.front());
-  image::ExrReader first(first_path);
-  const int width = first.width(), height = first.height();
-  Preset preset = make_preset(preset_name, first.channels(), args.get_or("layer", ""));
+  std::optional<image::ExrReader> first;   // an EXR input's first frame, open
+  std::optional<LoadedFrame> first_colour;  // a PFM / PNG input's first frame, read
+  Preset preset;
+  if (input_format == ImageFormat::Exr) {
+    first.emplace(first_path);
+    preset = make_preset(preset_name, first->channels(), args.get_or("layer", ""));
+  } else {
+    first_colour = load_colour_frame(input, input_format, frames.front());
+  }
+  const int width = first ? first->width() : first_colour->width;
+  const int height = first ? first->height() : first_colour->height;
   // ---- connect and open the session -----------------------------------------
   client::ConnectOptions copts;
   copts.client_name = "dn-cli";
@@ -272,24 +332,60 @@ int run_denoise(const std::vector<std::string>& argv) {
     throw UsageError("--pipeline: server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
                      "' (it offers: " + names + ")");
   }
-  const std::vector<ResolvedChannel> plan = plan_channels(preset, overrides, pipeline, only, first.channels(), first_path);
-  const std::optional<RoughGuidePlan> rough_guides = plan_rough_guides(preset, plan, first.channels());
-  apply_statistics_kind(first.string_attribute("dn.stat_samples"), first_path, plan, pipeline, params);
-  if (const std::string note = unexplained_pixels_note(preset, plan, rough_guides ? &*rough_guides : nullptr, pipeline, params); !note.empty())
-    std::fprintf(stderr, "dn: %s\n", note.c_str());
-  // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp),
-  // looked for only when the pipeline or a planned channel's conversion uses them.
-  FrameCameras cameras(args.get_or("camera", ""), preset, first.channels(), plan_needs_camera(pipeline, plan));
-  auto load = [&](size_t i) {
-    const std::string path = format_frame_path(input, frames[i]);
-    image::ExrReader exr = (i == 0) ? std::move(first) : image::ExrReader(path);
-    LoadedFrame lf = load_frame(exr, plan, frames[i], rough_guides ? &*rough_guides : nullptr);
-    cameras.apply(exr, frames[i], lf.camera);
-    apply_camera_conversions(lf, plan, exr);
-    if (rough_guides) apply_rough_guides(lf, *rough_guides);
-    derive_reflection_features(lf, plan, exr);
-    return lf;
-  };
+  check_side_channels(pipeline, sides, pipeline_name);
+
+  // What each channel is made from, for the log: "radiance <- in.png".
+  std::vector<std::pair<ChannelId, std::string>> sources;
+  std::vector<ResolvedChannel> plan;  // an EXR input's channels, from its layout
+  std::optional<RoughGuidePlan> rough_guides;
+  std::optional<FrameCameras> cameras;
+  std::function<LoadedFrame(size_t)> load;
+  if (first) {
+    // The side files' channels are theirs: the EXR layout plans the others.
+    std::optional<protocol::PipelineInfo> layout_pipeline;
+    if (pipeline) layout_pipeline = without_side_channels(*pipeline, sides);
+    std::optional<std::vector<ChannelId>> layout_only = only;
+    if (layout_only) std::erase_if(*layout_only, [&](ChannelId id) { return is_side_channel(sides, id); });
+    plan = plan_channels(preset, overrides, layout_pipeline ? &*layout_pipeline : nullptr, layout_only,
+                         first->channels(), first_path);
+    // A server that lists no pipelines gets the layout's usual channels, albedo and normal among them.
+    std::erase_if(plan, [&](const ResolvedChannel& ch) { return is_side_channel(sides, ch.id); });
+    rough_guides = plan_rough_guides(preset, plan, first->channels());
+    apply_statistics_kind(first->string_attribute("dn.stat_samples"), first_path, plan, pipeline, params);
+    if (const std::string note = unexplained_pixels_note(preset, plan, rough_guides ? &*rough_guides : nullptr, pipeline, params); !note.empty())
+      std::fprintf(stderr, "dn: %s\n", note.c_str());
+    // Cameras: --camera FILE > the header's dn.* > recovered from the Position pass > identity (camera_recovery.hpp),
+    // looked for only when the pipeline or a planned channel's conversion uses them.
+    cameras.emplace(args.get_or("camera", ""), preset, first->channels(), plan_needs_camera(pipeline, plan));
+    for (const auto& ch : plan) {
+      std::string where;
+      if (rough_guides)
+        for (const auto& r : rough_guides->channels)
+          if (r.id == ch.id)
+            where = " where " + rough_guides->describe_rule() + ", else " + r.describe();
+      sources.emplace_back(ch.id, ch.describe() + where);
+    }
+    load = [&](size_t i) {
+      const std::string path = format_frame_path(input, frames[i]);
+      image::ExrReader exr = (i == 0) ? std::move(*first) : image::ExrReader(path);
+      LoadedFrame lf = load_frame(exr, plan, frames[i], rough_guides ? &*rough_guides : nullptr);
+      cameras->apply(exr, frames[i], lf.camera);
+      apply_camera_conversions(lf, plan, exr);
+      if (rough_guides) apply_rough_guides(lf, *rough_guides);
+      derive_reflection_features(lf, plan, exr);
+      add_side_planes(lf, sides);
+      return lf;
+    };
+  } else {
+    plan_colour_channels(pipeline, pipeline_name, sides, first_path);
+    sources.emplace_back(ChannelId::Radiance, input);
+    load = [&](size_t i) {
+      LoadedFrame lf = (i == 0) ? std::move(*first_colour) : load_colour_frame(input, input_format, frames[i]);
+      add_side_planes(lf, sides);
+      return lf;
+    };
+  }
+  for (const auto& s : sides) sources.emplace_back(s.id, s.pattern + " (" + s.option + ")");
   // The first frame is made in full (channels, camera, conversions) before the session opens: a file that
   // cannot give what the pipeline needs is refused with nothing opened on the server.
   LoadedFrame first_frame = load(0);
@@ -301,21 +397,15 @@ int run_denoise(const std::vector<std::string>& argv) {
   desc.output_format = output_format;
   desc.parameters = params;
   desc.max_in_flight = uint32_t(in_flight);
-  for (const auto& ch : plan) desc.channel(ch.id, wire_format(ch.id, fp16));
+  for (const auto& source : sources) desc.channel(source.first, wire_format(source.first, fp16));
 
   if (!quiet) {
-    std::fprintf(stderr, "dn: %s (%s), %dx%d, pipeline %s, preset %s, %zu frame%s\n", conn.endpoint().c_str(),
-                 conn.welcome().device_name.c_str(), width, height, pipeline_name.c_str(), preset.name.c_str(),
+    const std::string layout = first ? "preset " + preset.name : std::string(input_format == ImageFormat::Png ? "PNG" : "PFM") + " colour";
+    std::fprintf(stderr, "dn: %s (%s), %dx%d, pipeline %s, %s, %zu frame%s\n", conn.endpoint().c_str(),
+                 conn.welcome().device_name.c_str(), width, height, pipeline_name.c_str(), layout.c_str(),
                  frames.size(), frames.size() == 1 ? "" : "s");
-    for (const auto& ch : plan) {
-      std::string where;
-      if (rough_guides)
-        for (const auto& r : rough_guides->channels)
-          if (r.id == ch.id)
-            where = " where " + rough_guides->describe_rule() + ", else " + r.describe();
-      std::fprintf(stderr, "dn:   %-12s <- %s%s\n", protocol::find_channel(ch.id)->name.data(), ch.describe().c_str(),
-                   where.c_str());
-    }
+    for (const auto& [id, from] : sources)
+      std::fprintf(stderr, "dn:   %-12s <- %s\n", protocol::find_channel(id)->name.data(), from.c_str());
   }
   client::Session session = [&] {
     try {
@@ -433,7 +523,7 @@ int run_denoise(const std::vector<std::string>& argv) {
         line += (i ? ", " : "") + r.timings[i].name + " " + fmt("%.2f", r.timings[i].milliseconds);
       line += "]";
     }
-    if (auto cam = cameras.record(number); cam && cam->source == FrameCameras::Source::Recovered)
+    if (auto cam = cameras ? cameras->record(number) : std::nullopt; cam && cam->source == FrameCameras::Source::Recovered)
       line += fmt("  camera residual %.3f px", cam->rms_px);
     std::string status = fmt("e2e %.1f ms", r.latency.count()) + fmt("  server %.1f ms", r.total_timing_ms());
     if (m) {
@@ -503,7 +593,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     const double n = double(std::max<size_t>(totals.frames, 1));
     std::fprintf(stderr, "dn: %zu frames in %.2f s (%.2f fps), mean e2e %.1f ms, mean server %.1f ms\n", totals.frames,
                  wall, wall > 0 ? double(handled) / wall : 0.0, totals.latency_ms / n, totals.server_ms / n);
-    std::fprintf(stderr, "dn: %s\n", cameras.summary().c_str());
+    if (cameras) std::fprintf(stderr, "dn: %s\n", cameras->summary().c_str());
   }
   if (reference && totals.with_ref) {
     const double n = double(totals.with_ref);

@@ -74,6 +74,12 @@ FrameRange resolve_frame_range(const std::string& pattern, std::optional<long lo
 }
 
 void require_frame_files(const std::vector<long long>& frames, const std::string& pattern, const std::string& what) {
+  // One file for every frame: named once, without a frame number.
+  if (!has_frame_placeholder(pattern)) {
+    const std::string path = format_frame_path(pattern, 0);
+    if (!fs::exists(path)) throw std::runtime_error(what + ": " + path + " does not exist");
+    return;
+  }
   std::string first;
   size_t missing = 0;
   for (long long n : frames) {

@@ -28,7 +28,8 @@ FrameRange resolve_frame_range(const std::string& pattern, std::optional<long lo
 
 // Throws std::runtime_error naming the first missing file of `frames` in
 // `pattern` (and how many others are missing), as "<what>: PATH (frame N)
-// does not exist".
+// does not exist"; a pattern without a placeholder is one file for every
+// frame: "<what>: PATH does not exist".
 void require_frame_files(const std::vector<long long>& frames, const std::string& pattern, const std::string& what);
 
 }  // namespace dn::cli

@@ -16,7 +16,7 @@ std::string help() {
              "usage: dn <command> [options]\n"
              "\n"
              "commands:\n"
-             "  denoise   denoise an EXR sequence through a server session\n"
+             "  denoise   denoise an image or a sequence (EXR, PFM, PNG) through a server session\n"
              "  watch     attach to a running session and write its newest frames\n"
              "  preview   attach to a running session and show it live in a browser\n"
              "  ping      handshake, server limits and pipelines, round-trip time\n"

@@ -1,0 +1,112 @@
+// `dn denoise` on the files people already have (oidnDenoise's PFM and PNG,
+// with albedo and normal side files) against a real dnserver: passthrough
+// returns the colour, so the output file must equal the input file.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "command.hpp"
+#include "dn/image/pfm.hpp"
+#include "dn/image/png.hpp"
+#include "dn/image/png_read.hpp"
+#include "server_process.hpp"
+
+namespace dn::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int W = 16, H = 8;
+
+class DenoiseFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("dn-denoise-files-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  // dn denoise with `args` against `server`; its exit status, `output` its stdout and stderr.
+  int dn_denoise(const ServerProcess& server, const std::string& args, std::string& output) const {
+    return run_command(std::string(DN_DN_PATH) + " denoise --server " + server.unix_url() + " " + args, output);
+  }
+  fs::path dir_;
+};
+
+// 8-bit sRGB in, passthrough, 8-bit sRGB out: --tonemap clamp makes the
+// output's encoding the inverse of the input's decoding.
+TEST_F(DenoiseFiles, PngThroughPassthroughIsTheSamePng) {
+  std::vector<uint8_t> srgb(size_t(W * H * 3));
+  for (size_t i = 0; i < srgb.size(); ++i) srgb[i] = uint8_t((i * 97 + 13) % 256);
+  srgb[0] = 0;
+  srgb[1] = 255;
+  image::write_png_rgb8(path("in.png"), W, H, srgb.data());
+  ServerProcess server;
+  std::string log;
+  ASSERT_EQ(dn_denoise(server, "'" + path("in.png") + "' -o '" + path("out.png") + "' --pipeline passthrough --tonemap clamp",
+                       log),
+            0)
+      << log;
+  int w = 0, h = 0;
+  const std::vector<float> in = image::read_png_rgb(path("in.png"), w, h, image::PngTransfer::Linear);
+  const std::vector<float> out = image::read_png_rgb(path("out.png"), w, h, image::PngTransfer::Linear);
+  ASSERT_EQ(w, W);
+  ASSERT_EQ(h, H);
+  ASSERT_EQ(out.size(), in.size());
+  for (size_t i = 0; i < in.size(); ++i) EXPECT_NEAR(out[i], in[i], 0.5 / 255.0) << i;
+}
+
+// oidnDenoise's command line, PFM in and out (fp32): the colour exactly.
+TEST_F(DenoiseFiles, PfmWithAlbedoAndNormalThroughPassthroughIsTheColour) {
+  std::vector<float> colour(size_t(W * H * 3)), albedo(colour.size()), normal(colour.size(), 0.0f);
+  for (size_t i = 0; i < colour.size(); ++i) {
+    colour[i] = 0.013f * float(i % 61) + (i % 7 == 0 ? 20.0f : 0.0f);  // HDR values too
+    albedo[i] = 0.1f + 0.8f * float(i % 11) / 10.0f;
+  }
+  for (size_t i = 2; i < normal.size(); i += 3) normal[i] = 1.0f;
+  image::write_pfm_rgb(path("color.pfm"), W, H, colour.data());
+  image::write_pfm_rgb(path("albedo.pfm"), W, H, albedo.data());
+  image::write_pfm_rgb(path("normal.pfm"), W, H, normal.data());
+  ServerProcess server;
+  std::string log;
+  ASSERT_EQ(dn_denoise(server,
+                       "'" + path("color.pfm") + "' --alb '" + path("albedo.pfm") + "' --nrm '" + path("normal.pfm") +
+                           "' -o '" + path("out.pfm") + "' --pipeline passthrough",
+                       log),
+            0)
+      << log;
+  EXPECT_NE(log.find("albedo       <- " + path("albedo.pfm") + " (--albedo)"), std::string::npos) << log;
+  EXPECT_NE(log.find("normal       <- " + path("normal.pfm") + " (--normal)"), std::string::npos) << log;
+  int w = 0, h = 0;
+  EXPECT_EQ(image::read_pfm_rgb(path("out.pfm"), w, h), colour);
+  EXPECT_EQ(w, W);
+  EXPECT_EQ(h, H);
+}
+
+// A side file of another size: exit status 1, one line naming both files and sizes.
+TEST_F(DenoiseFiles, SideFileOfAnotherSizeFails) {
+  const std::vector<float> colour(size_t(W * H * 3), 0.5f), small(size_t(8 * 8 * 3), 0.5f);
+  image::write_pfm_rgb(path("color.pfm"), W, H, colour.data());
+  image::write_pfm_rgb(path("albedo.pfm"), 8, 8, small.data());
+  ServerProcess server;
+  std::string log;
+  EXPECT_EQ(dn_denoise(server,
+                       "'" + path("color.pfm") + "' --albedo '" + path("albedo.pfm") + "' -o '" + path("out.pfm") +
+                           "' --pipeline passthrough -q",
+                       log),
+            1);
+  EXPECT_NE(log.find("dn denoise: error: --albedo: " + path("albedo.pfm") + " is 8x8, but the input " +
+                     path("color.pfm") + " is 16x8"),
+            std::string::npos)
+      << log;
+  EXPECT_FALSE(fs::exists(path("out.pfm")));
+}
+
+}  // namespace
+}  // namespace dn::test
