@@ -99,24 +99,28 @@ class Image {
           ++histogram[size_t(std::clamp(std::floor((std::log2(t) + 24.0) * 8.0), 0.0, 255.0))];
       }
     const double gain = median_gain(histogram);
-    // The noise variance: the guide-weighted 5x5 mean of r2 over 1.25, or
-    // the gain times the squared weighted mean luminance, the smaller.
+    // The noise variance: the median of r2 over the 5x5 taps on p's surface
+    // (guide weight >= 1/2) over 0.4549 and 1.25, at most noise_cap times
+    // the gain times the squared weighted mean luminance.
     std::vector<double> noise(n);
     for (int y = 0; y < h_; ++y)
       for (int x = 0; x < w_; ++x) {
         const int p = at(x, y);
-        double sum = r2[p], mean = luminance(colour[p]), weight = 1.0;
+        std::vector<double> own;  // squared residuals of the taps on p's surface
+        double mean = 0.0, weight = 0.0;
         for (int dy = -2; dy <= 2; ++dy)
           for (int dx = -2; dx <= 2; ++dx) {
-            if ((dx == 0 && dy == 0) || !inside(x + dx, y + dy)) continue;
+            if (!inside(x + dx, y + dy)) continue;
             const int q = at(x + dx, y + dy);
-            const double w = geometry_weight(p, q, std::hypot(dx, dy));
-            sum += w * r2[q];
+            const double w = dx == 0 && dy == 0 ? 1.0 : geometry_weight(p, q, std::hypot(dx, dy));
             mean += w * luminance(colour[q]);
             weight += w;
+            if (w >= 0.5) own.push_back(r2[q]);
           }
+        std::sort(own.begin(), own.end());
         const double m = mean / weight;
-        noise[p] = std::min(sum / (1.25 * weight), gain * m * m);
+        const double local = own[own.size() / 2] / 0.4549364 / 1.25;
+        noise[p] = p_.noise_cap > 0.0 ? std::min(local, p_.noise_cap * gain * m * m) : local;
       }
     // The a-trous iterations.
     const double h[3] = {3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0};

@@ -12,6 +12,7 @@ struct ImageParams {
   double phi_normal = 128.0;
   double phi_depth = 0.05;
   double phi_albedo = 0.1;
+  double noise_cap = 1.0;
   double harm_guard = 3.0;
 };
 
