@@ -37,6 +37,19 @@ class DenoiseFiles : public ::testing::Test {
   int dn_denoise(const ServerProcess& server, const std::string& args, std::string& output) const {
     return run_command(std::string(DN_DN_PATH) + " denoise --server " + server.unix_url() + " " + args, output);
   }
+  // Writes color.pfm, albedo.pfm and normal.pfm (each w x h rgb) and runs
+  // `dn denoise color.pfm --alb albedo.pfm --nrm normal.pfm -o out.pfm` with `args`.
+  int denoise_trio(const ServerProcess& server, int w, int h, const std::vector<float>& colour,
+                   const std::vector<float>& albedo, const std::vector<float>& normal, const std::string& args,
+                   std::string& output) const {
+    image::write_pfm_rgb(path("color.pfm"), w, h, colour.data());
+    image::write_pfm_rgb(path("albedo.pfm"), w, h, albedo.data());
+    image::write_pfm_rgb(path("normal.pfm"), w, h, normal.data());
+    return dn_denoise(server,
+                      "'" + path("color.pfm") + "' --alb '" + path("albedo.pfm") + "' --nrm '" + path("normal.pfm") +
+                          "' -o '" + path("out.pfm") + "' " + args,
+                      output);
+  }
   fs::path dir_;
 };
 
@@ -71,17 +84,9 @@ TEST_F(DenoiseFiles, PfmWithAlbedoAndNormalThroughPassthroughIsTheColour) {
     albedo[i] = 0.1f + 0.8f * float(i % 11) / 10.0f;
   }
   for (size_t i = 2; i < normal.size(); i += 3) normal[i] = 1.0f;
-  image::write_pfm_rgb(path("color.pfm"), W, H, colour.data());
-  image::write_pfm_rgb(path("albedo.pfm"), W, H, albedo.data());
-  image::write_pfm_rgb(path("normal.pfm"), W, H, normal.data());
   ServerProcess server;
   std::string log;
-  ASSERT_EQ(dn_denoise(server,
-                       "'" + path("color.pfm") + "' --alb '" + path("albedo.pfm") + "' --nrm '" + path("normal.pfm") +
-                           "' -o '" + path("out.pfm") + "' --pipeline passthrough",
-                       log),
-            0)
-      << log;
+  ASSERT_EQ(denoise_trio(server, W, H, colour, albedo, normal, "--pipeline passthrough", log), 0) << log;
   EXPECT_NE(log.find("albedo       <- " + path("albedo.pfm") + " (--albedo)"), std::string::npos) << log;
   EXPECT_NE(log.find("normal       <- " + path("normal.pfm") + " (--normal)"), std::string::npos) << log;
   int w = 0, h = 0;
@@ -106,17 +111,9 @@ TEST_F(DenoiseFiles, NoisyPfmTrioThroughImageComesOutCloserToTheTruth) {
         noisy[i] = truth[i] * uniform02();
       }
   for (size_t i = 2; i < normal.size(); i += 3) normal[i] = 1.0f;
-  image::write_pfm_rgb(path("color.pfm"), w, h, noisy.data());
-  image::write_pfm_rgb(path("albedo.pfm"), w, h, albedo.data());
-  image::write_pfm_rgb(path("normal.pfm"), w, h, normal.data());
   ServerProcess server;
   std::string log;
-  ASSERT_EQ(dn_denoise(server,
-                       "'" + path("color.pfm") + "' --alb '" + path("albedo.pfm") + "' --nrm '" + path("normal.pfm") +
-                           "' -o '" + path("out.pfm") + "' --pipeline image -q",
-                       log),
-            0)
-      << log;
+  ASSERT_EQ(denoise_trio(server, w, h, noisy, albedo, normal, "--pipeline image -q", log), 0) << log;
   int ow = 0, oh = 0;
   const std::vector<float> out = image::read_pfm_rgb(path("out.pfm"), ow, oh);
   ASSERT_EQ(out.size(), truth.size());

@@ -13,12 +13,6 @@ using protocol::ChannelId;
 // Bins of the noise-gain histogram (image_gain.glsl), its passes' GAIN_BINS.
 constexpr uint32_t kGainBins = 256;
 
-bool has(const SessionConfig& config, ChannelId id) {
-  for (const InputChannel& c : config.channels)
-    if (c.id == id) return true;
-  return false;
-}
-
 // The guides a session declared, as each pass's HAS_* constants.
 struct Guides {
   bool albedo = false, normal = false, depth = false;
@@ -32,7 +26,8 @@ struct Guides {
 
 GraphSpec build(const SessionConfig& config) {
   GraphSpec g = begin_graph(config);
-  const Guides guides{has(config, ChannelId::Albedo), has(config, ChannelId::Normal), has(config, ChannelId::Depth)};
+  const Guides guides{has_channel(config, ChannelId::Albedo), has_channel(config, ChannelId::Normal),
+                      has_channel(config, ChannelId::Depth)};
   g.add_input(config, ChannelId::Radiance, "radiance");
   if (guides.albedo) g.add_input(config, ChannelId::Albedo, "albedo");
   if (guides.normal) g.add_input(config, ChannelId::Normal, "normal");
