@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "dn/protocol/codec.hpp"  // max_payload_bytes
+#include "pipelines/auto_choice.hpp"
 #include "pipelines/pipeline.hpp"
 #include "server/log.hpp"
 
@@ -68,6 +69,10 @@ protocol::Welcome make_welcome(const ServerOptions& options, const std::string& 
     if (w.has_parameters)
       for (const auto& q : p.parameters) info.parameters.push_back(to_wire(q));
     w.pipelines.push_back(std::move(info));
+  }
+  if (client_minor >= protocol::kAutoMinor) {  // "auto" last: it takes no parameters
+    const pipelines::PipelineDescription a = pipelines::auto_description();
+    w.pipelines.push_back({a.name, a.required_channels, a.optional_channels & known, {}});
   }
   // WELCOME must stay within its 65536-byte payload limit. The table is far
   // below it (a few KiB); should it ever grow past, names and ranges matter

@@ -41,7 +41,7 @@ namespace {
 
 const std::vector<Args::Spec> kSpecs = {
     server_option(),
-    {"pipeline", "", true, false, "denoising pipeline (svgf, svgf-fb, ...; see 'dn ping')", "NAME"},
+    {"pipeline", "", true, false, "denoising pipeline (default auto: the server chooses; see 'dn pipelines')", "NAME"},
     {"input", "", true, false, "the input IN as an option (the positional IN is the same)", "IN"},
     {"albedo", "--alb", true, false,
      "albedo image, sent as the albedo channel: one file, or a pattern with the input's frame numbers "
@@ -93,7 +93,7 @@ const std::vector<Args::Spec> kSpecs = {
 };
 
 constexpr const char* kUsage =
-    "usage: dn denoise IN [-o OUT] --pipeline NAME [--server URL] [--albedo FILE] [--normal FILE]\n"
+    "usage: dn denoise IN [-o OUT] [--pipeline NAME] [--server URL] [--albedo FILE] [--normal FILE]\n"
     "                  [--start N] [--end M] [--png PATTERN] [--preset dnrender|cycles|auto]\n"
     "                  [--channel NAME=LAYER ...] [--fp16] [--param NAME=VALUE ...] [-r PATTERN [--fail X]]\n"
     "                  [--in-flight K] [--token-file FILE] [--camera FILE]\n"
@@ -153,7 +153,7 @@ std::string input_argument(const Args& args) {
     throw UsageError("the input is given twice, '" + positional.front() + "' and --input '" + *option +
                      "': give one");
   if (positional.empty() && !option)
-    throw UsageError("missing the input: dn denoise IN -o OUT --pipeline NAME (IN a file or a frame pattern)");
+    throw UsageError("missing the input: dn denoise IN -o OUT (IN a file or a frame pattern)");
   return option ? *option : positional.front();
 }
 
@@ -191,7 +191,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   } catch (const ChannelMapError& e) {
     throw UsageError(std::string("--preset: ") + e.what());
   }
-  const std::string pipeline_name = args.require("pipeline");
+  const std::string pipeline_name = args.get_or("pipeline", protocol::kAutoPipeline);
   const std::string input = input_argument(args);
   const ImageFormat input_format = input_format_for(input);
   if (input_format != ImageFormat::Exr)
@@ -330,7 +330,8 @@ int run_denoise(const std::vector<std::string>& argv) {
     std::string names;
     for (const auto& p : conn.welcome().pipelines) names += (names.empty() ? "" : ", ") + p.name;
     throw UsageError("--pipeline: server " + conn.endpoint() + " has no pipeline '" + pipeline_name +
-                     "' (it offers: " + names + ")");
+                     "' (it offers: " + names + ")" +
+                     (pipeline_name == protocol::kAutoPipeline ? "; it cannot choose one (protocol before 1.10): name one with --pipeline" : ""));
   }
   check_side_channels(pipeline, sides, pipeline_name);
 
@@ -417,6 +418,9 @@ int run_denoise(const std::vector<std::string>& argv) {
   // The watch key reaches watchers through a file or the environment, never a command line.
   const std::string watch_key_file = args.get_or("watch-key-file", "");
   if (!watch_key_file.empty()) client::write_watch_file(watch_key_file, {session.watch_key(), session.id()});
+  if (!quiet && session.info().pipeline_reason && !session.info().pipeline_reason->empty())
+    std::fprintf(stderr, "dn: %s chose pipeline %s: %s\n", pipeline_name.c_str(), session.info().pipeline.c_str(),
+                 session.info().pipeline_reason->c_str());
   if (!quiet) std::fputs(client::owner_hints("dn", session, watch_key_file).c_str(), stderr);
 
   // The summary's temporal error needs the frames too.

@@ -524,6 +524,15 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
       for (const auto& c : protocol::kChannels)
         if (pipeline->required_channels & protocol::channel_bit(c.id)) want(c.id, true);
       radiance_mode = wants(ChannelId::Radiance) || (takes(ChannelId::Radiance) && resolvable(ChannelId::Radiance));
+      // A pipeline that takes both forms and specular_f0 (auto) gets the split
+      // lighting where the file has both signals and F0: what svgf-fb and reflect filter.
+      if (radiance_mode && !wants(ChannelId::Radiance) && takes(ChannelId::SpecularF0)) {
+        radiance_mode = false;
+        const bool split = (resolvable(ChannelId::Diffuse) || resolvable(ChannelId::DiffuseLighting)) &&
+                           (resolvable(ChannelId::Specular) || resolvable(ChannelId::SpecularLighting)) &&
+                           resolvable(ChannelId::SpecularF0);
+        radiance_mode = !split;
+      }
       // Split mode: one form per signal, the lighting form where the pipeline
       // takes it and the file has it (with its modulator), unless the
       // radiance form is required or overridden; specular_albedo only as the
@@ -591,7 +600,12 @@ bool pipeline_uses_camera(const protocol::PipelineInfo* pipeline) {
 }
 
 bool plan_needs_camera(const protocol::PipelineInfo* pipeline, const std::vector<ResolvedChannel>& plan) {
-  return pipeline_uses_camera(pipeline) ||
+  // auto with specular_f0 planned chooses a pipeline that computes F_beta from the view direction.
+  const bool auto_with_f0 = pipeline && pipeline->name == protocol::kAutoPipeline &&
+                            std::any_of(plan.begin(), plan.end(), [](const ResolvedChannel& c) {
+                              return c.id == ChannelId::SpecularF0;
+                            });
+  return pipeline_uses_camera(pipeline) || auto_with_f0 ||
          std::any_of(plan.begin(), plan.end(), [](const ResolvedChannel& c) { return needs_camera(c.convert); });
 }
 

@@ -179,8 +179,8 @@ std::vector<ResolvedChannel> plan_channels(const Preset& preset, const std::vect
 // requires specular_f0 computes F_beta from the view direction; the others
 // run with identity matrices.
 bool pipeline_uses_camera(const protocol::PipelineInfo* pipeline);
-// True when a run needs each frame's camera: the pipeline uses it, or a
-// planned channel is converted with it.
+// True when a run needs each frame's camera: the pipeline uses it, a
+// planned channel is converted with it, or auto gets specular_f0.
 bool plan_needs_camera(const protocol::PipelineInfo* pipeline, const std::vector<ResolvedChannel>& plan);
 
 // Preset::rough_guides resolved for a plan: for each planned channel taken

@@ -2,12 +2,14 @@
 
     blender -b --factory-startup --python examples/blender/cycles_room.py -- \
         --out DIR [--width 320] [--height 180] [--frames 8] [--spp 1] [--seed 0] [--start 0]
-        [--name frame] [--half] [--threads N] [--passes preset|denoising|all] [--still]
+        [--name frame] [--half] [--threads N] [--passes default|preset|denoising|all] [--still]
 
 Writes DIR/frame_0000.exr, frame_0001.exr, ... (NAME_%04d.exr; frame numbers --start ..
 --start+frames-1): one multilayer OpenEXR per frame (ZIP, full float unless
 --half), view layer "ViewLayer". --passes picks the passes:
 
+  default    Blender's defaults for a new view layer: Combined and Depth only,
+             what a user who never opened the Passes panel has
   preset     the passes `dn denoise --preset cycles` reads when Denoising Data
              is absent, and no more: Combined, Depth, Normal, Position,
              Vector, Diffuse / Glossy / Transmission Direct, Indirect and
@@ -49,7 +51,7 @@ import time
 import bpy
 
 
-PASS_SETS = ("preset", "denoising", "all")
+PASS_SETS = ("default", "preset", "denoising", "all")
 
 # Data and light passes the cycles preset reads (client/tools/presets.cpp, p.settings).
 PRESET_PASSES = ("combined", "z", "normal", "position", "vector", "diffuse_direct", "diffuse_indirect",
@@ -71,7 +73,8 @@ def parse_args(prog="cycles_room", doc=__doc__):
     p.add_argument("--half", action="store_true", help="half-float EXR instead of full float")
     p.add_argument("--threads", type=int, default=0, help="render threads (0 = all cores)")
     p.add_argument("--passes", choices=PASS_SETS, default="all",
-                   help="preset: what --preset cycles reads without Denoising Data; denoising: + Denoising Data; "
+                   help="default: Combined and Depth (Blender's defaults); preset: what --preset cycles reads without "
+                        "Denoising Data; denoising: + Denoising Data; "
                         "all: + Denoising Data, Mist and the Roughness / SpecularF0 AOVs")
     p.add_argument("--still", action="store_true",
                    help="hold the camera at its pose of frame --start (the frames differ only in noise)")
@@ -288,9 +291,9 @@ def set_passes(scene, passes):
     vl = scene.view_layers[0]
     vl.name = "ViewLayer"
     for p in PRESET_PASSES:
-        setattr(vl, "use_pass_" + p, True)
-    vl.cycles.use_pass_volume_direct = True
-    vl.cycles.use_pass_volume_indirect = True
+        setattr(vl, "use_pass_" + p, passes != "default" or p in ("combined", "z"))
+    vl.cycles.use_pass_volume_direct = passes != "default"
+    vl.cycles.use_pass_volume_indirect = passes != "default"
     vl.use_pass_mist = passes == "all"
     vl.cycles.denoising_store_passes = passes in ("denoising", "all")
     # The materials' AOV Output nodes write only AOVs the view layer declares.

@@ -180,6 +180,22 @@ bool read_watch_url(Ctx& c, std::optional<std::string>& out) {
   return true;
 }
 
+// SESSION.pipeline_reason (1.10): one line of printable ASCII, possibly empty.
+bool read_pipeline_reason(Ctx& c, std::optional<std::string>& out) {
+  if (!c.has(kAutoMinor)) {
+    out.reset();
+    return true;
+  }
+  const Field f = c.f("pipeline_reason");
+  std::string reason;
+  if (!c.r.str(reason, f, kMaxPipelineReasonBytes)) return false;
+  for (size_t i = 0; i < reason.size(); ++i)
+    if (reason[i] < 0x20 || reason[i] > 0x7e)
+      return c.r.fail(ErrorCode::Malformed, f, f.str() + " must be printable ASCII; byte " + std::to_string(i) + " is not");
+  out = std::move(reason);
+  return true;
+}
+
 bool decode(Ctx& c, Hello& m) {
   Reader& r = c.r;
   const Field cap = c.f("capabilities");
@@ -305,7 +321,8 @@ bool decode(Ctx& c, Session& m) {
     return false;
   if (!read_bool(r, m.read_only, c.f("read_only"))) return false;
   return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels") &&
-         read_watch_key(c, m.watch_key) && read_watch_url(c, m.watch_url);
+         read_watch_key(c, m.watch_key) && read_watch_url(c, m.watch_url) &&
+         read_pipeline_reason(c, m.pipeline_reason);
 }
 
 bool decode(Ctx& c, Frame& m) {

@@ -179,6 +179,7 @@ struct Put {
     put_channels(s, m.channels);
     if (m.watch_key) s.str(*m.watch_key);  // 1.6, for a peer that knows it
     if (m.watch_url) s.str(*m.watch_url);  // 1.8, likewise
+    if (m.pipeline_reason) s.str(*m.pipeline_reason);  // 1.10, likewise
   }
   void operator()(const Frame& m) {
     const FrameInfo& f = m.info;
@@ -240,6 +241,7 @@ uint8_t payload_minor(const Message& message) {
   if (const auto* w = std::get_if<Welcome>(&message); w && !w->has_parameters) return 0;
   if (const auto* s = std::get_if<Session>(&message); s && !s->watch_key) return kWatchKeyMinor - 1;
   if (const auto* s = std::get_if<Session>(&message); s && !s->watch_url) return kWatchUrlMinor - 1;
+  if (const auto* s = std::get_if<Session>(&message); s && !s->pipeline_reason) return kAutoMinor - 1;
   if (const auto* a = std::get_if<Attach>(&message); a && !a->watch_key) return kWatchKeyMinor - 1;
   if (const auto* r = std::get_if<Result>(&message); r && !r->samples) return kSamplesMinor - 1;
   return kVersionMinor;
@@ -271,6 +273,8 @@ void encode(const Message& message, uint64_t request_id, uint32_t flags, std::ve
   check_welcome_parameters(message);
   if (const auto* s = std::get_if<Session>(&message); s && s->watch_url && !s->watch_key)
     throw std::invalid_argument("dn::protocol::encode: SESSION.watch_url (1.8) needs watch_key (1.6) before it");
+  if (const auto* s = std::get_if<Session>(&message); s && s->pipeline_reason && !s->watch_url)
+    throw std::invalid_argument("dn::protocol::encode: SESSION.pipeline_reason (1.10) needs watch_url (1.8) before it");
 
   Counter counter;
   std::visit(Put<Counter>{counter}, message);

@@ -184,7 +184,11 @@ void bind_connection(py::module_& m) {
       .def_property_readonly("id", [](PySession& s) { return s.get().id(); })
       .def_property_readonly("width", [](PySession& s) { return s.get().width(); })
       .def_property_readonly("height", [](PySession& s) { return s.get().height(); })
-      .def_property_readonly("pipeline", [](PySession& s) { return s.get().info().pipeline; })
+      .def_property_readonly("pipeline", [](PySession& s) { return s.get().info().pipeline; },
+                             "The pipeline the session runs: for 'auto', the server's choice.")
+      .def_property_readonly("pipeline_reason",
+                             [](PySession& s) { return s.get().info().pipeline_reason.value_or(""); },
+                             "For a session opened as 'auto': why the server chose `pipeline` ('' otherwise).")
       .def_property_readonly("output_format", [](PySession& s) { return format_name(s.get().info().output_format); })
       .def_property_readonly("channels",
                              [](PySession& s) {
@@ -317,11 +321,12 @@ void bind_connection(py::module_& m) {
             s->session.emplace(blocking(c.lock, [&] { return conn.open_session(desc); }));
             return s;
           },
-          py::arg("width"), py::arg("height"), py::arg("pipeline") = "svgf", py::kw_only(),
+          py::arg("width"), py::arg("height"), py::arg("pipeline") = protocol::kAutoPipeline, py::kw_only(),
           py::arg("channels") = py::make_tuple("radiance", "albedo", "normal", "depth", "motion"),
           py::arg("parameters") = py::none(), py::arg("output_format") = "f32", py::arg("max_in_flight") = 0,
           py::arg("share_input") = false,
-          "OPEN_SESSION. channels: {name: 'f32' | 'f16'} (the wire format; arrays of the other type are converted) "
+          "OPEN_SESSION. pipeline: a name from Connection.pipelines, or 'auto' (the server chooses from the "
+          "channels; protocol 1.10). channels: {name: 'f32' | 'f16'} (the wire format; arrays of the other type are converted) "
           "or a list of names (f32). parameters: {name: value}, checked against the server's table before "
           "anything is sent. max_in_flight: 0 = the server's limit. share_input: watchers' results also carry the "
           "noisy radiance (Result.input; protocol 1.7).")

@@ -43,4 +43,11 @@ const PipelineDefinition* find_definition(std::string_view name);
 // Common start of every graph: resolution and resolved parameters.
 GraphSpec begin_graph(const SessionConfig& config);
 
+// The checks every pipeline shares: resolution, output format, each channel
+// known, in f16 or f32, declared once and taken by `desc`, its required ones present.
+std::optional<ConfigError> check_declaration(const SessionConfig& config, const PipelineDescription& desc);
+
+// "radiance, albedo, normal": the channels of a protocol::channel_bit mask, in id order; "none" when empty.
+std::string channel_list(uint64_t mask);
+
 }  // namespace dn::pipelines

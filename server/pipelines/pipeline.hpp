@@ -93,7 +93,16 @@ struct FrameInput;  // pipelines/frame_input.hpp
 // its graph once. Cheap to copy (the graph is shared and immutable).
 class PreparedPipeline {
  public:
+  // The pipeline's configuration: for a session opened as "auto", the chosen
+  // pipeline and the declared channels it reads.
   const SessionConfig& config() const { return config_; }
+  // The channels each frame carries: config().channels, or for "auto" every
+  // declared channel (those the choice does not read are checked and dropped).
+  const std::vector<InputChannel>& declared_channels() const {
+    return declared_channels_.empty() ? config_.channels : declared_channels_;
+  }
+  // For "auto": why config().pipeline was chosen, one line; empty otherwise.
+  const std::string& choice_reason() const { return choice_reason_; }
   // Persistent device bytes create() will allocate (= the pipeline's device_bytes()).
   uint64_t device_bytes() const { return device_bytes_; }
   const GraphSpec& graph() const { return *graph_; }
@@ -101,10 +110,13 @@ class PreparedPipeline {
 
  private:
   friend std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config);
+  friend std::variant<PreparedPipeline, ConfigError> prepare_auto(const SessionConfig& declared);
   PreparedPipeline(SessionConfig config, std::shared_ptr<const GraphSpec> graph, uint64_t device_bytes)
       : config_(std::move(config)), graph_(std::move(graph)), device_bytes_(device_bytes) {}
 
   SessionConfig config_;
+  std::vector<InputChannel> declared_channels_;  // set only for "auto"
+  std::string choice_reason_;
   std::shared_ptr<const GraphSpec> graph_;
   uint64_t device_bytes_ = 0;
 };
@@ -141,9 +153,10 @@ class Pipeline {
 // Every pipeline this build offers, in a stable order.
 const std::vector<PipelineDescription>& available_pipelines();
 
-// Validates the configuration and builds its pass graph once: pipeline name,
-// resolution, channels (required present, no unknown ones), parameters (known
-// names, in range, integral where required) and the largest binding against
+// Validates the configuration and builds its pass graph once: pipeline name
+// (or "auto": auto_choice.hpp), resolution, channels (required present, no
+// unknown ones), parameters (known names, in range, integral where required)
+// and the largest binding against
 // the current device limits (gpu::current_device_limits()). The result's
 // device_bytes() is what create() allocates. Thread-safe, no device work.
 std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config);

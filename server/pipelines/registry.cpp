@@ -8,11 +8,11 @@
 #include <set>
 
 #include "gpu/context.hpp"
+#include "pipelines/auto_choice.hpp"
 #include "pipelines/definitions.hpp"
 #include "pipelines/registry.hpp"
 
 namespace dn::pipelines {
-namespace {
 
 std::string channel_list(uint64_t mask) {
   std::string out;
@@ -23,6 +23,8 @@ std::string channel_list(uint64_t mask) {
   }
   return out.empty() ? "none" : out;
 }
+
+namespace {
 
 std::string format_number(double v) {
   char buf[64];
@@ -139,20 +141,8 @@ std::optional<ConfigError> check_device_limits(const SessionConfig& config, cons
   return limit_error(config, *build_graph(*def, config), limits);
 }
 
-namespace {
-
-// Everything validate() checks except the device limits.
-std::optional<ConfigError> validate_config(const SessionConfig& config) {
-  
-  const PipelineDefinition* def = find_definition(config.pipeline);
-  if (!def) {
-    std::string names;
-    for (const auto& d : definitions()) names += (names.empty() ? "" : ", ") + d.description.name;
-    return error(ConfigProblem::UnknownPipeline, "pipeline",
-                 "unknown pipeline \"" + config.pipeline + "\"; available: " + names);
-  }
-  const PipelineDescription& desc = def->description;
-
+// Resolution, output format and each channel against what `desc` takes.
+std::optional<ConfigError> check_declaration(const SessionConfig& config, const PipelineDescription& desc) {
   if (config.width == 0)
     return error(ConfigProblem::InvalidParameter, "width", "width must be at least 1");
   if (config.height == 0)
@@ -193,6 +183,23 @@ std::optional<ConfigError> validate_config(const SessionConfig& config) {
   if (const uint64_t missing = desc.required_channels & ~declared)
     return error(ConfigProblem::MissingChannel, "channels",
                  "pipeline " + desc.name + " requires channel(s) " + channel_list(missing));
+  return std::nullopt;
+}
+
+namespace {
+
+// Everything validate() checks except the device limits.
+std::optional<ConfigError> validate_config(const SessionConfig& config) {
+  const PipelineDefinition* def = find_definition(config.pipeline);
+  if (!def) {
+    std::string names;
+    for (const auto& d : definitions()) names += (names.empty() ? "" : ", ") + d.description.name;
+    return error(ConfigProblem::UnknownPipeline, "pipeline",
+                 "unknown pipeline \"" + config.pipeline + "\"; available: " + names + ", " +
+                     std::string(kAutoPipeline));
+  }
+  const PipelineDescription& desc = def->description;
+  if (auto err = check_declaration(config, desc)) return err;
   if (def->check_channels)
     if (auto err = def->check_channels(config)) return err;
 
@@ -227,6 +234,7 @@ std::optional<ConfigError> validate_config(const SessionConfig& config) {
 }  // namespace
 
 std::variant<PreparedPipeline, ConfigError> prepare(const SessionConfig& config) {
+  if (config.pipeline == kAutoPipeline) return prepare_auto(config);
   if (auto err = validate_config(config)) return *err;
   auto graph = build_graph(*find_definition(config.pipeline), config);
   if (auto err = limit_error(config, *graph, gpu::current_device_limits())) return *err;

@@ -64,6 +64,17 @@ std::variant<pipelines::FrameInput, PlaneProblem> frame_planes(const protocol::F
   return input;
 }
 
+pipelines::FrameInput planes_read(pipelines::FrameInput input, const std::vector<pipelines::InputChannel>& declared,
+                                  const std::vector<pipelines::InputChannel>& read) {
+  if (declared == read) return input;
+  std::vector<std::span<const uint8_t>> planes;
+  for (const auto& r : read)
+    for (size_t d = 0; d < declared.size(); ++d)
+      if (declared[d].id == r.id) planes.push_back(input.planes[d]);
+  input.planes = std::move(planes);
+  return input;
+}
+
 pipelines::FrameInput frame_planes_or_throw(const protocol::Frame& frame, const pipelines::SessionConfig& config) {
   auto input = frame_planes(frame, config);
   if (auto* problem = std::get_if<PlaneProblem>(&input)) throw std::invalid_argument(problem->message);

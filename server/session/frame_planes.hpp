@@ -23,6 +23,12 @@ struct PlaneProblem {
 std::variant<pipelines::FrameInput, PlaneProblem> frame_planes(const protocol::Frame& frame,
                                                                 const pipelines::SessionConfig& config);
 
+// The planes of `declared` (a frame_planes() result) that the pipeline
+// reads, in the order of `read` (a subset of `declared`): for a session
+// opened as "auto", whose choice does not read every channel sent.
+pipelines::FrameInput planes_read(pipelines::FrameInput input, const std::vector<pipelines::InputChannel>& declared,
+                                  const std::vector<pipelines::InputChannel>& read);
+
 // For callers that build their own frames (tests, benchmarks, the warm-up):
 // frame_planes() or std::invalid_argument with the problem's message.
 pipelines::FrameInput frame_planes_or_throw(const protocol::Frame& frame, const pipelines::SessionConfig& config);

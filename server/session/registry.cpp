@@ -9,11 +9,11 @@ SessionRegistry::SessionRegistry() {
   ids_.seed((uint64_t{rd()} << 32) ^ rd());
 }
 
-std::shared_ptr<Session> SessionRegistry::add(uint64_t owner, pipelines::SessionConfig config,
+std::shared_ptr<Session> SessionRegistry::add(uint64_t owner, const pipelines::PreparedPipeline& prepared,
                                               std::unique_ptr<pipelines::Pipeline> pipeline) {
   uint64_t id;
   do id = ids_(); while (id == 0 || sessions_.count(id));
-  auto session = std::make_shared<Session>(id, owner, std::move(config), std::move(pipeline), new_watch_key());
+  auto session = std::make_shared<Session>(id, owner, prepared, std::move(pipeline), new_watch_key());
   sessions_[id] = session;
   return session;
 }

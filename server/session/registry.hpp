@@ -17,7 +17,7 @@ class SessionRegistry {
   SessionRegistry();
 
   // Registers a new session of `owner` (a connection id) under a fresh id and watch key.
-  std::shared_ptr<Session> add(uint64_t owner, pipelines::SessionConfig config,
+  std::shared_ptr<Session> add(uint64_t owner, const pipelines::PreparedPipeline& prepared,
                                std::unique_ptr<pipelines::Pipeline> pipeline);
   // nullptr when no such session is open.
   Session* find(uint64_t id) const;

@@ -62,8 +62,10 @@ void SessionService::on_open_session(net::Connection& c, const protocol::Header&
   const pipelines::PreparedPipeline& ready = std::get<pipelines::PreparedPipeline>(prepared);
   const pipelines::SessionConfig& config = ready.config();
 
-  // A frame of this session must fit one message.
-  const uint64_t frame_bytes = frame_message_bytes(config);
+  // A frame of this session (every channel declared) must fit one message.
+  pipelines::SessionConfig frame_config = config;
+  frame_config.channels = ready.declared_channels();
+  const uint64_t frame_bytes = frame_message_bytes(frame_config);
   if (frame_bytes > options_.max_message_bytes)
     return error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
                       "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +
@@ -113,7 +115,7 @@ void SessionService::on_pipeline_built(BuiltPipeline&& built) {
 
   std::shared_ptr<Session> session;
   try {
-    session = sessions_.add(c->id(), config, std::move(built.pipeline));
+    session = sessions_.add(c->id(), built.request.prepared, std::move(built.pipeline));
   } catch (const std::runtime_error& e) {  // no randomness for the watch key: refuse rather than guessable
     log::error("session.create_failed", {{"conn", c->id()}, {"reason", e.what()}});
     error(*c, request_id, ErrorCode::Internal, "OPEN_SESSION", std::string("cannot draw a watch key: ") + e.what());
@@ -127,16 +129,18 @@ void SessionService::on_pipeline_built(BuiltPipeline&& built) {
   log::info("session.open", {{"conn", c->id()},
                              {"session", id},
                              {"pipeline", config.pipeline},
+                             {"choice", session->choice_reason()},
                              {"width", config.width},
                              {"height", config.height},
                              {"device_bytes", session->device_bytes()},
                              {"build_ms", built.build_ms},
                              {"compile_ms", built.compile_ms}});
   protocol::Session reply{id, config.width, config.height, config.pipeline, config.output_format,
-                         session->device_bytes(), false, channel_decls(config)};
+                         session->device_bytes(), false, channel_decls(session->frame_config())};
   // A 1.5 client cannot carry the key: its session can be watched by no one.
   if (c->negotiated_minor >= protocol::kWatchKeyMinor) reply.watch_key = session->watch_key();
   if (c->negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
+  if (c->negotiated_minor >= protocol::kAutoMinor) reply.pipeline_reason = session->choice_reason();
   connections_.send(*c, reply, request_id);
   connections_.update_interest(*c);
 }
@@ -193,9 +197,10 @@ void SessionService::on_attach(net::Connection& c, const protocol::Header& h, co
   log::info("session.attach", {{"conn", c.id()}, {"session", s.id()}});
   // The watcher already holds the key; the reply does not repeat it.
   protocol::Session reply{s.id(), cfg.width, cfg.height, cfg.pipeline, cfg.output_format, s.device_bytes(), true,
-                          channel_decls(cfg)};
+                          channel_decls(s.frame_config())};
   reply.watch_key = std::string();
   if (c.negotiated_minor >= protocol::kWatchUrlMinor) reply.watch_url = options_.advertise_url;
+  if (c.negotiated_minor >= protocol::kAutoMinor) reply.pipeline_reason = s.choice_reason();
   connections_.send(c, reply, h.request_id);
 }
 

@@ -123,7 +123,7 @@ void SessionService::on_closed(net::Connection& c) {
 void SessionService::refresh_message_limit(net::Connection& c) {
   uint64_t largest = 0;
   for (uint64_t sid : c.owned_sessions)
-    if (const Session* s = sessions_.find(sid)) largest = std::max(largest, frame_message_bytes(s->config()));
+    if (const Session* s = sessions_.find(sid)) largest = std::max(largest, frame_message_bytes(s->frame_config()));
   connections_.set_largest_frame(c, largest);
 }
 

@@ -22,13 +22,16 @@ protocol::Error make_error(protocol::ErrorCode code, std::string field, std::str
 
 }  // namespace
 
-Session::Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config,
+Session::Session(uint64_t id, uint64_t owner, const pipelines::PreparedPipeline& prepared,
                  std::unique_ptr<pipelines::Pipeline> pipeline, std::string watch_key)
     : id_(id),
       owner_(owner),
       watch_key_(std::move(watch_key)),
-      config_(std::move(config)),
+      config_(prepared.config()),
+      frame_config_(prepared.config()),
+      choice_reason_(prepared.choice_reason()),
       pipeline_(std::move(pipeline)) {
+  frame_config_.channels = prepared.declared_channels();
   device_bytes_ = pipeline_ ? pipeline_->device_bytes() : 0;
   transient_bytes_ = pipeline_ ? pipeline_->transient_bytes() : 0;
 }
@@ -41,11 +44,11 @@ std::variant<pipelines::FrameInput, protocol::Error> Session::check_frame(const 
     return make_error(ErrorCode::OutOfOrder, "FRAME.frame_index",
                       "frame_index " + std::to_string(frame.info.frame_index) + " is not above the last frame " +
                           std::to_string(*last_frame_index) + " of session " + std::to_string(id_));
-  auto input = frame_planes(frame, config_);
+  auto input = frame_planes(frame, frame_config_);
   if (auto* problem = std::get_if<PlaneProblem>(&input))
     return make_error(problem->missing ? ErrorCode::MissingChannel : ErrorCode::InvalidChannel, problem->field,
                       "session " + std::to_string(id_) + ": " + problem->message);
-  return std::get<pipelines::FrameInput>(std::move(input));
+  return planes_read(std::get<pipelines::FrameInput>(std::move(input)), frame_config_.channels, config_.channels);
 }
 
 FrameOutcome Session::run(const FrameJob& job) {

@@ -21,15 +21,20 @@ uint64_t frame_message_bytes(const pipelines::SessionConfig& config);
 
 class Session {
  public:
-  Session(uint64_t id, uint64_t owner, pipelines::SessionConfig config, std::unique_ptr<pipelines::Pipeline> pipeline,
-          std::string watch_key);
+  Session(uint64_t id, uint64_t owner, const pipelines::PreparedPipeline& prepared,
+          std::unique_ptr<pipelines::Pipeline> pipeline, std::string watch_key);
   ~Session();
 
   uint64_t id() const { return id_; }
   uint64_t owner() const { return owner_; }
   // What ATTACH must present (protocol 1.6); given to the owner in SESSION.
   const std::string& watch_key() const { return watch_key_; }
+  // The pipeline's configuration (for "auto", the chosen pipeline and the channels it reads).
   const pipelines::SessionConfig& config() const { return config_; }
+  // config() with the channels each FRAME carries: all the client declared.
+  const pipelines::SessionConfig& frame_config() const { return frame_config_; }
+  // For a session opened as "auto": why config().pipeline; empty otherwise.
+  const std::string& choice_reason() const { return choice_reason_; }
   // Device memory the session needs per frame; of which transient_bytes() is
   // scratch leased from the device's pool only while one of its frames runs.
   uint64_t device_bytes() const { return device_bytes_; }
@@ -57,6 +62,8 @@ class Session {
   uint64_t owner_;
   std::string watch_key_;
   pipelines::SessionConfig config_;
+  pipelines::SessionConfig frame_config_;
+  std::string choice_reason_;
   std::unique_ptr<pipelines::Pipeline> pipeline_;
   uint64_t device_bytes_;
   uint64_t transient_bytes_;

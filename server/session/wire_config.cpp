@@ -1,6 +1,13 @@
 #include "server/session/wire_config.hpp"
 
+#include <string_view>
+
+#include "pipelines/auto_choice.hpp"
+
 namespace dn::server {
+
+// The wire's "auto" is the pipelines' (the name passes through unchanged).
+static_assert(std::string_view(protocol::kAutoPipeline) == pipelines::kAutoPipeline);
 
 pipelines::SessionConfig session_config(const protocol::OpenSession& m) {
   pipelines::SessionConfig c{m.width, m.height, m.pipeline, m.output_format, {}, {}};

@@ -134,6 +134,44 @@ static void test_passthrough_packed(void) {
   dnReleaseDevice(dev);
 }
 
+/* "auto": colour, albedo and normal of one frame (oidnNewFilter(dev, "RT")'s
+ * inputs) denoised by the pipeline the server chooses, named with its reason. */
+static void test_auto(void) {
+  printf("auto, colour + albedo + normal\n");
+  DNDevice dev = connected_device();
+  DNFilter f = dnNewFilter(dev, "auto");
+  EXPECT_OK(dev, "new auto filter");
+  static float color[W * H * 3], albedo[W * H * 3], normal[W * H * 3], out[W * H * 3];
+  unsigned s = 7;
+  for (int i = 0; i < W * H * 3; ++i) {
+    color[i] = 0.5f + noise(&s) * 0.1f;
+    albedo[i] = 0.5f;
+    normal[i] = (i % 3 == 2) ? 1.0f : 0.0f;
+  }
+  dnSetSharedFilterImage(f, "color", color, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnSetSharedFilterImage(f, "albedo", albedo, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnSetSharedFilterImage(f, "normal", normal, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnSetSharedFilterImage(f, "output", out, DN_FORMAT_FLOAT3, W, H, 0, 0, 0);
+  dnCommitFilter(f);
+  dnExecuteFilter(f);
+  EXPECT_OK(dev, "auto execute");
+  const char* pipeline = dnGetFilterPipeline(f);
+  const char* reason = dnGetFilterPipelineReason(f);
+  CHECK(pipeline && strcmp(pipeline, "image") == 0, "auto chose '%s' for colour, albedo and normal",
+        pipeline ? pipeline : "(null)");
+  CHECK(reason && strlen(reason) > 0, "no reason for the choice");
+  printf("  %s: %s\n", pipeline ? pipeline : "(null)", reason ? reason : "(null)");
+  /* Flat albedo and normal, noise of 0.1 around 0.55: the output is closer to the mean than the input. */
+  double in_err = 0, out_err = 0;
+  for (int i = 0; i < W * H * 3; ++i) {
+    in_err += (color[i] - 0.55) * (color[i] - 0.55);
+    out_err += (out[i] - 0.55) * (out[i] - 0.55);
+  }
+  CHECK(out_err < in_err, "auto output error %g not below the input's %g", out_err, in_err);
+  dnReleaseFilter(f);
+  dnReleaseDevice(dev);
+}
+
 static void test_passthrough_strided(void) {
   printf("passthrough, interleaved RGBA with padded rows\n");
   DNDevice dev = connected_device();
@@ -525,6 +563,7 @@ int main(int argc, char** argv) {
   }
   test_passthrough_packed();
   test_passthrough_strided();
+  test_auto();
   test_accumulate(0);
   test_accumulate(1);
   test_errors();

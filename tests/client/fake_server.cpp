@@ -107,6 +107,12 @@ void Peer::send(const Message& m, uint64_t request_id, uint32_t flags) {
     with.samples = protocol::SampleCounts{};
     return send_raw(encode(with, request_id, flags));
   }
+  // Likewise a SESSION carries SESSION.pipeline_reason after its watch URL: empty unless set.
+  if (const auto* s = std::get_if<Session>(&m); s && s->watch_url && !s->pipeline_reason) {
+    Session with = *s;
+    with.pipeline_reason = "";
+    return send_raw(encode(with, request_id, flags));
+  }
   send_raw(encode(m, request_id, flags));
 }
 

@@ -573,6 +573,7 @@ TEST(ClientWatcher, NextReturnsNewestAndEndsWithSession) {
     Session s;
     s.watch_key = "";  // the reply to ATTACH does not repeat it
     s.watch_url = "";  // a 1.8 server's SESSION ends with the watch URL
+    s.pipeline_reason = "";  // ... a 1.10 server's with the reason for an auto choice
     s.session_id = a->session_id;
     s.width = W;
     s.height = H;

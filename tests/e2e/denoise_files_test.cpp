@@ -1,7 +1,8 @@
 // `dn denoise` on the files people already have (oidnDenoise's PFM and PNG,
-// with albedo and normal side files) against a real dnserver: passthrough
-// returns the colour, so the output file must equal the input file; image
-// denoises it.
+// with albedo and normal side files, a Blender EXR with its default passes)
+// against a real dnserver: passthrough returns the colour, so the output file
+// must equal the input file; image denoises it; without --pipeline the
+// server chooses.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -22,6 +23,12 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int W = 16, H = 8;
+
+double squared_error(const std::vector<float>& a, const std::vector<float>& b) {
+  double sum = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) sum += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
+  return sum;
+}
 
 class DenoiseFiles : public ::testing::Test {
  protected:
@@ -117,12 +124,54 @@ TEST_F(DenoiseFiles, NoisyPfmTrioThroughImageComesOutCloserToTheTruth) {
   int ow = 0, oh = 0;
   const std::vector<float> out = image::read_pfm_rgb(path("out.pfm"), ow, oh);
   ASSERT_EQ(out.size(), truth.size());
-  double in_error = 0.0, out_error = 0.0;
-  for (size_t i = 0; i < truth.size(); ++i) {
-    in_error += (noisy[i] - truth[i]) * (noisy[i] - truth[i]);
-    out_error += (out[i] - truth[i]) * (out[i] - truth[i]);
+  EXPECT_LT(squared_error(out, truth), 0.25 * squared_error(noisy, truth));  // RMSE at most half the input's
+}
+
+// The three files of the common job, each with one command and no --pipeline:
+// the server chooses (image for each), dn says so, and the output is closer
+// to the truth than the input (a reference for the Blender file).
+TEST_F(DenoiseFiles, WithoutAPipelineTheServerChoosesForEachKindOfFile) {
+  ServerProcess server;
+  const std::string chose_image = "dn: auto chose pipeline image: ";
+
+  // A plain Blender EXR: Blender's default passes (Combined, Depth), 1 spp, and its 64-spp reference.
+  const std::string fixtures = DN_CYCLES_FIXTURES;
+  std::string log;
+  ASSERT_EQ(dn_denoise(server, "'" + fixtures + "/plain_0000.exr' -o '" + path("plain.exr") + "' -r '" + fixtures +
+                                   "/ref_0000.exr'",
+                       log),
+            0)
+      << log;
+  EXPECT_NE(log.find(chose_image), std::string::npos) << log;
+  EXPECT_NE(log.find("output worse than input: 0 (rmse), 0 (relmse) of 1 frames"), std::string::npos) << log;
+
+  // A noisy 8-bit PNG (sRGB): a mid grey with per-pixel noise.
+  std::vector<uint8_t> srgb(size_t(W * H * 3));
+  uint32_t state = 7;
+  for (auto& v : srgb) {
+    state = state * 1664525u + 1013904223u;
+    v = uint8_t(96 + (state >> 26));  // 96 .. 159
   }
-  EXPECT_LT(out_error, 0.25 * in_error);  // RMSE at most half the input's
+  image::write_png_rgb8(path("in.png"), W, H, srgb.data());
+  ASSERT_EQ(dn_denoise(server, "'" + path("in.png") + "' -o '" + path("out.png") + "'", log), 0) << log;
+  EXPECT_NE(log.find(chose_image), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(path("out.png")));
+
+  // oidnDenoise's trio: colour, albedo and normal PFMs.
+  constexpr int w = 48, h = 32;
+  std::vector<float> truth(size_t(w * h * 3)), noisy(truth.size()), albedo(truth.size(), 0.5f), normal(truth.size(), 0.0f);
+  for (size_t i = 0; i < truth.size(); ++i) {
+    state = state * 1664525u + 1013904223u;
+    truth[i] = 0.25f;
+    noisy[i] = truth[i] * 2.0f * float(state >> 8) / float(1u << 24);
+  }
+  for (size_t i = 2; i < normal.size(); i += 3) normal[i] = 1.0f;
+  ASSERT_EQ(denoise_trio(server, w, h, noisy, albedo, normal, "", log), 0) << log;
+  EXPECT_NE(log.find(chose_image), std::string::npos) << log;
+  int ow = 0, oh = 0;
+  const std::vector<float> out = image::read_pfm_rgb(path("out.pfm"), ow, oh);
+  ASSERT_EQ(out.size(), truth.size());
+  EXPECT_LT(squared_error(out, truth), squared_error(noisy, truth));
 }
 
 // A side file of another size: exit status 1, one line naming both files and sizes.

@@ -62,7 +62,7 @@ std::vector<Message> seed_messages(const std::vector<uint8_t>& pixels) {
                   {{ChannelId::Radiance, Format::F16}, {ChannelId::Depth, Format::F32}, {ChannelId::Motion, Format::F16}}},
       Session{1, 2, 1, "svgf", Format::F16, 4096, false,
               {{ChannelId::Radiance, Format::F16}, {ChannelId::Depth, Format::F32}},
-              "0123456789abcdef0123456789abcdef", "tcp://127.0.0.1:7101"},
+              "0123456789abcdef0123456789abcdef", "tcp://127.0.0.1:7101", "albedo, normal, depth and motion"},
       frame,
       result,
       Attach{1, "0123456789abcdef0123456789abcdef"},

@@ -201,15 +201,18 @@ TEST(Golden, OpenSessionBothWays) {
 
 // SESSION, request_id 3, session 0x0102030405060708, 640x360 "svgf", F16
 // output, not read-only, 4096 device bytes, one channel (radiance F32), and
-// from 1.6 the watch key (§5.5), from 1.8 the watch URL.
+// from 1.6 the watch key (§5.5), from 1.8 the watch URL, from 1.10 the
+// reason for an "auto" choice.
 const char* const kKey = "0123456789abcdef0123456789abcdef";
 const char* const kUrl = "tcp://lb:7101";
+const char* const kReason = "full G-buffer";
 std::vector<uint8_t> golden_session(int minor) {
   Bytes b;
   b.raw({0x44, 0x4E, 0x53, 0x56, 0x01, minor})  // magic, version 1.minor
       .raw({0x05, 0x00})                        // type 5 = SESSION
       .raw({0x00, 0x00, 0x00, 0x00})            // flags
-      .raw({minor >= 8 ? 0x55 : minor >= 6 ? 0x46 : 0x24, 0x00, 0x00, 0x00})  // payload_length 36, 70 with the key, 85 with the URL
+      // payload_length 36, 70 with the key, 85 with the URL, 100 with the reason
+      .raw({minor >= 10 ? 0x64 : minor >= 8 ? 0x55 : minor >= 6 ? 0x46 : 0x24, 0x00, 0x00, 0x00})
       .raw({0x03, 0, 0, 0, 0, 0, 0, 0})         // request_id 3
       // payload
       .raw({0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01})  // 0: session_id
@@ -222,6 +225,7 @@ std::vector<uint8_t> golden_session(int minor) {
       .raw({0x01, 0x00, 0x00, 0x02});                         // +10: 1 channel, radiance F32
   if (minor >= 6) b.raw({0x20, 0x00}).text(kKey);             // 1.6: watch_key, 32 bytes
   if (minor >= 8) b.raw({0x0D, 0x00}).text(kUrl);             // 1.8: watch_url, 13 bytes
+  if (minor >= 10) b.raw({0x0D, 0x00}).text(kReason);         // 1.10: pipeline_reason, 13 bytes
   return b.v;
 }
 
@@ -238,10 +242,12 @@ std::vector<uint8_t> golden_attach(int minor) {
   return b.v;
 }
 
-Session golden_session_message(std::optional<std::string> key, std::optional<std::string> url = std::nullopt) {
+Session golden_session_message(std::optional<std::string> key, std::optional<std::string> url = std::nullopt,
+                               std::optional<std::string> reason = std::nullopt) {
   Session s{0x0102030405060708u, 640, 360, "svgf", Format::F16, 4096, false, {{ChannelId::Radiance, Format::F32}}};
   s.watch_key = std::move(key);
   s.watch_url = std::move(url);
+  s.pipeline_reason = std::move(reason);
   return s;
 }
 
@@ -261,7 +267,10 @@ TEST(Golden, SessionWithTheWatchKeyBothWays) {
 
 TEST(Golden, SessionWithTheWatchUrlBothWays) {
   const Session s = golden_session_message(kKey, kUrl);
-  EXPECT_EQ(encode(s, 3, 0), golden_session(kVersionMinor));
+  // To a 1.8 or 1.9 client: the 1.9 payload under this sender's own minor.
+  std::vector<uint8_t> expected = golden_session(9);
+  expected[5] = kVersionMinor;
+  EXPECT_EQ(encode(s, 3, 0), expected);
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_session(8);
@@ -270,6 +279,30 @@ TEST(Golden, SessionWithTheWatchUrlBothWays) {
   EXPECT_EQ(diff(s, d.message), "");
   // A URL needs the key before it on the wire.
   EXPECT_THROW(encode(golden_session_message(std::nullopt, kUrl), 3, 0), std::invalid_argument);
+}
+
+TEST(Golden, SessionWithThePipelineReasonBothWays) {
+  const Session s = golden_session_message(kKey, kUrl, kReason);
+  EXPECT_EQ(encode(s, 3, 0), golden_session(kVersionMinor));
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto bytes = golden_session(10);
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_FALSE(err) << err->field << ": " << err->message;
+  EXPECT_EQ(diff(s, d.message), "");
+  // A reason needs the URL before it on the wire.
+  EXPECT_THROW(encode(golden_session_message(kKey, std::nullopt, kReason), 3, 0), std::invalid_argument);
+}
+
+TEST(Golden, PipelineReasonIsOneLineOfPrintableAscii) {
+  auto bytes = golden_session(10);
+  bytes[bytes.size() - 3] = '\n';  // "full G-buff\ner"
+  Decoded d;
+  std::vector<uint8_t> storage;
+  auto err = decode_message(bytes, kMaxMessage, d, storage);
+  ASSERT_TRUE(err) << "a reason with a line break decoded";
+  EXPECT_EQ(err->code, ErrorCode::Malformed);
+  EXPECT_EQ(err->field, "SESSION.pipeline_reason");
 }
 
 TEST(Golden, WatchUrlIsPrintableAscii) {
@@ -372,7 +405,9 @@ Result golden_result_message(std::optional<SampleCounts> samples) {
 
 TEST(Golden, ResultWithTheSampleCountsBothWays) {
   const Result r = golden_result_message(SampleCounts{true, 3, 8});
-  EXPECT_EQ(encode(r, 4, 0), golden_result(9));
+  std::vector<uint8_t> expected = golden_result(9);
+  expected[5] = kVersionMinor;  // 1.10 appended nothing to RESULT
+  EXPECT_EQ(encode(r, 4, 0), expected);
   Decoded d;
   std::vector<uint8_t> storage;
   auto bytes = golden_result(9);
@@ -397,6 +432,7 @@ TEST(Golden, ResultWithoutCountsIsTheOlderPayload) {
 TEST(Golden, ResultFromAPipelineWithoutACount) {
   // To a 1.9 client the field is there, not counted: 9 bytes, all 0.
   std::vector<uint8_t> expected = golden_result(9);
+  expected[5] = kVersionMinor;
   for (size_t i = expected.size() - 9; i < expected.size(); ++i) expected[i] = 0;
   EXPECT_EQ(encode(golden_result_message(SampleCounts{}), 4, 0), expected);
   Decoded d;

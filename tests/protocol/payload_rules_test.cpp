@@ -323,6 +323,7 @@ TEST(PayloadRules, SessionReadOnlyIsBool) {
   s.pipeline = "ab";
   s.watch_key = "";
   s.watch_url = "";
+  s.pipeline_reason = "";
   auto b = encode(s);
   // 0 session_id, 8 width, 12 height, 16 pipeline (2+2), 20 output_format, 21 read_only, 22 device_bytes, 30 channels
   b[P + 21] = 1;

@@ -196,6 +196,7 @@ OwnedMessage random_message(MessageType type, std::mt19937& rng, size_t max_plan
       m.channels = random_channels(rng);
       m.watch_key = random_watch_key(rng);
       m.watch_url = uniform<int>(rng, 0, 1) ? "" : "tcp://lb-" + std::to_string(random_u32(rng)) + ":7101";
+      m.pipeline_reason = uniform<int>(rng, 0, 1) ? "" : "the full G-buffer " + std::to_string(random_u32(rng));
       o.message = m;
       break;
     }
@@ -350,6 +351,8 @@ struct Differ {
     eq("read_only", a.read_only, b.read_only);
     channels(a.channels, b.channels);
     eq("watch_key", a.watch_key, b.watch_key);
+    eq("watch_url", a.watch_url, b.watch_url);
+    eq("pipeline_reason", a.pipeline_reason, b.pipeline_reason);
   }
   void operator()(const Frame& a, const Frame& b) {
     eq("session_id", a.info.session_id, b.info.session_id);

@@ -31,7 +31,7 @@ def still_scene(rng, w=W, h=H, dtype=np.float32):
 
 def test_connection_reports_the_servers_welcome(conn, server):
     assert conn.endpoint == server.url
-    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 9)
+    assert conn.protocol_version == dn.PROTOCOL_VERSION == (1, 10)
     assert conn.is_open
     assert conn.limits["max_width"] >= W and conn.limits["max_frames_in_flight"] >= 1
     names = [p.name for p in conn.pipelines()]
@@ -95,6 +95,23 @@ def test_passthrough_returns_the_radiance_exactly(conn):
         out = s.denoise({"radiance": radiance})
     assert out.dtype == np.float32 and out.shape == (H, W, 3)
     assert np.array_equal(out, np.where(np.isfinite(radiance), radiance, 0.0))  # non-finite: 0
+
+
+def test_auto_is_the_default_and_names_its_choice(conn):
+    auto = conn.find_pipeline("auto")
+    assert auto is not None and auto.required == [] and auto.parameters == []
+    rng = np.random.default_rng(3)
+    radiance = rng.uniform(0.4, 0.6, (H, W, 3)).astype(np.float32)
+    with conn.open_session(W, H, channels=["radiance"]) as s:  # no pipeline named: auto
+        assert s.pipeline == "image"
+        assert s.pipeline_reason.startswith("one frame at a time")
+        out = s.denoise({"radiance": radiance})
+    # A constant 0.5 under uniform noise: the output is nearer to it than the input.
+    assert np.mean((out - 0.5) ** 2) < np.mean((radiance - 0.5) ** 2)
+    with conn.open_session(W, H, "auto") as s:  # the default channels: svgf's five
+        assert s.pipeline == "svgf"
+    with conn.open_session(W, H, "passthrough", channels=["radiance"]) as s:
+        assert s.pipeline_reason == ""
 
 
 def test_non_contiguous_and_float64_arrays_are_converted(conn):

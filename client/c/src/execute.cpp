@@ -176,4 +176,21 @@ DN_API const char* dnGetFilterWatchCommand(DNFilter filter) {
                         });
 }
 
+DN_API const char* dnGetFilterPipeline(DNFilter filter) {
+  return guarded_filter(filter, "dnGetFilterPipeline", static_cast<const char*>(nullptr),
+                        [&](DNFilterImpl& f) -> const char* {
+                          open_session(f);
+                          return f.session ? f.session->info().pipeline.c_str() : "";
+                        });
+}
+
+DN_API const char* dnGetFilterPipelineReason(DNFilter filter) {
+  return guarded_filter(filter, "dnGetFilterPipelineReason", static_cast<const char*>(nullptr),
+                        [&](DNFilterImpl& f) -> const char* {
+                          open_session(f);
+                          if (!f.session || !f.session->info().pipeline_reason) return "";
+                          return f.session->info().pipeline_reason->c_str();
+                        });
+}
+
 }  // extern "C"

@@ -205,6 +205,10 @@ DN_API void dnResetFilterHistory(DNFilter filter);
 DN_API uint64_t dnGetFilterSessionId(DNFilter filter);
 DN_API const char* dnGetFilterWatchKey(DNFilter filter);     /* 32 hex digits ("" from a server before 1.6) */
 DN_API const char* dnGetFilterWatchCommand(DNFilter filter); /* "DN_WATCH_KEY=KEY dn watch --server URL --session ID" */
+/* The pipeline the session runs: for a filter of type "auto", the server's
+ * choice, and why in one line ("" for a named type or a server before 1.10). */
+DN_API const char* dnGetFilterPipeline(DNFilter filter);
+DN_API const char* dnGetFilterPipelineReason(DNFilter filter);
 
 #ifdef __cplusplus
 }

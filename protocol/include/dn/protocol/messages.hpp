@@ -19,7 +19,7 @@ namespace dn::protocol {
 
 inline constexpr uint32_t kMagic = 0x56534E44;  // bytes "DNSV" on the wire
 inline constexpr uint8_t kVersionMajor = 1;
-inline constexpr uint8_t kVersionMinor = 9;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag); 1.8: SESSION.watch_url; 1.9: RESULT.samples
+inline constexpr uint8_t kVersionMinor = 10;  // 1.1: parameter metadata in WELCOME; 1.2: channel ids 12-14 (lighting forms); 1.3: ids 15-21 (reflection features); 1.4: ids 33-50 (extra samples); 1.5: ids 51-54 (sample statistics); 1.6: watch keys (SESSION, ATTACH); 1.7: SHARE_INPUT (OPEN_SESSION flag); 1.8: SESSION.watch_url; 1.9: RESULT.samples; 1.10: pipeline 'auto', SESSION.pipeline_reason
 inline constexpr size_t kHeaderSize = 24;
 
 // Where dnserver listens when started without --listen, and so where clients
@@ -92,7 +92,12 @@ inline constexpr uint8_t kWatchKeyMinor = 6;
 inline constexpr uint8_t kShareInputMinor = 7;  // the header flag SHARE_INPUT
 inline constexpr uint8_t kWatchUrlMinor = 8;    // SESSION.watch_url
 inline constexpr uint8_t kSamplesMinor = 9;     // RESULT.samples
+inline constexpr uint8_t kAutoMinor = 10;       // OPEN_SESSION.pipeline "auto", SESSION.pipeline_reason
 inline constexpr size_t kMaxWatchUrlBytes = 256;
+inline constexpr size_t kMaxPipelineReasonBytes = 512;
+// 1.10: the pipeline name that asks the server to choose from the declared
+// channels (docs/pipelines.md "auto"); SESSION.pipeline names the choice.
+inline constexpr const char* kAutoPipeline = "auto";
 inline constexpr size_t kWatchKeyLength = 32;  // 128 random bits
 // Empty, or exactly kWatchKeyLength characters of 0-9a-f: what the decoder accepts.
 bool is_well_formed_watch_key(std::string_view key);
@@ -185,6 +190,10 @@ struct Session {
   // (dnserver --advertise-url); empty when the server has none. Printable
   // ASCII, at most kMaxWatchUrlBytes.
   std::optional<std::string> watch_url;
+  // 1.10, appended after watch_url (which must then be set): for a session
+  // opened as "auto", why the server chose `pipeline`, one line of printable
+  // ASCII (spaces allowed) at most kMaxPipelineReasonBytes; empty otherwise.
+  std::optional<std::string> pipeline_reason;
 };
 
 // Motion vectors: the protocol's canonical convention is pixels, current
