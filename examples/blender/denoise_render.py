@@ -51,7 +51,6 @@ import bpy
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__)) if "__file__" in globals() else os.getcwd()
-IMAGE_NAME = "dn denoised"
 
 
 def parse_args():
@@ -75,16 +74,13 @@ def parse_args():
 
 
 def import_dn(module_dir):
-    candidates = [module_dir or os.environ.get("DN_MODULE_DIR"), os.path.join(HERE, "..", "..", "build", "python")]
-    for d in candidates:
-        if d and os.path.isdir(d) and d not in sys.path:
-            sys.path.insert(0, os.path.abspath(d))
+    sys.path.insert(0, HERE)
+    from dn_denoise.module import import_dn as import_from  # the add-on's, beside this script
     try:
-        import dn
+        return import_from([module_dir or os.environ.get("DN_MODULE_DIR"),
+                            os.path.join(HERE, "..", "..", "build", "python")])
     except ImportError as e:
-        raise SystemExit("denoise_render.py: cannot import the dn module (%s); build it (cmake --build build "
-                         "--target dn_python) and give its directory with --dn-module-dir" % e)
-    return dn
+        raise SystemExit("denoise_render.py: %s with --dn-module-dir" % e)
 
 
 def frame_list(spec, scene):
@@ -142,26 +138,11 @@ def show(dn_image):
     return True
 
 
-def to_blender_image(rgb, name=IMAGE_NAME):
-    """(H, W, 3) float32, rows top-first -> a float Blender image (RGBA, rows bottom-first)."""
-    h, w, _ = rgb.shape
-    image = bpy.data.images.get(name)
-    if image is None or tuple(image.size) != (w, h):
-        if image is not None:
-            bpy.data.images.remove(image)
-        image = bpy.data.images.new(name, width=w, height=h, alpha=False, float_buffer=True)
-    rgba = np.ones((h, w, 4), np.float32)
-    rgba[..., :3] = rgb[::-1]
-    image.pixels.foreach_set(rgba.ravel())
-    image.update()
-    return image
-
-
 def main():
     args = parse_args()
     dn = import_dn(args.dn_module_dir)
-    sys.path.insert(0, HERE)
-    from export_camera import camera_matrices  # the camera as `dn denoise --camera` gets it
+    from dn_denoise.blender_image import to_blender_image  # the add-on's, beside this script
+    from dn_denoise.camera import camera_matrices  # the camera as `dn denoise --camera` gets it
 
     scene = bpy.context.scene
     frames = frame_list(args.frames, scene)
