@@ -345,6 +345,10 @@ int run_denoise(const std::vector<std::string>& argv) {
     // The side files' channels are theirs: the EXR layout plans the others.
     std::optional<protocol::PipelineInfo> layout_pipeline;
     if (pipeline) layout_pipeline = without_side_channels(*pipeline, sides);
+    // One file is one frame: with nothing before it, its motion moves no history, and auto
+    // would choose a temporal pipeline for a frame that has none.
+    if (layout_pipeline && !sequence && pipeline_name == protocol::kAutoPipeline)
+      layout_pipeline->optional_channels &= ~protocol::channel_bit(ChannelId::Motion);
     std::optional<std::vector<ChannelId>> layout_only = only;
     if (layout_only) std::erase_if(*layout_only, [&](ChannelId id) { return is_side_channel(sides, id); });
     plan = plan_channels(preset, overrides, layout_pipeline ? &*layout_pipeline : nullptr, layout_only,

@@ -144,6 +144,15 @@ TEST_F(DenoiseFiles, WithoutAPipelineTheServerChoosesForEachKindOfFile) {
       << log;
   EXPECT_NE(log.find(chose_image), std::string::npos) << log;
   EXPECT_NE(log.find("output worse than input: 0 (rmse), 0 (relmse) of 1 frames"), std::string::npos) << log;
+  // With every pass, the Vector pass among them: one file is one frame, its motion not sent.
+  ASSERT_EQ(dn_denoise(server, "'" + fixtures + "/frame_0000.exr' -o '" + path("all.exr") + "' -r '" + fixtures +
+                                   "/ref_0000.exr'",
+                       log),
+            0)
+      << log;
+  EXPECT_NE(log.find(chose_image), std::string::npos) << log;
+  EXPECT_EQ(log.find("motion       <-"), std::string::npos) << log;
+  EXPECT_NE(log.find("output worse than input: 0 (rmse), 0 (relmse) of 1 frames"), std::string::npos) << log;
 
   // A noisy 8-bit PNG (sRGB): a mid grey with per-pixel noise.
   std::vector<uint8_t> srgb(size_t(W * H * 3));

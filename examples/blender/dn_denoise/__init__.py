@@ -113,9 +113,13 @@ def denoise_render(context):
             if auto is None:
                 raise RuntimeError("%s cannot choose a pipeline (a server before protocol 1.10)" % conn.endpoint)
             frame = dn.read_frame(path, auto, preset="cycles", view=view, projection=projection)
-            with conn.open_session(frame.width, frame.height, "auto", channels=frame.channels,
+            # One render is one frame: its motion (a Vector pass) moves no history, and auto would
+            # choose a temporal pipeline for it.
+            planes = {name: plane for name, plane in frame.planes.items() if name != "motion"}
+            channels = {name: kind for name, kind in frame.channels.items() if name != "motion"}
+            with conn.open_session(frame.width, frame.height, "auto", channels=channels,
                                    parameters=frame.parameters) as session:
-                rgb = session.denoise(frame)
+                rgb = session.denoise(planes)
                 pipeline, reason = session.pipeline, session.pipeline_reason
         finally:
             conn.close()
