@@ -54,10 +54,13 @@ mkdir -p "$out"
 start_bench_server image_quality "$bin" "$dn" "$out/dnserver.log"
 
 # Rows: "label pipeline channels [NAME=VALUE,...]". image-all-cap16: image with the noise estimate
-# capped far higher and no harm guard (filters more: better on these frames, worse on fine detail).
+# capped far higher and no harm guard (filters more: better on these frames, worse on fine detail);
+# image-all-mean: the mean of the squared residuals instead of their median, capped at 64 times the
+# frame's gain, no harm guard (heavy-tailed noise: far better at low spp, over-smooths at 64).
 rows=("input passthrough radiance" "image-colour image radiance" "image-albedo-normal image radiance,albedo,normal"
       "image-all image radiance,albedo,normal,depth"
       "image-all-cap16 image radiance,albedo,normal,depth noise_cap=16,harm_guard=0"
+      "image-all-mean image radiance,albedo,normal,depth noise_mean=1,noise_cap=64,harm_guard=0"
       "svgf-first-frame svgf radiance,albedo,normal,depth,motion")
 results="$out/results.tsv"
 printf 'scene\tspp\tmethod\trmse\trelmse\tflip_hdr\tdevice_ms\n' > "$results"

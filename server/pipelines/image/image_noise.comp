@@ -32,7 +32,7 @@ void main() {
   // least 1/2, p itself always), kept sorted by insertion.
   float r2[25];
   int n = 0;
-  float mean = 0.0, weight = 0.0;
+  float mean = 0.0, weight = 0.0, r2_sum = 0.0;
   for (int y = -2; y <= 2; ++y)
     for (int x = -2; x <= 2; ++x) {
       const ivec2 q = p + ivec2(x, y);
@@ -45,6 +45,7 @@ void main() {
       mean += w * dn_luminance(sq.rgb);
       weight += w;
       if (w < 0.5) continue;
+      r2_sum += sq.w;
       int k = n++;
       for (; k > 0 && r2[k - 1] > sq.w; --k) r2[k] = r2[k - 1];
       r2[k] = sq.w;
@@ -54,6 +55,7 @@ void main() {
   const float cap = DN_PARAM_VALUE(image, noise_cap);
   // The median over its chi-square ratio (image_gain.glsl): a firefly or
   // an edge among the taps, a minority, does not move it.
-  const float local = r2[n / 2] * DN_GAIN_MEDIAN_TO_MEAN / 1.25;
+  const float local = DN_PARAM_VALUE(image, noise_mean) != 0.0 ? r2_sum / float(n) / 1.25
+                                                               : r2[n / 2] * DN_GAIN_MEDIAN_TO_MEAN / 1.25;
   noisy.data[pi] = vec4(sp.rgb, cap > 0.0 ? min(local, cap * gain * m * m) : local);
 }

@@ -100,8 +100,9 @@ class Image {
       }
     const double gain = median_gain(histogram);
     // The noise variance: the median of r2 over the 5x5 taps on p's surface
-    // (guide weight >= 1/2) over 0.4549 and 1.25, at most noise_cap times
-    // the gain times the squared weighted mean luminance.
+    // (guide weight >= 1/2) over 0.4549 and 1.25 (noise_mean: their mean over
+    // 1.25), at most noise_cap times the gain times the squared weighted mean
+    // luminance.
     std::vector<double> noise(n);
     for (int y = 0; y < h_; ++y)
       for (int x = 0; x < w_; ++x) {
@@ -119,7 +120,9 @@ class Image {
           }
         std::sort(own.begin(), own.end());
         const double m = mean / weight;
-        const double local = own[own.size() / 2] / 0.4549364 / 1.25;
+        double sum = 0.0;
+        for (double v : own) sum += v;
+        const double local = p_.noise_mean ? sum / double(own.size()) / 1.25 : own[own.size() / 2] / 0.4549364 / 1.25;
         noise[p] = p_.noise_cap > 0.0 ? std::min(local, p_.noise_cap * gain * m * m) : local;
       }
     // The a-trous iterations.

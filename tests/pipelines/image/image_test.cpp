@@ -64,8 +64,23 @@ double rmse(const std::vector<float>& a, const std::vector<float>& truth) {
 class ImageTest : public test::GpuTest, public testing::WithParamInterface<Guides> {};
 class ImageAgainstSvgfTest : public test::GpuTest {};
 
-TEST_P(ImageTest, MatchesTheCpuReferenceWithBadValues) {
-  const Guides& g = GetParam();
+// The device against the CPU reference, with `params` (default: the pipeline's defaults).
+void expect_reference(gpu::Context& context, const Guides& g, const std::vector<pipelines::ParameterValue>& params,
+                      const test::ImageParams& reference_params);
+
+TEST_P(ImageTest, MatchesTheCpuReferenceWithBadValues) { expect_reference(ctx(), GetParam(), {}, {}); }
+
+// The mean noise estimate, capped higher and unguarded (bench/image_quality.sh's image-all-mean).
+TEST_P(ImageTest, MatchesTheCpuReferenceWithTheMeanNoiseEstimate) {
+  test::ImageParams reference;
+  reference.noise_mean = true;
+  reference.noise_cap = 64.0;
+  reference.harm_guard = 0.0;
+  expect_reference(ctx(), GetParam(), {{"noise_mean", 1}, {"noise_cap", 64}, {"harm_guard", 0}}, reference);
+}
+
+void expect_reference(gpu::Context& context, const Guides& g, const std::vector<pipelines::ParameterValue>& params,
+                      const test::ImageParams& reference_params) {
   const test::ImageScene scene;
   std::vector<float> radiance = scene.noisy(1, 5);
   const float bad[] = {NAN, INFINITY, -INFINITY, -1.0f, 1e30f};
@@ -75,7 +90,7 @@ TEST_P(ImageTest, MatchesTheCpuReferenceWithBadValues) {
   guides.depth[30 * scene.width + 21] = INFINITY;    // and one that is background
   for (Format in : {Format::F32, Format::F16}) {
     SCOPED_TRACE(in == Format::F32 ? "fp32" : "fp16");
-    auto pipe = pipelines::create(ctx(), config_of(g, scene.width, scene.height, in));
+    auto pipe = pipelines::create(context, config_of(g, scene.width, scene.height, in, params));
     const test::HostFrame f = host_frame(g, guides, radiance, in);
     const std::vector<float> got = run(*pipe, f);
     test::ImageFrame r;
@@ -83,7 +98,7 @@ TEST_P(ImageTest, MatchesTheCpuReferenceWithBadValues) {
     if (g.albedo) r.albedo = test::decode_plane(f.plane(ChannelId::Albedo).bytes, in);
     if (g.normal) r.normal = test::decode_plane(f.plane(ChannelId::Normal).bytes, in);
     if (g.depth) r.depth = test::decode_plane(f.plane(ChannelId::Depth).bytes, in);
-    const std::vector<double> want = test::image_reference(scene.width, scene.height, r, {});
+    const std::vector<double> want = test::image_reference(scene.width, scene.height, r, reference_params);
     ASSERT_EQ(got.size(), want.size());
     for (float v : got) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << v;
     EXPECT_LE(test::relative_rms(got, want), 1e-3);
