@@ -163,36 +163,24 @@ bool read_watch_key(Ctx& c, std::optional<std::string>& out) {
   return true;
 }
 
-// SESSION.watch_url (1.8): printable ASCII, possibly empty.
-bool read_watch_url(Ctx& c, std::optional<std::string>& out) {
-  if (!c.has(kWatchUrlMinor)) {
+// A string field appended by minor `since` (unset when the message is older):
+// printable ASCII, possibly empty; spaces only where `spaces` allows them.
+bool read_appended_text(Ctx& c, uint8_t since, const char* name, size_t max_bytes, bool spaces,
+                        std::optional<std::string>& out) {
+  if (!c.has(since)) {
     out.reset();
     return true;
   }
-  const Field f = c.f("watch_url");
-  std::string url;
-  if (!c.r.str(url, f, kMaxWatchUrlBytes)) return false;
-  for (size_t i = 0; i < url.size(); ++i)
-    if (url[i] < 0x21 || url[i] > 0x7e)
+  const Field f = c.f(name);
+  std::string text;
+  if (!c.r.str(text, f, max_bytes)) return false;
+  const char lowest = spaces ? 0x20 : 0x21;
+  for (size_t i = 0; i < text.size(); ++i)
+    if (text[i] < lowest || text[i] > 0x7e)
       return c.r.fail(ErrorCode::Malformed, f,
-                      f.str() + " must be printable ASCII without spaces; byte " + std::to_string(i) + " is not");
-  out = std::move(url);
-  return true;
-}
-
-// SESSION.pipeline_reason (1.10): one line of printable ASCII, possibly empty.
-bool read_pipeline_reason(Ctx& c, std::optional<std::string>& out) {
-  if (!c.has(kAutoMinor)) {
-    out.reset();
-    return true;
-  }
-  const Field f = c.f("pipeline_reason");
-  std::string reason;
-  if (!c.r.str(reason, f, kMaxPipelineReasonBytes)) return false;
-  for (size_t i = 0; i < reason.size(); ++i)
-    if (reason[i] < 0x20 || reason[i] > 0x7e)
-      return c.r.fail(ErrorCode::Malformed, f, f.str() + " must be printable ASCII; byte " + std::to_string(i) + " is not");
-  out = std::move(reason);
+                      f.str() + (spaces ? " must be printable ASCII" : " must be printable ASCII without spaces") +
+                          "; byte " + std::to_string(i) + " is not");
+  out = std::move(text);
   return true;
 }
 
@@ -321,8 +309,10 @@ bool decode(Ctx& c, Session& m) {
     return false;
   if (!read_bool(r, m.read_only, c.f("read_only"))) return false;
   return r.u64(m.device_bytes, c.f("device_bytes")) && read_channel_decls(r, m.channels, c.type, "channels") &&
-         read_watch_key(c, m.watch_key) && read_watch_url(c, m.watch_url) &&
-         read_pipeline_reason(c, m.pipeline_reason);
+         read_watch_key(c, m.watch_key) &&
+         read_appended_text(c, kWatchUrlMinor, "watch_url", kMaxWatchUrlBytes, false, m.watch_url) &&  // 1.8
+         read_appended_text(c, kAutoMinor, "pipeline_reason", kMaxPipelineReasonBytes, true,  // 1.10
+                            m.pipeline_reason);
 }
 
 bool decode(Ctx& c, Frame& m) {

@@ -11,12 +11,6 @@ namespace {
 
 using protocol::ChannelId;
 
-uint64_t mask_of(const std::vector<InputChannel>& channels) {
-  uint64_t m = 0;
-  for (const auto& c : channels) m |= protocol::channel_bit(c.id);
-  return m;
-}
-
 uint64_t mask_of(const std::vector<ChannelId>& ids) {
   uint64_t m = 0;
   for (ChannelId id : ids) m |= protocol::channel_bit(id);
@@ -25,12 +19,12 @@ uint64_t mask_of(const std::vector<ChannelId>& ids) {
 
 // The declared channels `desc` reads. A pipeline that takes radiance or the
 // split pair (svgf) reads radiance when both came: one signal, one filter.
-std::vector<InputChannel> channels_read(const std::vector<InputChannel>& declared, const PipelineDescription& desc) {
+std::vector<InputChannel> channels_read(const SessionConfig& declared, const PipelineDescription& desc) {
   uint64_t takes = desc.required_channels | desc.optional_channels;
-  const uint64_t radiance = protocol::channel_bit(ChannelId::Radiance);
-  if ((takes & radiance) && (mask_of(declared) & radiance)) takes &= ~split_channel_bits();
+  if ((takes & protocol::channel_bit(ChannelId::Radiance)) && has_channel(declared, ChannelId::Radiance))
+    takes &= ~split_channel_bits();
   std::vector<InputChannel> read;
-  for (const auto& c : declared)
+  for (const auto& c : declared.channels)
     if (takes & protocol::channel_bit(c.id)) read.push_back(c);
   return read;
 }
@@ -69,14 +63,14 @@ std::variant<PreparedPipeline, ConfigError> prepare_auto(const SessionConfig& de
     return ConfigError{ConfigProblem::InvalidParameter, "parameters[0].name",
                        "pipeline auto takes no parameters; name the pipeline to set \"" +
                            declared.parameters[0].name + "\""};
-  const uint64_t have = mask_of(declared.channels);
+  const uint64_t have = channel_mask(declared);
   std::optional<ConfigError> last;
   for (const AutoRule& rule : auto_rules()) {
     const PipelineDefinition* def = find_definition(rule.pipeline);
     if (!def || (mask_of(rule.signal) & ~have)) continue;
     SessionConfig candidate = declared;
     candidate.pipeline = std::string(rule.pipeline);
-    candidate.channels = channels_read(declared.channels, def->description);
+    candidate.channels = channels_read(declared, def->description);
     auto prepared = prepare(candidate);
     if (auto* err = std::get_if<ConfigError>(&prepared)) {
       if (err->problem == ConfigProblem::LimitExceeded) return *err;  // too large for any pipeline: say so
@@ -86,7 +80,7 @@ std::variant<PreparedPipeline, ConfigError> prepare_auto(const SessionConfig& de
     PreparedPipeline chosen = std::get<PreparedPipeline>(std::move(prepared));
     chosen.declared_channels_ = declared.channels;
     chosen.choice_reason_ = std::string(rule.reason);
-    if (const uint64_t unused = have & ~mask_of(candidate.channels))
+    if (const uint64_t unused = have & ~channel_mask(candidate))
       chosen.choice_reason_ += "; not used: " + channel_list(unused);
     return chosen;
   }

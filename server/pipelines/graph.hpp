@@ -151,6 +151,8 @@ uint64_t round_up4(uint64_t bytes);
 protocol::Format channel_format(const SessionConfig& config, protocol::ChannelId channel);
 // Whether the session declared the channel.
 bool has_channel(const SessionConfig& config, protocol::ChannelId channel);
+// The declared channels as a protocol::channel_bit mask.
+uint64_t channel_mask(const SessionConfig& config);
 
 // The context's buffer for optional bindings a pass leaves unbound (the
 // shader does not touch them): one small placeholder, never a real buffer

@@ -21,6 +21,12 @@ bool has_channel(const SessionConfig& config, protocol::ChannelId channel) {
   return false;
 }
 
+uint64_t channel_mask(const SessionConfig& config) {
+  uint64_t mask = 0;
+  for (const auto& c : config.channels) mask |= protocol::channel_bit(c.id);
+  return mask;
+}
+
 uint64_t GraphSpec::device_bytes() const {
   uint64_t total = kConstantBytes;
   for (const auto& b : buffers) total += b.role == BufferRole::History ? 2 * b.bytes : b.bytes;

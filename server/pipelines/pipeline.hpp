@@ -101,6 +101,12 @@ class PreparedPipeline {
   const std::vector<InputChannel>& declared_channels() const {
     return declared_channels_.empty() ? config_.channels : declared_channels_;
   }
+  // config() with declared_channels(): what each frame of the session carries.
+  SessionConfig frame_config() const {
+    SessionConfig c = config_;
+    c.channels = declared_channels();
+    return c;
+  }
   // For "auto": why config().pipeline was chosen, one line; empty otherwise.
   const std::string& choice_reason() const { return choice_reason_; }
   // Persistent device bytes create() will allocate (= the pipeline's device_bytes()).

@@ -60,12 +60,9 @@ void SessionService::on_open_session(net::Connection& c, const protocol::Header&
   if (auto* err = std::get_if<pipelines::ConfigError>(&prepared))
     return error(c, h.request_id, error_code(err->problem), open_session_field(err->field), err->message);
   const pipelines::PreparedPipeline& ready = std::get<pipelines::PreparedPipeline>(prepared);
-  const pipelines::SessionConfig& config = ready.config();
 
   // A frame of this session (every channel declared) must fit one message.
-  pipelines::SessionConfig frame_config = config;
-  frame_config.channels = ready.declared_channels();
-  const uint64_t frame_bytes = frame_message_bytes(frame_config);
+  const uint64_t frame_bytes = frame_message_bytes(ready.frame_config());
   if (frame_bytes > options_.max_message_bytes)
     return error(c, h.request_id, ErrorCode::LimitExceeded, "OPEN_SESSION.channels",
                       "a frame of this session needs " + std::to_string(frame_bytes) + " bytes, above the " +

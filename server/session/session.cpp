@@ -28,10 +28,9 @@ Session::Session(uint64_t id, uint64_t owner, const pipelines::PreparedPipeline&
       owner_(owner),
       watch_key_(std::move(watch_key)),
       config_(prepared.config()),
-      frame_config_(prepared.config()),
+      frame_config_(prepared.frame_config()),
       choice_reason_(prepared.choice_reason()),
       pipeline_(std::move(pipeline)) {
-  frame_config_.channels = prepared.declared_channels();
   device_bytes_ = pipeline_ ? pipeline_->device_bytes() : 0;
   transient_bytes_ = pipeline_ ? pipeline_->transient_bytes() : 0;
 }

@@ -3,12 +3,11 @@
 // does no device work.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "pipelines/auto_choice.hpp"
+#include "text_file.hpp"
 
 namespace dn::pipelines {
 namespace {
@@ -171,11 +170,7 @@ TEST(AutoChoice, AnnouncesEveryChannelItsPipelinesTakeAndRequiresNone) {
 
 // docs/pipelines.md "auto" reproduces the table: one row per rule, in order.
 TEST(AutoChoice, TheDocsTableIsTheCodesTable) {
-  std::ifstream in(DN_DOCS_PIPELINES_MD);
-  ASSERT_TRUE(in) << "cannot open " << DN_DOCS_PIPELINES_MD;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string doc = ss.str();
+  const std::string doc = test::read_text(DN_DOCS_PIPELINES_MD);
   size_t order = 0, at = 0;
   for (const AutoRule& rule : auto_rules()) {
     std::string signal;

@@ -8,9 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstddef>
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <string>
 
 #include "dn/shaders/declaration.hpp"
@@ -18,6 +16,7 @@
 #include "json_lite.hpp"
 #include "pipelines/frame_constants.hpp"
 #include "pipelines/parameters.hpp"
+#include "text_file.hpp"
 
 namespace dn {
 namespace {
@@ -25,12 +24,7 @@ namespace {
 using test::json::Value;
 
 Value reflection(std::string_view shader) {
-  const std::string path = std::string(DN_SPIRV_DIR) + "/" + std::string(shader) + ".spv.json";
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return test::json::parse(ss.str());
+  return test::json::parse(test::read_text(std::string(DN_SPIRV_DIR) + "/" + std::string(shader) + ".spv.json"));
 }
 
 const char* type_name(shaders::SpecType t) {

@@ -14,6 +14,7 @@
 #include "pipelines/pipeline.hpp"
 #include "pipelines/sample_summary.hpp"
 #include "pipelines/registry.hpp"
+#include "text_file.hpp"
 
 namespace dn {
 namespace {
@@ -208,11 +209,7 @@ TEST_F(DeviceBytesTest, CreateRejectsConfigurationsValidateRejects) {
 // docs/pipelines.md reproduces parameters.def: every parameter appears in a
 // table row "| `name` | default | min – max | ...".
 TEST(Docs, ParameterTableMatchesTheDefinition) {
-  std::ifstream in(DN_DOCS_PIPELINES_MD);
-  ASSERT_TRUE(in) << "cannot open " << DN_DOCS_PIPELINES_MD;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string doc = ss.str();
+  const std::string doc = test::read_text(DN_DOCS_PIPELINES_MD);
   auto fmt = [](double v) {
     std::ostringstream o;
     o << v;

@@ -39,9 +39,7 @@ uint64_t stat_channels() {
 }
 
 bool declares_statistics(const SessionConfig& config) {
-  uint64_t declared = 0;
-  for (const InputChannel& c : config.channels) declared |= protocol::channel_bit(c.id);
-  return (declared & statistics_channels()) == statistics_channels();
+  return (channel_mask(config) & statistics_channels()) == statistics_channels();
 }
 
 void add_stat_inputs(GraphSpec& g, const SessionConfig& config, bool with_statistics, double still_alpha) {

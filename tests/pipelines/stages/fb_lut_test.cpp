@@ -10,11 +10,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <random>
 #include <regex>
-#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -24,6 +22,7 @@
 #include "gpu/commands.hpp"
 #include "gpu/compute.hpp"
 #include "gpu_test_env.hpp"
+#include "text_file.hpp"
 #include "pipelines/stages/fb_lut.hpp"
 #include "pipelines/pass.hpp"
 
@@ -121,11 +120,7 @@ class FbLutTest : public test::GpuTest {
 // fb_lut.glsl's DN_FB_LUT_SIZE is the same number as kFbLutSize (the one
 // GLSL and the one C++ definition of the table size).
 TEST(FbLutDefinition, GlslSizeMatchesCpp) {
-  std::ifstream file(DN_FB_LUT_GLSL);
-  ASSERT_TRUE(file) << DN_FB_LUT_GLSL;
-  std::stringstream text;
-  text << file.rdbuf();
-  const std::string s = text.str();
+  const std::string s = test::read_text(DN_FB_LUT_GLSL);
   std::smatch m;
   const std::regex define(R"(#define\s+DN_FB_LUT_SIZE\s+(\d+)\s)");
   ASSERT_TRUE(std::regex_search(s, m, define)) << "no #define DN_FB_LUT_SIZE in " << DN_FB_LUT_GLSL;
