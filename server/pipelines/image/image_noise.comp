@@ -1,13 +1,23 @@
 #version 450
-// image_noise: the noise variance of a pixel's demodulated luminance over
-// its 5x5 neighbourhood: the median of the squared residuals (image_prepare's
-// .w) of the taps its guides put on p's surface (weight >= 1/2), over
-// 0.4549 (a chi-square median) and 1.25 (a residual's variance for
-// independent noise of equal variance), which structure covering most of
-// the window inflates, at most noise_cap times the frame's
-// gain k (image_gain) times the guide-weighted mean luminance squared, which a region
-// noisier than the frame's median underestimates: the cap errs towards
-// filtering less. One invocation per pixel.
+// image_noise: the noise variance of a pixel's demodulated luminance, from
+// the residuals r (image_prepare's .w) of the taps of its 5x5 neighbourhood
+// on its surface (guide weight >= 1/2, p itself always), at most noise_cap
+// times the frame's gain k (image_gain) times the guide-weighted mean
+// luminance squared: a region noisier than the frame's median is
+// underestimated there, so the cap errs towards filtering less.
+//  - noise_estimate 0: the median of r^2 over 0.4549 (a chi-square median)
+//    and 1.25 (E[r^2] for independent noise of equal variance): a firefly or
+//    an edge among the taps, a minority, does not move it; the heavy-tailed
+//    noise of few samples it underestimates.
+//  - noise_estimate 1: r^2 less the mean of r's products with its right and
+//    lower neighbours' residuals, averaged: for independent noise of variance
+//    s2 that is 1.75 s2 (the covariance of neighbouring residuals is -0.5 s2),
+//    while curvature of the signal smooth over a pixel cancels; shrunk by
+//    the cube of its ratio to the plain mean of r^2 over 1.25, so where
+//    structure still dominates (fine glossy detail) the filter trusts its
+//    noise less. A mean: it follows heavy tails, and a small bright feature
+//    beside p too.
+// One invocation per pixel.
 //
 // Resources: image_noise.pass (binding 0 FrameConstants).
 #extension GL_GOOGLE_include_directive : require
@@ -28,11 +38,10 @@ void main() {
   const vec4 sp = signal_at(pi);
   const vec4 gp = guide_at(pi);
   const vec3 ap = dn_image_albedo(pi);
-  // The squared residuals of the taps on p's surface (geometry weight at
-  // least 1/2, p itself always), kept sorted by insertion.
-  float r2[25];
+  const bool decorrelated_estimate = DN_PARAM_VALUE(image, noise_estimate) != 0.0;
+  float r2[25];  // the squared residuals of the taps on p's surface, sorted (median estimate)
   int n = 0;
-  float mean = 0.0, weight = 0.0, r2_sum = 0.0;
+  float mean = 0.0, weight = 0.0, plain = 0.0, decorrelated = 0.0;
   for (int y = -2; y <= 2; ++y)
     for (int x = -2; x <= 2; ++x) {
       const ivec2 q = p + ivec2(x, y);
@@ -45,17 +54,30 @@ void main() {
       mean += w * dn_luminance(sq.rgb);
       weight += w;
       if (w < 0.5) continue;
-      r2_sum += sq.w;
+      const float r = sq.w;
+      if (decorrelated_estimate) {
+        const float r_right = signal_at(dn_image_clamped(q, ivec2(1, 0), size)).w;
+        const float r_lower = signal_at(dn_image_clamped(q, ivec2(0, 1), size)).w;
+        plain += r * r;
+        decorrelated += r * r - 0.5 * r * (r_right + r_lower);
+        ++n;
+        continue;
+      }
       int k = n++;
-      for (; k > 0 && r2[k - 1] > sq.w; --k) r2[k] = r2[k - 1];
-      r2[k] = sq.w;
+      for (; k > 0 && r2[k - 1] > r * r; --k) r2[k] = r2[k - 1];
+      r2[k] = r * r;
     }
+  float local;
+  if (decorrelated_estimate) {
+    const float from_plain = plain / (1.25 * float(n));
+    const float from_decorrelated = max(decorrelated, 0.0) / (1.75 * float(n));
+    const float noise_share = from_plain > 0.0 ? min(1.0, from_decorrelated / from_plain) : 0.0;
+    local = from_decorrelated * noise_share * noise_share * noise_share;
+  } else {
+    local = r2[n / 2] * DN_GAIN_MEDIAN_TO_MEAN / 1.25;
+  }
   const float gain = uintBitsToFloat(histogram.data[GAIN_BINS]);
   const float m = mean / weight;
   const float cap = DN_PARAM_VALUE(image, noise_cap);
-  // The median over its chi-square ratio (image_gain.glsl): a firefly or
-  // an edge among the taps, a minority, does not move it.
-  const float local = DN_PARAM_VALUE(image, noise_mean) != 0.0 ? r2_sum / float(n) / 1.25
-                                                               : r2[n / 2] * DN_GAIN_MEDIAN_TO_MEAN / 1.25;
   noisy.data[pi] = vec4(sp.rgb, cap > 0.0 ? min(local, cap * gain * m * m) : local);
 }

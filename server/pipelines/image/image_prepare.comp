@@ -1,10 +1,9 @@
 #version 450
 // image_prepare: per pixel, the sanitized radiance divided by its guarded
-// albedo (with an albedo plane), and in .w the square of its luminance's
-// residual against the mean of its 4 neighbours (clamped at the frame's
-// edge): for noise independent between pixels its expectation is 1.25 times
-// the noise variance plus the signal's curvature, which image_noise averages
-// over the pixel's surface. Each pixel whose 5-pixel mean m is above 0
+// albedo (with an albedo plane), and in .w its luminance's residual r
+// against the mean of its 4 neighbours (clamped at the frame's edge): noise
+// and the signal's curvature, which image_noise tells apart over the
+// pixel's surface. Each pixel whose 5-pixel mean m is above 0
 // counts t = r^2 / (1.25 m^2) in the gain histogram (image_gain.glsl). The
 // guide: the sanitized normal (zero if none) and depth (0 if none). One
 // invocation per pixel.
@@ -33,7 +32,7 @@ void main() {
   for (int k = 0; k < 4; ++k) around += dn_luminance(demodulated(dn_image_clamped(p, dirs[k], size)));
   const float l = dn_luminance(c);
   const float r = l - 0.25 * around;
-  signal.data[pi] = vec4(c, r * r);
+  signal.data[pi] = vec4(c, r);
   const float m = 0.2 * (l + around);
   const float t = r * r / (1.25 * m * m);
   if (m > 0.0 && t > 0.0 && dn_is_finite(t)) atomicAdd(histogram.data[dn_gain_bin(t)], 1u);

@@ -12,7 +12,8 @@ TEST(ImageDescription, RadianceWithOptionalGuidesAndItsOwnParameters) {
   EXPECT_EQ(d.required_channels, test::bits({ChannelId::Radiance}));
   EXPECT_EQ(d.optional_channels, test::bits({ChannelId::Albedo, ChannelId::Normal, ChannelId::Depth}));
   EXPECT_EQ(test::parameter_names(d), (std::vector<std::string>{"iterations", "phi_luminance", "phi_normal", "phi_depth",
-                                                                "phi_albedo", "noise_cap", "harm_guard", "noise_mean"}));
+                                                                "phi_albedo", "noise_cap", "harm_guard",
+                                                                "noise_estimate"}));
 }
 
 }  // namespace

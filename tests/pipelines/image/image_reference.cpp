@@ -82,8 +82,8 @@ class Image {
 
   std::vector<double> run() const {
     const int n = w_ * h_;
-    // The squared residual of each pixel's luminance against its 4 neighbours' mean.
-    std::vector<double> r2(n);
+    // The residual of each pixel's luminance against its 4 neighbours' mean.
+    std::vector<double> r(n);
     std::vector<Vec3> colour(n);
     std::vector<double> histogram(256, 0.0);  // of t = r^2 / (1.25 m^2), eighths of an octave from 2^-24
     for (int y = 0; y < h_; ++y)
@@ -92,23 +92,24 @@ class Image {
         colour[i] = demodulated(i);
         const double around = luminance(demodulated(clamped(x + 1, y))) + luminance(demodulated(clamped(x - 1, y))) +
                               luminance(demodulated(clamped(x, y + 1))) + luminance(demodulated(clamped(x, y - 1)));
-        const double l = luminance(colour[i]), r = l - 0.25 * around;
-        r2[i] = r * r;
-        const double m = 0.2 * (l + around), t = r * r / (1.25 * m * m);
+        const double l = luminance(colour[i]);
+        r[i] = l - 0.25 * around;
+        const double m = 0.2 * (l + around), t = r[i] * r[i] / (1.25 * m * m);
         if (m > 0.0 && t > 0.0 && finite(t))
           ++histogram[size_t(std::clamp(std::floor((std::log2(t) + 24.0) * 8.0), 0.0, 255.0))];
       }
     const double gain = median_gain(histogram);
-    // The noise variance: the median of r2 over the 5x5 taps on p's surface
-    // (guide weight >= 1/2) over 0.4549 and 1.25 (noise_mean: their mean over
-    // 1.25), at most noise_cap times the gain times the squared weighted mean
-    // luminance.
+    // The noise variance over the 5x5 taps q on p's surface (guide weight >=
+    // 1/2): the median of r_q^2 over 0.4549 and 1.25, or (noise_estimate 1) with
+    // a = mean r_q^2 / 1.25 and b = max(0, mean(r_q^2 - r_q (r_right + r_lower) / 2)) / 1.75
+    // (neighbours clamped to the frame) b min(1, b / a)^3; at most noise_cap times
+    // the gain times the squared weighted mean luminance.
     std::vector<double> noise(n);
     for (int y = 0; y < h_; ++y)
       for (int x = 0; x < w_; ++x) {
         const int p = at(x, y);
+        double mean = 0.0, weight = 0.0, plain = 0.0, decorrelated = 0.0;
         std::vector<double> own;  // squared residuals of the taps on p's surface
-        double mean = 0.0, weight = 0.0;
         for (int dy = -2; dy <= 2; ++dy)
           for (int dx = -2; dx <= 2; ++dx) {
             if (!inside(x + dx, y + dy)) continue;
@@ -116,13 +117,18 @@ class Image {
             const double w = dx == 0 && dy == 0 ? 1.0 : geometry_weight(p, q, std::hypot(dx, dy));
             mean += w * luminance(colour[q]);
             weight += w;
-            if (w >= 0.5) own.push_back(r2[q]);
+            if (w < 0.5) continue;
+            const double right = r[clamped(x + dx + 1, y + dy)], lower = r[clamped(x + dx, y + dy + 1)];
+            own.push_back(r[q] * r[q]);
+            plain += r[q] * r[q];
+            decorrelated += r[q] * r[q] - 0.5 * r[q] * (right + lower);
           }
         std::sort(own.begin(), own.end());
-        const double m = mean / weight;
-        double sum = 0.0;
-        for (double v : own) sum += v;
-        const double local = p_.noise_mean ? sum / double(own.size()) / 1.25 : own[own.size() / 2] / 0.4549364 / 1.25;
+        const double m = mean / weight, taps = double(own.size());
+        const double a = plain / (1.25 * taps), b = std::max(decorrelated, 0.0) / (1.75 * taps);
+        const double local = !p_.decorrelated_noise ? own[own.size() / 2] / 0.4549364 / 1.25
+                             : a > 0.0            ? b * std::pow(std::min(1.0, b / a), 3.0)
+                                                  : 0.0;
         noise[p] = p_.noise_cap > 0.0 ? std::min(local, p_.noise_cap * gain * m * m) : local;
       }
     // The a-trous iterations.

@@ -14,7 +14,7 @@ struct ImageParams {
   double phi_albedo = 0.1;
   double noise_cap = 1.0;
   double harm_guard = 3.0;
-  bool noise_mean = false;
+  bool decorrelated_noise = false;  // noise_estimate 1
 };
 
 // One frame's planes decoded to doubles (NaN and Inf kept as sent); an

@@ -70,13 +70,14 @@ void expect_reference(gpu::Context& context, const Guides& g, const std::vector<
 
 TEST_P(ImageTest, MatchesTheCpuReferenceWithBadValues) { expect_reference(ctx(), GetParam(), {}, {}); }
 
-// The mean noise estimate, capped higher and unguarded (bench/image_quality.sh's image-all-mean).
-TEST_P(ImageTest, MatchesTheCpuReferenceWithTheMeanNoiseEstimate) {
+// The decorrelated noise estimate, capped higher and unguarded (bench/image_quality.sh's
+// image-all-decorrelated).
+TEST_P(ImageTest, MatchesTheCpuReferenceWithTheDecorrelatedNoiseEstimate) {
   test::ImageParams reference;
-  reference.noise_mean = true;
+  reference.decorrelated_noise = true;
   reference.noise_cap = 64.0;
   reference.harm_guard = 0.0;
-  expect_reference(ctx(), GetParam(), {{"noise_mean", 1}, {"noise_cap", 64}, {"harm_guard", 0}}, reference);
+  expect_reference(ctx(), GetParam(), {{"noise_estimate", 1}, {"noise_cap", 64}, {"harm_guard", 0}}, reference);
 }
 
 void expect_reference(gpu::Context& context, const Guides& g, const std::vector<pipelines::ParameterValue>& params,
