@@ -21,6 +21,7 @@
 #include "dn/image/metrics.hpp"
 #include "frame_range.hpp"
 #include "frame_source.hpp"
+#include "input_image.hpp"
 #include "output_image.hpp"
 #include "presets.hpp"
 #include "progress.hpp"
@@ -65,7 +66,9 @@ const std::vector<Args::Spec> kSpecs = {
     {"fp16", "", false, false, "send input planes and receive the output as fp16", ""},
     {"output-format", "", true, false, "f32 | f16 output on the wire (default f16 with --fp16, else f32)", "FMT"},
     {"param", "", true, true, "pipeline parameter NAME=VALUE", "NAME=VALUE"},
-    {"reference", "-r", true, false, "reference EXR pattern: print RMSE, relMSE, SSIM, FLIP and the input's error per frame", "PATTERN"},
+    {"reference", "-r", true, false,
+     "reference pattern (EXR, or .pfm / .png by extension): print RMSE, relMSE, SSIM, FLIP and the input's error per frame",
+     "PATTERN"},
     {"fail", "", true, false,
      "with -r: a frame fails when its --fail-metric is above X; too many failing frames make dn exit 3", "X"},
     {"fail-metric", "", true, false, "relmse | rmse: the metric --fail bounds (default relmse)", "NAME"},
@@ -155,14 +158,6 @@ std::string input_argument(const Args& args) {
   if (positional.empty() && !option)
     throw UsageError("missing the input: dn denoise IN -o OUT (IN a file or a frame pattern)");
   return option ? *option : positional.front();
-}
-
-// .pfm and .png by extension (any case); anything else is read as EXR, as
-// every input was before PFM and PNG were taken.
-ImageFormat input_format_for(const std::string& input) {
-  std::string ext = std::filesystem::path(input).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".pfm" ? ImageFormat::Pfm : ext == ".png" ? ImageFormat::Png : ImageFormat::Exr;
 }
 
 // Device time of a frame: its passes, without the host-side upload and download stages.
@@ -475,7 +470,7 @@ int run_denoise(const std::vector<std::string>& argv) {
     if (reference) {
       int rw = 0, rh = 0;
       const std::string path = format_frame_path(*reference, number);
-      const std::vector<float> ref = image::read_exr_rgb(path, rw, rh);
+      const std::vector<float> ref = read_reference_rgb(path, rw, rh);
       if (rw != int(r.width) || rh != int(r.height))
         throw std::runtime_error("reference " + path + " is " + std::to_string(rw) + "x" + std::to_string(rh) +
                                  ", the output is " + std::to_string(r.width) + "x" + std::to_string(r.height));
@@ -587,7 +582,7 @@ int run_denoise(const std::vector<std::string>& argv) {
   session.close();
   for (const auto& p : pending_flip) {
     int rw = 0, rh = 0;
-    const std::vector<float> ref = image::read_exr_rgb(format_frame_path(*reference, p.number), rw, rh);
+    const std::vector<float> ref = read_reference_rgb(format_frame_path(*reference, p.number), rw, rh);
     const FlipMetrics f = flip_metrics(p.rgb, ref, rw, rh, tonemap, exposure);
     extras.add_flip(f);
     char head[32];

@@ -1,5 +1,7 @@
 #include "input_image.hpp"
 
+#include <filesystem>
+
 #include "dn/image/exr_io.hpp"
 #include "dn/image/pfm.hpp"
 #include "dn/image/png_read.hpp"
@@ -24,6 +26,21 @@ std::vector<float> read_exr_components(const image::ExrReader& exr, protocol::Ch
 }
 
 }  // namespace
+
+ImageFormat input_format_for(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".pfm" ? ImageFormat::Pfm : ext == ".png" ? ImageFormat::Png : ImageFormat::Exr;
+}
+
+std::vector<float> read_reference_rgb(const std::string& path, int& width, int& height) {
+  const ImageFormat format = input_format_for(path);
+  if (format == ImageFormat::Exr) return image::read_exr_rgb(path, width, height);
+  RgbImage img = read_input_image(path, format, protocol::ChannelId::Radiance);
+  width = img.width;
+  height = img.height;
+  return std::move(img.rgb);
+}
 
 RgbImage read_input_image(const std::string& path, ImageFormat format, protocol::ChannelId id) {
   RgbImage img;

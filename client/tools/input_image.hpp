@@ -25,4 +25,12 @@ struct RgbImage {
 // Throws image::ImageError naming the file and what was wrong.
 RgbImage read_input_image(const std::string& path, ImageFormat format, protocol::ChannelId id);
 
+// An input's or a reference's format: .pfm and .png by extension (any case);
+// anything else is EXR.
+ImageFormat input_format_for(const std::string& path);
+
+// A reference frame's linear RGB (-r, --reference2): an EXR as
+// image::read_exr_rgb reads it, a PFM or PNG as read_input_image reads radiance.
+std::vector<float> read_reference_rgb(const std::string& path, int& width, int& height);
+
 }  // namespace dn::cli

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "dn/image/exr_io.hpp"
 #include "dn/image/metrics.hpp"
+#include "input_image.hpp"
 
 namespace dn::cli {
 
@@ -26,7 +26,7 @@ struct NoiseCorrected {
 inline NoiseCorrected noise_corrected_metrics(const std::vector<float>& rgb, const std::vector<float>& ref,
                                               int width, int height, const std::string& ref2_path) {
   int w = 0, h = 0;
-  const std::vector<float> ref2 = image::read_exr_rgb(ref2_path, w, h);
+  const std::vector<float> ref2 = read_reference_rgb(ref2_path, w, h);
   if (w != width || h != height)
     throw std::runtime_error("second reference " + ref2_path + " is " + std::to_string(w) + "x" +
                              std::to_string(h) + ", the output and first reference are " + std::to_string(width) +

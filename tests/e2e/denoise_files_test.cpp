@@ -16,6 +16,7 @@
 #include "dn/image/png.hpp"
 #include "dn/image/png_read.hpp"
 #include "server_process.hpp"
+#include "summary_file.hpp"
 
 namespace dn::test {
 namespace {
@@ -125,6 +126,38 @@ TEST_F(DenoiseFiles, NoisyPfmTrioThroughImageComesOutCloserToTheTruth) {
   const std::vector<float> out = image::read_pfm_rgb(path("out.pfm"), ow, oh);
   ASSERT_EQ(out.size(), truth.size());
   EXPECT_LT(squared_error(out, truth), 0.25 * squared_error(noisy, truth));  // RMSE at most half the input's
+}
+
+// -r takes a PFM or a PNG reference by its extension, as the input: the
+// summary's RMSE of the output and of the input are those against the
+// reference as this test reads it (a PNG as sRGB-decoded 8-bit values).
+TEST_F(DenoiseFiles, APfmOrPngReferenceIsMeasuredByItsExtension) {
+  constexpr int w = 24, h = 16;
+  std::vector<float> truth(size_t(w * h * 3)), noisy(truth.size()), albedo(truth.size(), 0.5f), normal(truth.size());
+  std::vector<uint8_t> truth8(truth.size());
+  for (size_t i = 0; i < truth.size(); ++i) {
+    truth8[i] = uint8_t(40 + (i * 7) % 160);
+    noisy[i] = (i % 3 == 2 ? 0.0f : 1.0f) * float(i % 5) * 0.1f;
+    normal[i] = i % 3 == 2 ? 1.0f : 0.0f;
+  }
+  image::write_png_rgb8(path("truth.png"), w, h, truth8.data());
+  int pw = 0, ph = 0;
+  const std::vector<float> png_truth = image::read_png_rgb(path("truth.png"), pw, ph, image::PngTransfer::Srgb);
+  truth = png_truth;
+  image::write_pfm_rgb(path("truth.pfm"), w, h, truth.data());
+  ServerProcess server;
+  for (const char* reference : {"truth.pfm", "truth.png"}) {
+    SCOPED_TRACE(reference);
+    std::string log;
+    const std::string args = "--pipeline image -q -r '" + path(reference) + "' --summary '" + path("s.tsv") + "'";
+    ASSERT_EQ(denoise_trio(server, w, h, noisy, albedo, normal, args, log), 0) << log;
+    int ow = 0, oh = 0;
+    const std::vector<float> out = image::read_pfm_rgb(path("out.pfm"), ow, oh);
+    const auto summary = test::summary_columns(path("s.tsv"));
+    const double n = double(truth.size());
+    EXPECT_NEAR(summary.at("rmse"), std::sqrt(squared_error(out, truth) / n), 1e-4);
+    EXPECT_NEAR(summary.at("input_rmse"), std::sqrt(squared_error(noisy, truth) / n), 1e-4);
+  }
 }
 
 // The three files of the common job, each with one command and no --pipeline:
