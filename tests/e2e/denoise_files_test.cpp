@@ -133,17 +133,18 @@ TEST_F(DenoiseFiles, NoisyPfmTrioThroughImageComesOutCloserToTheTruth) {
 // reference as this test reads it (a PNG as sRGB-decoded 8-bit values).
 TEST_F(DenoiseFiles, APfmOrPngReferenceIsMeasuredByItsExtension) {
   constexpr int w = 24, h = 16;
-  std::vector<float> truth(size_t(w * h * 3)), noisy(truth.size()), albedo(truth.size(), 0.5f), normal(truth.size());
-  std::vector<uint8_t> truth8(truth.size());
-  for (size_t i = 0; i < truth.size(); ++i) {
+  const size_t values = size_t(w * h * 3);
+  std::vector<float> noisy(values), albedo(values, 0.5f), normal(values);
+  std::vector<uint8_t> truth8(values);
+  for (size_t i = 0; i < values; ++i) {
     truth8[i] = uint8_t(40 + (i * 7) % 160);
     noisy[i] = (i % 3 == 2 ? 0.0f : 1.0f) * float(i % 5) * 0.1f;
     normal[i] = i % 3 == 2 ? 1.0f : 0.0f;
   }
   image::write_png_rgb8(path("truth.png"), w, h, truth8.data());
   int pw = 0, ph = 0;
-  const std::vector<float> png_truth = image::read_png_rgb(path("truth.png"), pw, ph, image::PngTransfer::Srgb);
-  truth = png_truth;
+  const std::vector<float> truth = image::read_png_rgb(path("truth.png"), pw, ph, image::PngTransfer::Srgb);
+  ASSERT_EQ(truth.size(), values);
   image::write_pfm_rgb(path("truth.pfm"), w, h, truth.data());
   ServerProcess server;
   for (const char* reference : {"truth.pfm", "truth.png"}) {

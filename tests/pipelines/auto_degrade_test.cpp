@@ -5,7 +5,6 @@
 // to the truth than its input: a missing guide costs quality, never harm.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -20,12 +19,6 @@ namespace {
 
 using test::ChannelId;
 using test::Format;
-
-double rmse(const std::vector<float>& a, const std::vector<float>& truth) {
-  double e = 0.0;
-  for (size_t i = 0; i < truth.size(); ++i) e += (double(a[i]) - truth[i]) * (double(a[i]) - truth[i]);
-  return std::sqrt(e / double(truth.size()));
-}
 
 class AutoDegradeTest : public test::GpuTest {};
 
@@ -62,7 +55,7 @@ TEST_F(AutoDegradeTest, EverySubsetOfTheGuidesDenoisesEveryFrameOfAStillView) {
       std::vector<uint8_t> out;
       std::vector<pipelines::PassTiming> timings;
       test::process(*pipe, f.view(), true, out, timings);
-      const double in_error = rmse(noisy, scene.truth), out_error = rmse(test::decode_output(out, Format::F32), scene.truth);
+      const double in_error = scene.rmse(noisy), out_error = scene.rmse(test::decode_output(out, Format::F32));
       std::printf("[ info     ] %s -> %s, frame %u: RMSE input %.4f output %.4f\n", name.c_str(),
                   chosen.config().pipeline.c_str(), frame, in_error, out_error);
       EXPECT_LT(out_error, in_error) << chosen.config().pipeline << ", frame " << frame;

@@ -6,6 +6,7 @@
 // [0, 2] (seeded).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -38,6 +39,13 @@ struct ImageScene {
         normal[3 * i + 2] = left ? 1.0f : 0.0f;
         depth[i] = background ? 0.0f : left ? 3.0f : 4.0f;
       }
+  }
+
+  // Root-mean-square error of an rgb frame against the truth.
+  double rmse(const std::vector<float>& rgb) const {
+    double e = 0.0;
+    for (size_t i = 0; i < truth.size(); ++i) e += (double(rgb[i]) - truth[i]) * (double(rgb[i]) - truth[i]);
+    return std::sqrt(e / double(truth.size()));
   }
 
   std::vector<float> noisy(int spp, uint32_t seed) const {

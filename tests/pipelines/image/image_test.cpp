@@ -55,12 +55,6 @@ std::vector<float> run(pipelines::Pipeline& p, const test::HostFrame& f) {
   return test::decode_output(out, Format::F32);
 }
 
-double rmse(const std::vector<float>& a, const std::vector<float>& truth) {
-  double e = 0.0;
-  for (size_t i = 0; i < truth.size(); ++i) e += (double(a[i]) - truth[i]) * (double(a[i]) - truth[i]);
-  return std::sqrt(e / truth.size());
-}
-
 class ImageTest : public test::GpuTest, public testing::WithParamInterface<Guides> {};
 class ImageAgainstSvgfTest : public test::GpuTest {};
 
@@ -117,7 +111,7 @@ TEST_P(ImageTest, BelowItsInputsErrorAtEverySampleCount) {
   for (int spp : {1, 4, 16, 64}) {
     const std::vector<float> noisy = scene.noisy(spp, 11 + spp);
     const std::vector<float> out = run(*pipe, host_frame(g, scene, noisy, Format::F32));
-    const double in_error = rmse(noisy, scene.truth), out_error = rmse(out, scene.truth);
+    const double in_error = scene.rmse(noisy), out_error = scene.rmse(out);
     std::printf("[ info     ] %s %d spp: RMSE input %.4f output %.4f (%.2fx)\n", g.name, spp, in_error, out_error,
                 in_error / out_error);
     EXPECT_LT(out_error, in_error) << spp << " spp";
@@ -141,9 +135,9 @@ TEST_F(ImageAgainstSvgfTest, BelowSvgfsFirstFrameAtEverySampleCount) {
     f.add(ChannelId::Motion, Format::F32, std::vector<float>(2 * scene.width * scene.height, 0.0f));
     auto svgf = pipelines::create(ctx(), test::make_config("svgf", scene.width, scene.height, svgf_channels));
     const std::vector<float> theirs = run(*svgf, f);
-    std::printf("[ info     ] %d spp: RMSE image %.4f, svgf's first frame %.4f\n", spp, rmse(ours, scene.truth),
-                rmse(theirs, scene.truth));
-    EXPECT_LT(rmse(ours, scene.truth), rmse(theirs, scene.truth)) << spp << " spp";
+    std::printf("[ info     ] %d spp: RMSE image %.4f, svgf's first frame %.4f\n", spp, scene.rmse(ours),
+                scene.rmse(theirs));
+    EXPECT_LT(scene.rmse(ours), scene.rmse(theirs)) << spp << " spp";
   }
 }
 
